@@ -1,0 +1,1 @@
+/* placeholder: being written */ typedef int xyl__placeholder_presets;

@@ -1,0 +1,254 @@
+/* Results, diagnostics, allocation, frame math and file helpers shared by all modules. */
+#define _POSIX_C_SOURCE 200809L
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "xyl_internal.h"
+
+/* One table, indexed by code, so names cannot drift from the enum. */
+static const char *const result_names[XYL_RESULT_COUNT_] = {
+    [XYL_OK] = "ok",
+    [XYL_ERR_INVALID_ARGUMENT] = "invalid argument",
+    [XYL_ERR_OUT_OF_MEMORY] = "out of memory",
+    [XYL_ERR_INVALID_GRAMMAR] = "invalid grammar",
+    [XYL_ERR_LIMIT_EXCEEDED] = "limit exceeded",
+    [XYL_ERR_NON_FINITE] = "non-finite number",
+    [XYL_ERR_INVALID_SKELETON] = "invalid skeleton",
+    [XYL_ERR_PARSE] = "parse error",
+    [XYL_ERR_TRUNCATED] = "truncated input",
+    [XYL_ERR_IO] = "input/output error",
+    [XYL_ERR_NOT_FOUND] = "not found",
+    [XYL_ERR_UNSUPPORTED] = "unsupported",
+};
+
+const char *xyl_result_string(xyl_result r)
+{
+    if ((unsigned)r >= (unsigned)XYL_RESULT_COUNT_ || !result_names[r]) return "unknown result";
+    return result_names[r];
+}
+
+/* ---- allocation ---------------------------------------------------------------------------- */
+
+void *xyl__alloc(const xyl_allocator *a, size_t size)
+{
+    if (size == 0) size = 1;
+    if (a && a->alloc) return a->alloc(size, a->user);
+    return malloc(size);
+}
+
+void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size)
+{
+    size_t bytes;
+    if (!xyl__mul_ok(count, size, &bytes)) return NULL;
+    void *p = xyl__alloc(a, bytes);
+    if (p) memset(p, 0, bytes ? bytes : 1);
+    return p;
+}
+
+void xyl__free(const xyl_allocator *a, void *p)
+{
+    if (!p) return;
+    if (a && a->alloc) {
+        if (a->free) a->free(p, a->user);
+        return;
+    }
+    free(p);
+}
+
+bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
+               size_t elem)
+{
+    if (need <= *cap) return true;
+    size_t ncap = *cap ? *cap : 16;
+    while (ncap < need) {
+        if (ncap > SIZE_MAX / 2) return false;
+        ncap *= 2;
+    }
+    size_t bytes;
+    if (!xyl__mul_ok(ncap, elem, &bytes)) return false;
+    void *p = xyl__alloc(a, bytes);
+    if (!p) return false;
+    if (*ptr && used) memcpy(p, *ptr, used * elem);
+    xyl__free(a, *ptr);
+    *ptr = p;
+    *cap = ncap;
+    return true;
+}
+
+/* ---- diagnostics --------------------------------------------------------------------------- */
+
+xyl_result xyl__fail(xyl_diag *diag, xyl_result code, uint32_t line, uint32_t column,
+                     int64_t index, const char *fmt, ...)
+{
+    if (!diag) return code;
+    diag->code = code;
+    diag->line = line;
+    diag->column = column;
+    diag->index = index;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(diag->message, sizeof diag->message, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+void xyl__diag_ok(xyl_diag *diag)
+{
+    if (!diag) return;
+    diag->code = XYL_OK;
+    diag->message[0] = '\0';
+    diag->line = 0;
+    diag->column = 0;
+    diag->index = -1;
+}
+
+void xyl__warn(xyl_diag *diag, const char *fmt, ...)
+{
+    if (!diag) return;
+    if (diag->warning_count++ != 0) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(diag->warning, sizeof diag->warning, fmt, ap);
+    va_end(ap);
+}
+
+/* ---- vectors and frames -------------------------------------------------------------------- */
+
+xyl__dvec3 xyl__d3_any_orthogonal(xyl__dvec3 n)
+{
+    /* Duff et al. 2017, "Building an orthonormal basis, revisited": exact for unit n. */
+    double sign = copysign(1.0, n.z);
+    double a = -1.0 / (sign + n.z);
+    double b = n.x * n.y * a;
+    xyl__dvec3 t = xyl__d3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    return xyl__d3_normalize_or(t, xyl__d3(1, 0, 0));
+}
+
+xyl__dvec3 xyl__d3_rotate(xyl__dvec3 v, xyl__dvec3 axis, double angle)
+{
+    double c = cos(angle), s = sin(angle);
+    xyl__dvec3 kxv = xyl__d3_cross(axis, v);
+    double kdv = xyl__d3_dot(axis, v);
+    return xyl__d3_add(xyl__d3_add(xyl__d3_scale(v, c), xyl__d3_scale(kxv, s)),
+                       xyl__d3_scale(axis, kdv * (1.0 - c)));
+}
+
+void xyl__frame_orthonormalize(xyl__frame *f)
+{
+    f->h = xyl__d3_normalize_or(f->h, xyl__d3(0, 1, 0));
+    xyl__dvec3 l = xyl__d3_sub(f->l, xyl__d3_scale(f->h, xyl__d3_dot(f->l, f->h)));
+    f->l = xyl__d3_normalize_or(l, xyl__d3_any_orthogonal(f->h));
+    f->u = xyl__d3_cross(f->h, f->l);
+}
+
+double xyl__frame_error(const xyl__frame *f)
+{
+    const xyl__dvec3 *v[3] = {&f->h, &f->l, &f->u};
+    double worst = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = i; j < 3; ++j) {
+            double e = fabs(xyl__d3_dot(*v[i], *v[j]) - (i == j ? 1.0 : 0.0));
+            if (e > worst || isnan(e)) worst = isnan(e) ? INFINITY : e;
+        }
+    }
+    return worst;
+}
+
+/* ---- files --------------------------------------------------------------------------------- */
+
+xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag)
+{
+    if (!path || !*path || (!data && size))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "no output path");
+    size_t plen = strlen(path);
+    char *tmp = malloc(plen + 16);
+    if (!tmp) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    memcpy(tmp, path, plen);
+    memcpy(tmp + plen, ".tmp-XXXXXX", 12);
+    int fd = mkstemp(tmp);
+    if (fd < 0) {
+        int e = errno;
+        free(tmp);
+        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot create a file next to '%s': %s", path,
+                         strerror(e));
+    }
+    const char *p = data;
+    size_t left = size;
+    while (left > 0) {
+        ssize_t n = write(fd, p, left);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            int e = errno;
+            close(fd);
+            unlink(tmp);
+            free(tmp);
+            return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot write '%s': %s", path,
+                             strerror(e));
+        }
+        p += n;
+        left -= (size_t)n;
+    }
+    /* mkstemp makes 0600 files; give the output the usual permissions. */
+    mode_t mask = umask(0);
+    umask(mask);
+    if (fchmod(fd, 0666 & ~mask) != 0 || fsync(fd) != 0 || close(fd) != 0) {
+        int e = errno;
+        unlink(tmp);
+        free(tmp);
+        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot finish '%s': %s", path, strerror(e));
+    }
+    if (rename(tmp, path) != 0) {
+        int e = errno;
+        unlink(tmp);
+        free(tmp);
+        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot rename onto '%s': %s", path,
+                         strerror(e));
+    }
+    free(tmp);
+    return XYL_OK;
+}
+
+xyl_result xyl__read_file(const char *path, size_t max_bytes, const xyl_allocator *a, char **out,
+                          size_t *size, xyl_diag *diag)
+{
+    if (!path || !out || !size)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "no input path");
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot open '%s': %s", path,
+                         strerror(errno));
+    size_t cap = 0, used = 0;
+    char *buf = NULL;
+    for (;;) {
+        if (!xyl__grow(a, (void **)&buf, &cap, used, used + 65536 + 1, 1)) {
+            fclose(f);
+            xyl__free(a, buf);
+            return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory reading '%s'",
+                             path);
+        }
+        size_t n = fread(buf + used, 1, cap - used - 1, f);
+        used += n;
+        if (used > max_bytes) {
+            fclose(f);
+            xyl__free(a, buf);
+            return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                             "'%s' is larger than the limit of %zu bytes", path, max_bytes);
+        }
+        if (n == 0) break;
+    }
+    int err = ferror(f);
+    fclose(f);
+    if (err) {
+        xyl__free(a, buf);
+        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot read '%s'", path);
+    }
+    buf[used] = '\0';
+    *out = buf;
+    *size = used;
+    return XYL_OK;
+}

@@ -1,0 +1,25 @@
+/* Skeleton internals shared by stems/ and the modules above it (lsystem's turtle). */
+#ifndef XYL_SKELETON_INTERNAL_H
+#define XYL_SKELETON_INTERNAL_H
+
+#include "xyl_internal.h"
+#include "xylem/xyl_stems.h"
+
+/* The public view comes first so a xyl_skeleton* is a xyl__skeleton*. */
+typedef struct xyl__skeleton {
+    xyl_skeleton pub;
+    xyl_skel_node *nodes;
+    xyl_skel_leaf *leaves;
+    xyl_allocator alloc;
+} xyl__skeleton;
+
+/* Runs the checks of xyl_skeleton_create without copying. */
+xyl_result xyl__skeleton_validate(const xyl_skeleton_desc *desc, xyl_diag *diag);
+
+/* Takes ownership of nodes/leaves (allocated with alloc; freed on failure too), derives branch
+ * ids and orders and wraps them in a skeleton. The arrays must already be valid. */
+xyl_result xyl__skeleton_adopt(xyl_skel_node *nodes, size_t node_count, xyl_skel_leaf *leaves,
+                               size_t leaf_count, const xyl_allocator *alloc, xyl_skeleton **out,
+                               xyl_diag *diag);
+
+#endif

@@ -1,0 +1,136 @@
+/* Library-internal helpers shared by all modules: allocation, diagnostics, double-precision
+ * vector math with safe normalisation, and the named epsilons. Not installed. */
+#ifndef XYL_INTERNAL_H
+#define XYL_INTERNAL_H
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "xylem/xyl_common.h"
+
+/* Scale-relative tolerances, in one place. */
+#define XYL__EPS_REL 1e-12       /* relative tolerance on double lengths */
+#define XYL__EPS_NORMALIZE 1e-300 /* below this squared length a vector has no direction */
+#define XYL__EPS_COLLINEAR 1e-9  /* 1 - cos(angle) under which two directions count as equal */
+
+/* ---- allocation ---------------------------------------------------------------------------- */
+
+void *xyl__alloc(const xyl_allocator *a, size_t size);
+void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size); /* overflow-checked, zeroed */
+void xyl__free(const xyl_allocator *a, void *p);
+/* Grows *ptr (of *cap elements of elem bytes, *used of which are live) to hold at least need
+ * elements; doubling. Returns false on overflow or allocation failure (then *ptr unchanged). */
+bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
+               size_t elem);
+/* a * b without overflow, false if it would overflow. */
+static inline bool xyl__mul_ok(size_t a, size_t b, size_t *out)
+{
+    if (b != 0 && a > SIZE_MAX / b) return false;
+    *out = a * b;
+    return true;
+}
+
+/* ---- diagnostics --------------------------------------------------------------------------- */
+
+/* Fills diag (if not NULL) and returns code. line/column 0 and index -1 mean "none". */
+xyl_result xyl__fail(xyl_diag *diag, xyl_result code, uint32_t line, uint32_t column,
+                     int64_t index, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 6, 7)))
+#endif
+    ;
+/* Sets diag to success (code XYL_OK, empty message) without touching warnings. */
+void xyl__diag_ok(xyl_diag *diag);
+/* Counts a warning; keeps the text of the first one. */
+void xyl__warn(xyl_diag *diag, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* ---- double vectors ------------------------------------------------------------------------ */
+
+typedef struct xyl__dvec3 {
+    double x, y, z;
+} xyl__dvec3;
+
+static inline xyl__dvec3 xyl__d3(double x, double y, double z)
+{
+    xyl__dvec3 r = {x, y, z};
+    return r;
+}
+static inline xyl__dvec3 xyl__d3_add(xyl__dvec3 a, xyl__dvec3 b)
+{
+    return xyl__d3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+static inline xyl__dvec3 xyl__d3_sub(xyl__dvec3 a, xyl__dvec3 b)
+{
+    return xyl__d3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+static inline xyl__dvec3 xyl__d3_scale(xyl__dvec3 a, double s)
+{
+    return xyl__d3(a.x * s, a.y * s, a.z * s);
+}
+static inline double xyl__d3_dot(xyl__dvec3 a, xyl__dvec3 b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static inline xyl__dvec3 xyl__d3_cross(xyl__dvec3 a, xyl__dvec3 b)
+{
+    return xyl__d3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double xyl__d3_len(xyl__dvec3 a)
+{
+    return sqrt(xyl__d3_dot(a, a));
+}
+static inline bool xyl__d3_finite(xyl__dvec3 a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+/* Unit vector along a; returns fallback (assumed unit) when a has no direction or is not
+ * finite, so the result is never NaN. */
+static inline xyl__dvec3 xyl__d3_normalize_or(xyl__dvec3 a, xyl__dvec3 fallback)
+{
+    double l2 = xyl__d3_dot(a, a);
+    if (!(l2 > XYL__EPS_NORMALIZE) || !isfinite(l2)) return fallback;
+    return xyl__d3_scale(a, 1.0 / sqrt(l2));
+}
+/* Some unit vector orthogonal to unit n, chosen deterministically (Frisvad-style branchless
+ * basis, robust near n = -z). */
+xyl__dvec3 xyl__d3_any_orthogonal(xyl__dvec3 n);
+/* Rotates v about unit axis by angle (Rodrigues). */
+xyl__dvec3 xyl__d3_rotate(xyl__dvec3 v, xyl__dvec3 axis, double angle);
+
+/* A right-handed orthonormal frame: heading, left, up = heading x left. */
+typedef struct xyl__frame {
+    xyl__dvec3 h, l, u;
+} xyl__frame;
+
+/* Re-orthonormalises a frame in place (Gram-Schmidt from h, then l; u = h x l). */
+void xyl__frame_orthonormalize(xyl__frame *f);
+/* Largest |dot - kronecker| over the frame's 6 pairs: 0 for a perfect frame. */
+double xyl__frame_error(const xyl__frame *f);
+
+static inline xyl_vec3 xyl__to_f3(xyl__dvec3 a)
+{
+    xyl_vec3 r = {(float)a.x, (float)a.y, (float)a.z};
+    return r;
+}
+static inline xyl__dvec3 xyl__from_f3(xyl_vec3 a)
+{
+    return xyl__d3(a.x, a.y, a.z);
+}
+
+/* ---- files --------------------------------------------------------------------------------- */
+
+/* Writes size bytes to path through a temporary file in the same folder and a rename, so path is
+ * either the old file or the complete new one. */
+xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag);
+/* Reads a whole file (at most max_bytes) into a NUL-terminated buffer from a. */
+xyl_result xyl__read_file(const char *path, size_t max_bytes, const xyl_allocator *a, char **out,
+                          size_t *size, xyl_diag *diag);
+
+#endif /* XYL_INTERNAL_H */
