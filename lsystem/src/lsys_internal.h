@@ -87,7 +87,7 @@ typedef struct lsys_prod {
     bool group_member;                 /* not the group's first production */
     bool is_constant;                  /* successor fully constant, no ctx/cond/weight/params */
     uint32_t const_first, const_count; /* precompiled successor: cmods[] */
-    uint32_t const_pfirst;             /* its parameters: cparams[] */
+    uint32_t const_pfirst, const_pcount; /* its parameters: cparams[] */
     int32_t const_depth_max;           /* highest bracket depth inside, relative */
 } lsys_prod;
 

@@ -16,6 +16,8 @@
 #define XYL__EPS_NORMALIZE 1e-300 /* below this squared length a vector has no direction */
 #define XYL__EPS_COLLINEAR 1e-9  /* 1 - cos(angle) under which two directions count as equal */
 
+#define XYL__PI 3.14159265358979323846
+
 /* ---- allocation ---------------------------------------------------------------------------- */
 
 void *xyl__alloc(const xyl_allocator *a, size_t size);

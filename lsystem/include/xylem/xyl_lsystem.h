@@ -29,8 +29,8 @@
 
 #include <stdbool.h>
 
-#include "xyl_common.h"
-#include "xyl_stems.h"
+#include <xylem/xyl_common.h>
+#include <xylem/xyl_stems.h>
 
 #ifdef __cplusplus
 extern "C" {

@@ -24,7 +24,7 @@
 #ifndef XYL_STEMS_H
 #define XYL_STEMS_H
 
-#include "xyl_common.h"
+#include <xylem/xyl_common.h>
 
 #ifdef __cplusplus
 extern "C" {
