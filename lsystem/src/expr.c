@@ -296,6 +296,7 @@ xyl_result lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr 
 xyl_result lsys_const_expr(lsys_parser *p, size_t *pos, size_t end, double *out)
 {
     uint32_t saved_vars = p->var_count;
+    lsys_skip_space(p->src, pos, end);
     size_t at = *pos;
     p->var_count = 0;
     lsys_expr e;

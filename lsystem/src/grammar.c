@@ -476,6 +476,7 @@ static xyl_result parse_directive(lsys_parser *p, size_t pos, size_t end)
     size_t at = pos++; /* '#' */
     size_t n = ident_len(s, pos, end);
     size_t arg = pos + n;
+    lsys_skip_space(s, &arg, end);
     xyl_grammar_info *in = &p->g->info;
     xyl_result r;
     uint64_t u;

@@ -1,0 +1,75 @@
+/* Shared helpers for the cmocka suites. */
+#ifndef XYL_TEST_UTIL_H
+#define XYL_TEST_UTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include <xylem/xyl_lsystem.h>
+
+/* Parses text; fails the test with the diagnostic if it does not parse. */
+static inline xyl_grammar *tu_parse(const char *text)
+{
+    xyl_grammar_desc gd = {0};
+    gd.source = text;
+    xyl_grammar *g = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_grammar_parse(&gd, &g, &d);
+    if (r != XYL_OK) fail_msg("parse failed: %s at %u:%u: %s", xyl_result_string(r), d.line, d.column, d.message);
+    return g;
+}
+
+/* Expects text to fail to parse with code at line:column (column 0 = don't care). */
+static inline void tu_parse_fails(const char *text, xyl_result code, uint32_t line, uint32_t column)
+{
+    xyl_grammar_desc gd = {0};
+    gd.source = text;
+    xyl_grammar *g = (xyl_grammar *)(uintptr_t)1; /* must stay untouched */
+    xyl_diag d = {0};
+    xyl_result r = xyl_grammar_parse(&gd, &g, &d);
+    if (r != code || d.line != line || (column && d.column != column))
+        fail_msg("expected %s at %u:%u, got %s at %u:%u (%s) for:\n%s", xyl_result_string(code), line,
+                 column, xyl_result_string(r), d.line, d.column, d.message, text);
+    assert_int_equal(d.code, code);
+    assert_true(strlen(d.message) > 0);
+    assert_ptr_equal(g, (xyl_grammar *)(uintptr_t)1);
+}
+
+/* Derives text to the given depth and returns the formatted string (malloc'd). */
+static inline char *tu_derive_text(const char *text, uint32_t depth, uint64_t seed)
+{
+    xyl_grammar *g = tu_parse(text);
+    xyl_derive_desc dd = {0};
+    dd.has_depth = true;
+    dd.depth = depth;
+    dd.has_seed = true;
+    dd.seed = seed;
+    xyl_lstring *s = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_lsystem_derive(g, &dd, &s, &d);
+    if (r != XYL_OK) fail_msg("derive failed: %s: %s", xyl_result_string(r), d.message);
+    size_t need = 0;
+    assert_int_equal(xyl_lstring_format(s, NULL, 0, &need), XYL_OK);
+    char *buf = malloc(need + 1);
+    assert_non_null(buf);
+    assert_int_equal(xyl_lstring_format(s, buf, need + 1, &need), XYL_OK);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return buf;
+}
+
+static inline void tu_assert_derives(const char *text, uint32_t depth, const char *expected)
+{
+    char *got = tu_derive_text(text, depth, 1);
+    if (strcmp(got, expected) != 0) fail_msg("depth %u: expected\n  %s\ngot\n  %s", depth, expected, got);
+    free(got);
+}
+
+#endif
