@@ -1,1 +1,86 @@
-exit 0
+#!/usr/bin/env bash
+# The CLI's interface: commands, outputs, exit codes and error messages. $XYLEM is the binary.
+set -uo pipefail
+: "${XYLEM:?set XYLEM to the xylem binary}"
+data="$(cd "$(dirname "$0")" && pwd)/data"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+
+# expect CODE DESCRIPTION -- command...   (stdout+stderr saved in $tmp/out)
+expect() {
+  local want=$1 what=$2
+  shift 3
+  "$@" >"$tmp/out" 2>&1
+  local got=$?
+  if [ "$got" -eq "$want" ]; then
+    passed=$((passed + 1))
+  else
+    failed=$((failed + 1))
+    echo "FAIL: $what: exit $got, expected $want"
+    sed 's/^/    /' "$tmp/out" | head -20
+  fi
+}
+# contains TEXT DESCRIPTION: the last command's output holds TEXT
+contains() {
+  if grep -qF -- "$1" "$tmp/out"; then passed=$((passed + 1)); else
+    failed=$((failed + 1)); echo "FAIL: $2: output lacks '$1'"; sed 's/^/    /' "$tmp/out" | head -20; fi
+}
+
+expect 0 "help" -- "$XYLEM" --help
+contains "usage: xylem" "help text"
+expect 64 "no command" -- "$XYLEM"
+expect 64 "unknown command" -- "$XYLEM" frobnicate
+expect 0 "presets" -- "$XYLEM" presets
+contains "(default)" "presets mark the default"
+contains "abop-1.24a" "presets list ABOP 1.24a"
+expect 0 "preset text" -- "$XYLEM" preset abop-1.24a
+contains "F -> F[+F]F[-F]F" "preset text is the grammar"
+expect 64 "unknown preset" -- "$XYLEM" preset nope
+
+expect 0 "derive depth 1" -- "$XYLEM" derive --preset abop-1.24a --depth 1
+[ "$(cat "$tmp/out")" = "F[+F]F[-F]F" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: derive output: $(cat "$tmp/out")"; }
+expect 0 "derive parametric" -- "$XYLEM" derive --preset abop-2.6-monopodial --depth 1
+contains "!(0.6)F(1)[&(45)B(0.6,0.4242)]/(137.5)A(0.9,0.4242)" "parametric output with parameters"
+expect 0 "derive a file" -- "$XYLEM" derive --grammar "$data/grammars/parametric.lsys" --depth 2
+expect 0 "seeded derive" -- "$XYLEM" derive --preset abop-1.28-stochastic --seed 3
+cp "$tmp/out" "$tmp/seed3"
+"$XYLEM" derive --preset abop-1.28-stochastic --seed 3 >"$tmp/seed3b"
+"$XYLEM" derive --preset abop-1.28-stochastic --seed 4 >"$tmp/seed4"
+cmp -s "$tmp/seed3" "$tmp/seed3b" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: equal seeds differ"; }
+cmp -s "$tmp/seed3" "$tmp/seed4" && { failed=$((failed + 1)); echo "FAIL: different seeds agree"; } || passed=$((passed + 1))
+
+printf 'axiom: F\nF -> F[+F\n' >"$tmp/bad.lsys"
+expect 65 "broken grammar" -- "$XYLEM" derive --grammar "$tmp/bad.lsys"
+contains "bad.lsys:2:7: invalid grammar: '[' is never closed" "error names file, line, column"
+expect 66 "missing grammar file" -- "$XYLEM" derive --grammar "$tmp/none.lsys"
+: >"$tmp/empty.lsys"
+expect 65 "empty grammar file" -- "$XYLEM" derive --grammar "$tmp/empty.lsys"
+expect 64 "bad depth" -- "$XYLEM" derive --depth -1
+expect 64 "preset and grammar" -- "$XYLEM" derive --preset abop-1.24a --grammar x
+expect 65 "depth over the limit" -- "$XYLEM" derive --preset abop-1.24a --depth 1000
+contains "limit" "limit message"
+printf 'axiom: A(1)\nA(x) -> A(x-1)B(1/(x-1))\n' >"$tmp/nan.lsys"
+expect 65 "division by zero" -- "$XYLEM" derive --grammar "$tmp/nan.lsys" --depth 3
+contains "non-finite" "non-finite message"
+
+expect 0 "skeleton .skel" -- "$XYLEM" skeleton --out "$tmp/tree.skel"
+contains "nodes" "summary counts nodes"
+contains "time:" "summary shows time"
+head -n 1 "$tmp/tree.skel" | grep -q "xylem-skeleton 1" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: .skel header"; }
+expect 0 "skeleton .obj" -- "$XYLEM" skeleton --preset faycal-leaves --out "$tmp/tree.obj"
+grep -q '^l ' "$tmp/tree.obj" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: obj has no polylines"; }
+expect 0 "murray angles" -- "$XYLEM" skeleton --preset abop-2.7-sympodial --angles murray --radius-exponent 3 --out "$tmp/m.skel"
+expect 0 "murray clamps at n = 2" -- "$XYLEM" skeleton --preset abop-2.7-sympodial --angles murray --radius-exponent 2 --out "$tmp/m2.skel"
+contains "warning: " "clamping is reported"
+expect 0 "grammar radii" -- "$XYLEM" skeleton --preset abop-2.6-monopodial --radius grammar --merge-collinear --out "$tmp/g.skel"
+expect 64 "bad exponent" -- "$XYLEM" skeleton --radius-exponent 0 --out "$tmp/x.skel"
+expect 64 "bad angles" -- "$XYLEM" skeleton --angles sideways --out "$tmp/x.skel"
+expect 64 "missing --out" -- "$XYLEM" skeleton
+expect 64 "bad extension" -- "$XYLEM" skeleton --out "$tmp/tree.png"
+expect 73 "unwritable output" -- "$XYLEM" skeleton --out "$tmp/no/such/dir/tree.skel"
+[ -z "$(ls "$tmp" | grep tmp-)" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: temporary files left behind"; }
+
+echo "test_cli: $passed passed, $failed failed"
+[ "$failed" -eq 0 ]

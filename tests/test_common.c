@@ -1,7 +1,162 @@
-#include <stdarg.h>
-#include <stddef.h>
-#include <setjmp.h>
-#include <stdint.h>
-#include <cmocka.h>
-static void placeholder(void **state) { (void)state; }
-int main(void) { const struct CMUnitTest t[] = { cmocka_unit_test(placeholder) }; return cmocka_run_group_tests(t, NULL, NULL); }
+/* The common layer: result names, diagnostics, allocation helpers, safe vector math, frames,
+ * atomic file writes. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "test_util.h"
+#include "xyl_internal.h"
+
+static void every_result_has_a_distinct_name(void **state)
+{
+    (void)state;
+    for (int i = 0; i < XYL_RESULT_COUNT_; ++i) {
+        const char *a = xyl_result_string((xyl_result)i);
+        assert_non_null(a);
+        assert_string_not_equal(a, "unknown result");
+        for (int j = 0; j < i; ++j) assert_string_not_equal(a, xyl_result_string((xyl_result)j));
+    }
+    assert_string_equal(xyl_result_string(XYL_OK), "ok");
+    assert_string_equal(xyl_result_string((xyl_result)9999), "unknown result");
+    assert_string_equal(xyl_result_string((xyl_result)-1), "unknown result");
+}
+
+static void diag_keeps_the_first_warning_and_counts_all(void **state)
+{
+    (void)state;
+    xyl_diag d = {0};
+    assert_int_equal(xyl__fail(&d, XYL_ERR_PARSE, 3, 4, 7, "bad %s", "thing"), XYL_ERR_PARSE);
+    assert_int_equal(d.code, XYL_ERR_PARSE);
+    assert_string_equal(d.message, "bad thing");
+    assert_int_equal(d.line, 3);
+    assert_int_equal(d.column, 4);
+    assert_int_equal(d.index, 7);
+    xyl__warn(&d, "first %d", 1);
+    xyl__warn(&d, "second %d", 2);
+    assert_int_equal(d.warning_count, 2);
+    assert_string_equal(d.warning, "first 1");
+    xyl__diag_ok(&d);
+    assert_int_equal(d.code, XYL_OK);
+    assert_string_equal(d.message, "");
+    assert_int_equal(d.warning_count, 2);
+    assert_int_equal(xyl__fail(NULL, XYL_ERR_IO, 0, 0, -1, "x"), XYL_ERR_IO);
+    xyl__warn(NULL, "x");
+}
+
+static void grow_and_calloc_refuse_overflowing_sizes(void **state)
+{
+    (void)state;
+    assert_null(xyl__calloc(NULL, SIZE_MAX / 2, 4));
+    void *p = NULL;
+    size_t cap = 0;
+    assert_false(xyl__grow(NULL, &p, &cap, 0, SIZE_MAX / 2, 8));
+    assert_null(p);
+    assert_true(xyl__grow(NULL, &p, &cap, 0, 100, 8));
+    assert_true(cap >= 100);
+    ((char *)p)[799] = 1;
+    xyl__free(NULL, p);
+}
+
+static void normalising_a_zero_or_nan_vector_gives_the_fallback(void **state)
+{
+    (void)state;
+    xyl__dvec3 fb = xyl__d3(0, 0, 1);
+    xyl__dvec3 r = xyl__d3_normalize_or(xyl__d3(0, 0, 0), fb);
+    assert_true(r.x == 0 && r.y == 0 && r.z == 1);
+    r = xyl__d3_normalize_or(xyl__d3(NAN, 1, 0), fb);
+    assert_true(r.z == 1);
+    r = xyl__d3_normalize_or(xyl__d3(1e-200, 0, 0), fb);
+    assert_true(r.z == 1); /* squared length underflows: no direction */
+    r = xyl__d3_normalize_or(xyl__d3(1e-100, 0, 0), fb);
+    assert_true(fabs(r.x - 1.0) < 1e-15);
+    r = xyl__d3_normalize_or(xyl__d3(3e150, 4e150, 0), fb);
+    assert_true(fabs(r.x - 0.6) < 1e-15 && fabs(r.y - 0.8) < 1e-15);
+}
+
+static uint64_t splitmix(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static double unit_random(uint64_t *s)
+{
+    return (double)(splitmix(s) >> 11) / 9007199254740992.0 * 2.0 - 1.0;
+}
+
+static void any_orthogonal_is_unit_and_orthogonal_everywhere(void **state)
+{
+    (void)state;
+    uint64_t seed = 5;
+    xyl__dvec3 special[] = {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, 1, 0}, {0, 1e-9, -1}};
+    for (int i = 0; i < 100005; ++i) {
+        xyl__dvec3 n = i < 5 ? special[i]
+                             : xyl__d3(unit_random(&seed), unit_random(&seed), unit_random(&seed));
+        n = xyl__d3_normalize_or(n, xyl__d3(0, 0, 1));
+        xyl__dvec3 t = xyl__d3_any_orthogonal(n);
+        assert_true(fabs(xyl__d3_len(t) - 1.0) < 1e-12);
+        assert_true(fabs(xyl__d3_dot(t, n)) < 1e-12);
+    }
+}
+
+static void rotation_preserves_length_and_turns_by_the_angle(void **state)
+{
+    (void)state;
+    xyl__dvec3 v = xyl__d3_rotate(xyl__d3(1, 0, 0), xyl__d3(0, 0, 1), 3.14159265358979323846 / 2);
+    assert_true(fabs(v.x) < 1e-15 && fabs(v.y - 1.0) < 1e-15 && fabs(v.z) < 1e-15);
+    xyl__frame f = {xyl__d3(0, 1, 0), xyl__d3(-1, 0, 0), xyl__d3(0, 0, 1)};
+    assert_true(xyl__frame_error(&f) == 0.0);
+    f.h = xyl__d3(0.1, 2, 0);
+    f.l = xyl__d3(-1, 0.3, 0.2);
+    xyl__frame_orthonormalize(&f);
+    assert_true(xyl__frame_error(&f) < 1e-15);
+    xyl__frame bad = {xyl__d3(NAN, 0, 0), xyl__d3(0, 0, 0), xyl__d3(0, 0, 0)};
+    xyl__frame_orthonormalize(&bad); /* degenerate input still yields a frame */
+    assert_true(xyl__frame_error(&bad) < 1e-15);
+}
+
+static void atomic_write_replaces_whole_files_and_reports_errors(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/xyl-test-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char path[256];
+    snprintf(path, sizeof path, "%s/out.txt", dir);
+    xyl_diag d = {0};
+    assert_int_equal(xyl__write_file_atomic(path, "first", 5, &d), XYL_OK);
+    assert_int_equal(xyl__write_file_atomic(path, "second", 6, &d), XYL_OK);
+    char *buf = NULL;
+    size_t n = 0;
+    assert_int_equal(xyl__read_file(path, 100, NULL, &buf, &n, &d), XYL_OK);
+    assert_int_equal(n, 6);
+    assert_string_equal(buf, "second");
+    free(buf);
+    assert_int_equal(xyl__read_file(path, 3, NULL, &buf, &n, &d), XYL_ERR_LIMIT_EXCEEDED);
+    char missing[300];
+    snprintf(missing, sizeof missing, "%s/no/such/dir/out.txt", dir);
+    assert_int_equal(xyl__write_file_atomic(missing, "x", 1, &d), XYL_ERR_IO);
+    assert_non_null(strstr(d.message, "cannot create"));
+    assert_int_equal(xyl__read_file(missing, 100, NULL, &buf, &n, &d), XYL_ERR_IO);
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    assert_true((st.st_mode & 0044) != 0 || (st.st_mode & 0600) == 0600);
+    assert_int_equal(unlink(path), 0);
+    assert_int_equal(rmdir(dir), 0); /* nothing temporary was left behind */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(every_result_has_a_distinct_name),
+        cmocka_unit_test(diag_keeps_the_first_warning_and_counts_all),
+        cmocka_unit_test(grow_and_calloc_refuse_overflowing_sizes),
+        cmocka_unit_test(normalising_a_zero_or_nan_vector_gives_the_fallback),
+        cmocka_unit_test(any_orthogonal_is_unit_and_orthogonal_everywhere),
+        cmocka_unit_test(rotation_preserves_length_and_turns_by_the_angle),
+        cmocka_unit_test(atomic_write_replaces_whole_files_and_reports_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
