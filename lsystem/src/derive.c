@@ -216,6 +216,7 @@ static xyl_result emit_constant(deriver *d, const lsys_prod *pr)
     if (!reserve(n, n->count + pr->const_count, n->nparams + np)) return oom(d);
     if (d->depth + (uint32_t)pr->const_depth_max > d->limits.max_nesting)
         return fail_limit(d, "bracket nesting", d->limits.max_nesting);
+    if (pr->const_count == 0) return XYL_OK; /* an erasing production */
     lsys_module *out = n->mods + n->count;
     memcpy(out, g->cmods + pr->const_first, pr->const_count * sizeof *out);
     uint32_t base = (uint32_t)n->nparams;
@@ -223,7 +224,7 @@ static xyl_result emit_constant(deriver *d, const lsys_prod *pr)
         out[i].param += base;
         d->has_cut |= out[i].sym == '%';
     }
-    memcpy(n->params + n->nparams, g->cparams + pr->const_pfirst, np * sizeof(double));
+    if (np) memcpy(n->params + n->nparams, g->cparams + pr->const_pfirst, np * sizeof(double));
     n->nparams += np;
     n->count += pr->const_count;
     return XYL_OK;

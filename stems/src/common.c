@@ -63,7 +63,8 @@ void xyl__free(const xyl_allocator *a, void *p)
 bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
                size_t elem)
 {
-    if (need <= *cap) return true;
+    if (need == 0) need = 1; /* an array is never NULL after a successful grow */
+    if (need <= *cap && *ptr) return true;
     size_t ncap = *cap ? *cap : 16;
     while (ncap < need) {
         if (ncap > SIZE_MAX / 2) return false;
