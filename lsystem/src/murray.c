@@ -3,6 +3,8 @@
  * from the triangle of forces between it and a virtual branch carrying all its siblings; its
  * azimuth comes from the grammar. Rotations are found from the original geometry, then one
  * walk in node order (parents first) composes them, so the whole pass is O(nodes + leaves). */
+#include <stdlib.h>
+
 #include "turtle_internal.h"
 
 typedef struct mat3 {
@@ -28,6 +30,7 @@ typedef struct murray {
     uint32_t *first, *kids;          /* children of node i: kids[first[i] .. first[i + 1]) */
     mat3 *rot;
     kid *scratch;
+    double *angles;                  /* scratch: given azimuths as angles about d0 */
 } murray;
 
 /* ---- 3x3 rotations ------------------------------------------------------------------------- */
@@ -155,24 +158,76 @@ static uint32_t main_kid(const murray *m, const kid *kv, uint32_t k)
     return best;
 }
 
-/* Each child's azimuth as the grammar drew it; children drawn along d0 have none and are
- * spread evenly around d0 from a deterministic start. */
-static void grammar_azimuths(kid *kv, uint32_t k, xyl__dvec3 d0)
+/* An orthonormal basis (e1, e2) of the plane orthogonal to d0, for azimuth angles. */
+typedef struct plane {
+    xyl__dvec3 e1, e2;
+} plane;
+
+static plane plane_of(xyl__dvec3 d0)
 {
-    uint32_t missing = 0, seen = 0;
+    plane p;
+    p.e1 = xyl__d3_any_orthogonal(d0);
+    p.e2 = xyl__d3_cross(d0, p.e1);
+    return p;
+}
+
+static double angle_of(const plane *p, xyl__dvec3 az)
+{
+    return atan2(xyl__d3_dot(az, p->e2), xyl__d3_dot(az, p->e1));
+}
+
+static xyl__dvec3 azimuth_at(const plane *p, double phi)
+{
+    return xyl__d3_add(xyl__d3_scale(p->e1, cos(phi)), xyl__d3_scale(p->e2, sin(phi)));
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The widest empty sector between the sorted angles a[0 .. n): its start and width. With no
+ * angle the whole circle, from e1. */
+static double widest_gap(const double *a, uint32_t n, double *start)
+{
+    *start = n ? a[n - 1] : 0.0;
+    double best = n ? a[0] + 2.0 * XYL__PI - a[n - 1] : 2.0 * XYL__PI;
+    for (uint32_t j = 1; j < n; ++j) {
+        if (a[j] - a[j - 1] > best) {
+            best = a[j] - a[j - 1];
+            *start = a[j - 1];
+        }
+    }
+    return best;
+}
+
+/* Each child's azimuth as the grammar drew it. Children drawn along d0 have none; they are
+ * spread evenly over the widest empty sector between the others (for two children: opposite
+ * the other one, keeping a planar fork planar). */
+static void grammar_azimuths(const murray *m, kid *kv, uint32_t k, xyl__dvec3 d0)
+{
+    plane p = plane_of(d0);
+    uint32_t given = 0, missing = 0;
     for (uint32_t j = 0; j < k; ++j) {
         double along = xyl__d3_dot(kv[j].dir, d0);
         kv[j].has_az = 1.0 - fabs(along) >= XYL__EPS_COLLINEAR;
-        if (kv[j].has_az)
-            kv[j].az = xyl__d3_normalize_or(xyl__d3_sub(kv[j].dir, xyl__d3_scale(d0, along)),
-                                            xyl__d3_any_orthogonal(d0));
-        else
+        if (!kv[j].has_az) {
             ++missing;
+            continue;
+        }
+        kv[j].az = xyl__d3_normalize_or(xyl__d3_sub(kv[j].dir, xyl__d3_scale(d0, along)), p.e1);
+        m->angles[given++] = angle_of(&p, kv[j].az);
     }
-    xyl__dvec3 base = xyl__d3_any_orthogonal(d0);
-    for (uint32_t j = 0; j < k; ++j) {
+    if (missing == 0) return;
+    qsort(m->angles, given, sizeof *m->angles, cmp_double);
+    double start, width = widest_gap(m->angles, given, &start);
+    double denom = given ? (double)missing + 1.0 : (double)missing;
+    double offset = given ? 1.0 : 0.0;
+    for (uint32_t j = 0, placed = 0; j < k; ++j) {
         if (kv[j].has_az) continue;
-        kv[j].az = xyl__d3_rotate(base, d0, 2.0 * XYL__PI * (double)seen++ / (double)missing);
+        double t = ((double)placed++ + offset) / denom;
+        kv[j].az = azimuth_at(&p, start + width * t);
     }
 }
 
@@ -197,7 +252,7 @@ static bool solve_fork(murray *m, uint32_t f, uint32_t k)
     xyl__dvec3 d0 = incoming(m, f);
     double w0 = load_kids(m, f, kv, k, d0);
     bool clamped = solve_angles(m, kv, k, w0);
-    grammar_azimuths(kv, k, d0);
+    grammar_azimuths(m, kv, k, d0);
     balance_main(kv, k, main_kid(m, kv, k));
     for (uint32_t j = 0; j < k; ++j) {
         xyl__dvec3 to = xyl__d3_add(xyl__d3_scale(d0, kv[j].c), xyl__d3_scale(kv[j].az, kv[j].s));
@@ -269,16 +324,19 @@ xyl_result lsys_turtle_murray(lsys_tnode *nodes, size_t count, lsys_tleaf *leave
 {
     const xyl_allocator *a = &o->alloc;
     murray m = {nodes, count, radius, o->exponent, cos(o->max_angle), cos(o->min_angle),
-                NULL, NULL, NULL, NULL};
+                NULL, NULL, NULL, NULL, NULL};
     *forks = *clamped = 0;
     m.first = xyl__calloc(a, count + 1, sizeof *m.first);
     m.kids = xyl__calloc(a, count ? count : 1, sizeof *m.kids);
     m.rot = xyl__calloc(a, count ? count : 1, sizeof *m.rot);
     xyl__dvec3 *old = xyl__calloc(a, count ? count : 1, sizeof *old);
     xyl_result r = XYL_ERR_OUT_OF_MEMORY;
-    if (m.first && m.kids && m.rot && old)
-        m.scratch = xyl__calloc(a, build_children(&m) + 1u, sizeof *m.scratch);
-    if (m.scratch) {
+    if (m.first && m.kids && m.rot && old) {
+        size_t widest = (size_t)build_children(&m) + 1u;
+        m.scratch = xyl__calloc(a, widest, sizeof *m.scratch);
+        m.angles = xyl__calloc(a, widest, sizeof *m.angles);
+    }
+    if (m.scratch && m.angles) {
         for (size_t i = 0; i < count; ++i) old[i] = nodes[i].pos;
         solve_all(&m, forks, clamped);
         apply_nodes(&m, old);
@@ -289,6 +347,7 @@ xyl_result lsys_turtle_murray(lsys_tnode *nodes, size_t count, lsys_tleaf *leave
     xyl__free(a, m.kids);
     xyl__free(a, m.rot);
     xyl__free(a, m.scratch);
+    xyl__free(a, m.angles);
     xyl__free(a, old);
     return r;
 }

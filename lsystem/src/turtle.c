@@ -9,6 +9,7 @@
 
 #define DEG_TO_RAD (XYL__PI / 180.0)
 #define NO_ANCHOR SIZE_MAX
+#define FLOAT_MAX ((double)FLT_MAX)
 
 typedef struct tstate {
     xyl__dvec3 pos;
@@ -103,12 +104,12 @@ static xyl_result resolve_radii(const xyl_grammar *g, const xyl_turtle_desc *d,
     double n = d->radius_exponent, tip = d->tip_radius;
     if (!isfinite(n) || (n != 0.0 && !(n > 0.5 && n <= 8.0)))
         return bad_option(diag, "radius_exponent must be in (0.5, 8] (or 0 for 2)");
-    if (!isfinite(tip) || tip < 0.0 || (tip > 0.0 && !((float)tip > 0.0f)) || tip > FLT_MAX)
+    if (!isfinite(tip) || tip < 0.0 || tip > FLOAT_MAX || (tip > 0.0 && !((float)tip > 0.0f)))
         return bad_option(diag, "tip_radius must be finite, >= 0 and representable as a float");
     o->exponent = n != 0.0 ? n : 2.0;
     o->tip_radius = tip != 0.0 ? tip : 0.5 * g->info.width;
     if (o->radius_mode == XYL_RADIUS_PIPE && tip == 0.0 &&
-        !((float)o->tip_radius > 0.0f && o->tip_radius <= FLT_MAX))
+        !(o->tip_radius <= FLOAT_MAX && (float)o->tip_radius > 0.0f))
         return xyl__fail(diag, XYL_ERR_INVALID_GRAMMAR, 0, 0, -1,
                          "#width %g gives no usable tip radius; set tip_radius", g->info.width);
     return XYL_OK;
@@ -125,8 +126,8 @@ static xyl_result resolve_options(const xyl_grammar *g, const xyl_turtle_desc *d
     o->angle_mode = d->angle_mode;
     o->merge = d->merge_collinear;
     o->alloc = d->alloc;
-    o->max_nodes = d->limits.max_nodes ? d->limits.max_nodes : LSYS_DEFAULT_MAX_SKEL_NODES;
-    o->max_leaves = d->limits.max_leaves ? d->limits.max_leaves : LSYS_DEFAULT_MAX_SKEL_LEAVES;
+    o->max_nodes = d->limits.max_nodes ? d->limits.max_nodes : XYL__SKEL_DEFAULT_MAX_NODES;
+    o->max_leaves = d->limits.max_leaves ? d->limits.max_leaves : XYL__SKEL_DEFAULT_MAX_LEAVES;
     o->max_nesting = g->limits.max_nesting ? g->limits.max_nesting : LSYS_DEFAULT_MAX_NESTING;
     xyl_result r = resolve_angles(d, o, diag);
     return r != XYL_OK ? r : resolve_radii(g, d, o, diag);
@@ -146,7 +147,7 @@ static xyl_result check_info(const xyl_grammar_info *in, xyl_diag *diag)
 
 static bool fits_float(xyl__dvec3 v)
 {
-    return fabs(v.x) <= FLT_MAX && fabs(v.y) <= FLT_MAX && fabs(v.z) <= FLT_MAX;
+    return fabs(v.x) <= FLOAT_MAX && fabs(v.y) <= FLOAT_MAX && fabs(v.z) <= FLOAT_MAX;
 }
 
 static const lsys_module *module_at(const turtle *t, size_t i)
@@ -180,7 +181,7 @@ static xyl_result check_width(const turtle *t, size_t i)
 {
     double r = 0.5 * t->st.width;
     if (t->o->radius_mode != XYL_RADIUS_GRAMMAR) return XYL_OK;
-    if (!(fabs(r) <= FLT_MAX))
+    if (!(fabs(r) <= FLOAT_MAX))
         return xyl__fail(t->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)i,
                          "module %zu: width %g overflows a float radius", i, t->st.width);
     if (!((float)r > 0.0f))
@@ -300,7 +301,7 @@ static xyl_result add_leaf(turtle *t, size_t i)
     double size;
     xyl_result r = first_param(t, i, 0.5 * t->g->info.step, &size);
     if (r != XYL_OK) return r;
-    if (!(fabs(size) <= FLT_MAX))
+    if (!(fabs(size) <= FLOAT_MAX))
         return xyl__fail(t->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)i,
                          "module %zu: leaf size %g overflows a float", i, size);
     if (!((float)size > 0.0f)) return XYL_OK; /* documented: no leaf */
@@ -432,11 +433,23 @@ static xyl_result walk(turtle *t)
 
 /* ---- output -------------------------------------------------------------------------------- */
 
+/* Pipe radii grow with the number of tips; a huge tip radius could leave the float range. */
+static xyl_result check_radii(const turtle *t, const double *radius)
+{
+    for (size_t i = 0; i < t->node_count; ++i) {
+        if (radius[i] <= FLOAT_MAX) continue;
+        return xyl__fail(t->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)t->nodes[i].module,
+                         "the radius of the node of module %zu overflows a float",
+                         t->nodes[i].module);
+    }
+    return XYL_OK;
+}
+
 static xyl_result fill_nodes(const turtle *t, const double *radius, xyl_skel_node *out)
 {
     for (size_t i = 0; i < t->node_count; ++i) {
         const lsys_tnode *n = &t->nodes[i];
-        if (!fits_float(n->pos) || !(radius[i] <= FLT_MAX))
+        if (!fits_float(n->pos))
             return xyl__fail(t->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)n->module,
                              "node of module %zu leaves the float range", n->module);
         out[i].pos = xyl__to_f3(n->pos);
@@ -488,11 +501,11 @@ static xyl_result finish(turtle *t, xyl_skeleton **out)
     if (!radius) return xyl__fail(t->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     lsys_turtle_radii(t->nodes, t->node_count, t->o, radius);
     uint32_t forks = 0, clamped = 0;
-    xyl_result r = XYL_OK;
-    if (t->o->angle_mode == XYL_ANGLES_MURRAY)
-        r = lsys_turtle_murray(t->nodes, t->node_count, t->leaves, t->leaf_count, radius, t->o,
-                               &forks, &clamped);
-    if (r != XYL_OK) r = xyl__fail(t->diag, r, 0, 0, -1, "out of memory for Murray angles");
+    xyl_result r = check_radii(t, radius);
+    if (r == XYL_OK && t->o->angle_mode == XYL_ANGLES_MURRAY &&
+        lsys_turtle_murray(t->nodes, t->node_count, t->leaves, t->leaf_count, radius, t->o,
+                           &forks, &clamped) != XYL_OK)
+        r = xyl__fail(t->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for Murray angles");
     xyl_skeleton *sk = NULL;
     if (r == XYL_OK) r = adopt(t, radius, &sk);
     xyl__free(a, radius);

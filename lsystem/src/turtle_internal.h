@@ -5,9 +5,7 @@
 
 #include "lsys_internal.h"
 
-/* The skeleton limits' documented defaults (xyl_stems.h). */
-#define LSYS_DEFAULT_MAX_SKEL_NODES (UINT64_C(1) << 24)
-#define LSYS_DEFAULT_MAX_SKEL_LEAVES (UINT64_C(1) << 24)
+#include "skeleton_internal.h"
 
 /* A node while the turtle grows the tree: double position, the turtle width that made it, and
  * what merge_collinear needs to know. */

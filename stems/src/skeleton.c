@@ -4,13 +4,11 @@
 #include "skeleton_internal.h"
 #include "xylem/xyl_stems.h"
 
-#define DEFAULT_MAX_NODES (UINT64_C(1) << 24)
-#define DEFAULT_MAX_LEAVES (UINT64_C(1) << 24)
 
 static xyl_result validate(const xyl_skeleton_desc *d, xyl_diag *diag)
 {
-    uint64_t max_nodes = d->limits.max_nodes ? d->limits.max_nodes : DEFAULT_MAX_NODES;
-    uint64_t max_leaves = d->limits.max_leaves ? d->limits.max_leaves : DEFAULT_MAX_LEAVES;
+    uint64_t max_nodes = d->limits.max_nodes ? d->limits.max_nodes : XYL__SKEL_DEFAULT_MAX_NODES;
+    uint64_t max_leaves = d->limits.max_leaves ? d->limits.max_leaves : XYL__SKEL_DEFAULT_MAX_LEAVES;
     if ((d->node_count && !d->nodes) || (d->leaf_count && !d->leaves))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "array is NULL but count is not 0");
     if ((uint64_t)d->node_count > max_nodes || d->node_count > (size_t)INT32_MAX)

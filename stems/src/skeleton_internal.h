@@ -5,6 +5,10 @@
 #include "xyl_internal.h"
 #include "xylem/xyl_stems.h"
 
+/* Documented defaults of xyl_skeleton_limits (xyl_stems.h), shared by every producer. */
+#define XYL__SKEL_DEFAULT_MAX_NODES (UINT64_C(1) << 24)
+#define XYL__SKEL_DEFAULT_MAX_LEAVES (UINT64_C(1) << 24)
+
 /* The public view comes first so a xyl_skeleton* is a xyl__skeleton*. */
 typedef struct xyl__skeleton {
     xyl_skeleton pub;
