@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,10 +35,17 @@ const char *xyl_result_string(xyl_result r)
 
 /* ---- allocation ---------------------------------------------------------------------------- */
 
+/* A custom allocator needs both hooks; one with only one hook counts as zero-filled (malloc and
+ * free), so a missing free can never leak. */
+static bool custom(const xyl_allocator *a)
+{
+    return a && a->alloc && a->free;
+}
+
 void *xyl__alloc(const xyl_allocator *a, size_t size)
 {
     if (size == 0) size = 1;
-    if (a && a->alloc) return a->alloc(size, a->user);
+    if (custom(a)) return a->alloc(size, a->user);
     return malloc(size);
 }
 
@@ -53,11 +61,8 @@ void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size)
 void xyl__free(const xyl_allocator *a, void *p)
 {
     if (!p) return;
-    if (a && a->alloc) {
-        if (a->free) a->free(p, a->user);
-        return;
-    }
-    free(p);
+    if (custom(a)) a->free(p, a->user);
+    else free(p);
 }
 
 bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
@@ -162,6 +167,23 @@ double xyl__frame_error(const xyl__frame *f)
 
 /* ---- files --------------------------------------------------------------------------------- */
 
+/* Makes a rename durable: fsync the folder that holds path (best effort; the rename itself is
+ * already atomic). path is modified. */
+static void sync_parent(char *path)
+{
+    char *slash = strrchr(path, '/');
+    const char *dir = ".";
+    if (slash == path) dir = "/";
+    else if (slash) {
+        *slash = '\0';
+        dir = path;
+    }
+    int fd = open(dir, O_RDONLY);
+    if (fd < 0) return;
+    (void)fsync(fd);
+    close(fd);
+}
+
 xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag)
 {
     if (!path || !*path || (!data && size))
@@ -210,6 +232,7 @@ xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t siz
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot rename onto '%s': %s", path,
                          strerror(e));
     }
+    sync_parent(tmp);
     free(tmp);
     return XYL_OK;
 }

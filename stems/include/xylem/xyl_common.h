@@ -70,7 +70,8 @@ typedef struct xyl_diag {
     char warning[XYL_DIAG_MESSAGE_SIZE];    /* the first warning's text */
 } xyl_diag;
 
-/* Allocation hooks. Zero-filled means the C library's malloc/free. */
+/* Allocation hooks. Zero-filled means the C library's malloc/free; so does a struct with only
+ * one of the two hooks set. */
 typedef struct xyl_allocator {
     void *(*alloc)(size_t size, void *user);
     void (*free)(void *ptr, void *user);

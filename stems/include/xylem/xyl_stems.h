@@ -106,7 +106,8 @@ XYL_API xyl_result xyl_skeleton_read_file(const char *path, const xyl_skeleton_r
 
 /* Count-then-fill: with buffer == NULL (or too small) sets *needed to the byte count
  * (without the terminating NUL) and returns XYL_OK / XYL_ERR_INVALID_ARGUMENT respectively;
- * otherwise writes NUL-terminated text. */
+ * otherwise writes NUL-terminated text. A caller-built view that breaks the skeleton's
+ * invariants gives XYL_ERR_NON_FINITE or XYL_ERR_INVALID_SKELETON, as xyl_skeleton_create. */
 XYL_API xyl_result xyl_skeleton_write_text(const xyl_skeleton *skeleton, xyl_skel_format format,
                                            char *buffer, size_t capacity, size_t *needed);
 

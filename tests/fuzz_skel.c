@@ -1,0 +1,95 @@
+/* libFuzzer target for the .skel reader.
+ *
+ * Any bytes go to xyl_skeleton_read_text (with small limits so big inputs stay fast). A
+ * rejected input must come back with a filled diag and *out untouched; an accepted one must
+ * write back in both formats and re-read from .skel text to the very same bits. Anything else
+ * abort()s, which libFuzzer reports as a crash.
+ *
+ *   ./fuzz_skel -max_total_time=60 new_corpus/ tests/data/skel
+ */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "xylem/xyl_stems.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static void check(int ok)
+{
+    if (!ok) abort();
+}
+
+static char *render(const xyl_skeleton *sk, xyl_skel_format format, size_t *len)
+{
+    size_t needed = 0;
+    check(xyl_skeleton_write_text(sk, format, NULL, 0, &needed) == XYL_OK);
+    char *text = malloc(needed + 1);
+    check(text != NULL);
+    check(xyl_skeleton_write_text(sk, format, text, needed + 1, len) == XYL_OK);
+    check(*len == needed && strlen(text) == needed);
+    return text;
+}
+
+static void check_same(const xyl_skeleton *a, const xyl_skeleton *b)
+{
+    check(a->node_count == b->node_count && a->leaf_count == b->leaf_count);
+    check(a->branch_count == b->branch_count && a->root_count == b->root_count);
+    check(a->max_order == b->max_order);
+    check(a->node_count == 0 || memcmp(a->nodes, b->nodes, a->node_count * sizeof *a->nodes) == 0);
+    check(a->leaf_count == 0 ||
+          memcmp(a->leaves, b->leaves, a->leaf_count * sizeof *a->leaves) == 0);
+}
+
+/* A rejection must explain itself in printable text and point at the input, except when
+ * memory ran out. */
+static void check_rejection(xyl_result r, const xyl_skeleton *out, const xyl_diag *d)
+{
+    check(out == NULL && d->code == r && d->message[0] != '\0');
+    for (const char *c = d->message; *c; ++c) check((unsigned char)*c >= 0x20);
+    check(r == XYL_ERR_OUT_OF_MEMORY || d->line >= 1);
+}
+
+static size_t count_lines(const char *text, char first)
+{
+    size_t n = 0;
+    for (const char *p = text; *p; ++p)
+        if ((p == text || p[-1] == '\n') && *p == first) ++n;
+    return n;
+}
+
+static void check_obj(const xyl_skeleton *sk)
+{
+    size_t len, segments = 0;
+    char *obj = render(sk, XYL_SKEL_FORMAT_OBJ, &len);
+    for (size_t i = 0; i < sk->node_count; ++i) segments += sk->nodes[i].parent >= 0;
+    check(count_lines(obj, 'v') == sk->node_count);
+    check(count_lines(obj, 'l') == segments);
+    free(obj);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    xyl_skeleton_read_desc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.limits.max_nodes = 4096;
+    desc.limits.max_leaves = 4096;
+    xyl_diag diag;
+    memset(&diag, 0, sizeof diag);
+    xyl_skeleton *sk = NULL;
+    xyl_result r = xyl_skeleton_read_text((const char *)data, size, &desc, &sk, &diag);
+    if (r != XYL_OK) {
+        check_rejection(r, sk, &diag);
+        return 0;
+    }
+    size_t len;
+    char *text = render(sk, XYL_SKEL_FORMAT_SKEL, &len);
+    xyl_skeleton *back = NULL;
+    check(xyl_skeleton_read_text(text, len, &desc, &back, &diag) == XYL_OK);
+    check_same(sk, back);
+    check_obj(sk);
+    free(text);
+    xyl_skeleton_destroy(back);
+    xyl_skeleton_destroy(sk);
+    return 0;
+}
