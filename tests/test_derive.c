@@ -4,24 +4,7 @@
 
 #include "test_util.h"
 
-static xyl_lstring *derive(const char *text, uint32_t depth, uint64_t seed, xyl_result expect,
-                           xyl_diag *d)
-{
-    xyl_grammar *g = tu_parse(text);
-    xyl_derive_desc dd = {0};
-    dd.has_depth = true;
-    dd.depth = depth;
-    dd.has_seed = true;
-    dd.seed = seed;
-    xyl_lstring *s = NULL;
-    xyl_diag local = {0};
-    xyl_result r = xyl_lsystem_derive(g, &dd, &s, d ? d : &local);
-    xyl_grammar_destroy(g);
-    if (r != expect)
-        fail_msg("expected %s, got %s (%s)", xyl_result_string(expect), xyl_result_string(r),
-                 (d ? d : &local)->message);
-    return s;
-}
+#define derive tu_derive
 
 static size_t count_symbol(const xyl_lstring *s, char c)
 {

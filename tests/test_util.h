@@ -42,8 +42,9 @@ static inline void tu_parse_fails(const char *text, xyl_result code, uint32_t li
     assert_ptr_equal(g, (xyl_grammar *)(uintptr_t)1);
 }
 
-/* Derives text to the given depth and returns the formatted string (malloc'd). */
-static inline char *tu_derive_text(const char *text, uint32_t depth, uint64_t seed)
+/* Derives text with depth and seed; fails the test unless the result is expect. */
+static inline xyl_lstring *tu_derive(const char *text, uint32_t depth, uint64_t seed,
+                                     xyl_result expect, xyl_diag *diag)
 {
     xyl_grammar *g = tu_parse(text);
     xyl_derive_desc dd = {0};
@@ -52,16 +53,26 @@ static inline char *tu_derive_text(const char *text, uint32_t depth, uint64_t se
     dd.has_seed = true;
     dd.seed = seed;
     xyl_lstring *s = NULL;
-    xyl_diag d = {0};
-    xyl_result r = xyl_lsystem_derive(g, &dd, &s, &d);
-    if (r != XYL_OK) fail_msg("derive failed: %s: %s", xyl_result_string(r), d.message);
+    xyl_diag local = {0};
+    xyl_diag *d = diag ? diag : &local;
+    xyl_result r = xyl_lsystem_derive(g, &dd, &s, d);
+    xyl_grammar_destroy(g);
+    if (r != expect)
+        fail_msg("expected %s, got %s (%s)", xyl_result_string(expect), xyl_result_string(r),
+                 d->message);
+    return s;
+}
+
+/* Derives text to the given depth and returns the formatted string (malloc'd). */
+static inline char *tu_derive_text(const char *text, uint32_t depth, uint64_t seed)
+{
+    xyl_lstring *s = tu_derive(text, depth, seed, XYL_OK, NULL);
     size_t need = 0;
     assert_int_equal(xyl_lstring_format(s, NULL, 0, &need), XYL_OK);
     char *buf = malloc(need + 1);
     assert_non_null(buf);
     assert_int_equal(xyl_lstring_format(s, buf, need + 1, &need), XYL_OK);
     xyl_lstring_destroy(s);
-    xyl_grammar_destroy(g);
     return buf;
 }
 

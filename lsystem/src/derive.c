@@ -191,6 +191,16 @@ static xyl_result oom(deriver *d)
                      "out of memory at derivation step %u", d->step);
 }
 
+/* Bookkeeping for a module just written to next: bracket depth and the cut flag. */
+static xyl_result track(deriver *d, uint8_t sym)
+{
+    d->has_cut |= sym == '%';
+    if (sym == ']') --d->depth;
+    if (sym == '[' && ++d->depth > d->limits.max_nesting)
+        return fail_limit(d, "bracket nesting", d->limits.max_nesting);
+    return XYL_OK;
+}
+
 static xyl_result emit_copy(deriver *d, size_t i)
 {
     const lsys_module *m = &d->cur->mods[i];
@@ -201,11 +211,7 @@ static xyl_result emit_copy(deriver *d, size_t i)
     memcpy(n->params + n->nparams, d->cur->params + m->param, m->nparam * sizeof(double));
     n->nparams += m->nparam;
     n->mods[n->count++] = out;
-    if (m->sym == '[' && ++d->depth > d->limits.max_nesting)
-        return fail_limit(d, "bracket nesting", d->limits.max_nesting);
-    if (m->sym == ']') --d->depth;
-    d->has_cut |= m->sym == '%';
-    return XYL_OK;
+    return track(d, m->sym);
 }
 
 static xyl_result emit_constant(deriver *d, const lsys_prod *pr)
@@ -250,10 +256,8 @@ static xyl_result emit_successor(deriver *d, const lsys_prod *pr)
             n->params[n->nparams++] = v;
         }
         n->mods[n->count++] = out;
-        if (m->sym == '[' && ++d->depth > d->limits.max_nesting)
-            return fail_limit(d, "bracket nesting", d->limits.max_nesting);
-        if (m->sym == ']') --d->depth;
-        d->has_cut |= m->sym == '%';
+        xyl_result r = track(d, m->sym);
+        if (r) return r;
     }
     return XYL_OK;
 }

@@ -91,21 +91,18 @@ static size_t find_top(const char *s, size_t pos, size_t end, char c)
 
 /* ---- successors (and the axiom) ------------------------------------------------------------ */
 
-static xyl_result add_param_exprs(lsys_parser *p, size_t *pos, size_t end, lsys_succ *m)
+/* Parses "(item, item, ...)" at *pos with one item callback per element; the callback raises
+ * *count and checks the parameter limit. */
+typedef xyl_result (*list_item_fn)(lsys_parser *p, size_t *pos, size_t end, void *ctx);
+
+static xyl_result parse_list(lsys_parser *p, size_t *pos, size_t end, list_item_fn item, void *ctx)
 {
     const char *s = p->src;
     size_t open = (*pos)++;
     for (;;) {
-        if (m->nparam >= p->g->limits.max_params)
-            return lsys_error_at(p, *pos, XYL_ERR_LIMIT_EXCEEDED,
-                                 "module '%c' has more than %u parameters", m->sym,
-                                 p->g->limits.max_params);
-        if (!GROW(p, exprs, expr_count, expr_cap, p->g->expr_count + 1)) return oom(p, *pos);
-        lsys_expr e;
-        xyl_result r = lsys_compile_expr(p, pos, end, &e);
+        xyl_result r = item(p, pos, end, ctx);
         if (r) return r;
-        p->g->exprs[p->g->expr_count++] = e;
-        ++m->nparam;
+        lsys_skip_space(s, pos, end);
         if (*pos < end && s[*pos] == ',') {
             ++*pos;
             continue;
@@ -116,6 +113,27 @@ static xyl_result add_param_exprs(lsys_parser *p, size_t *pos, size_t end, lsys_
         }
         return lsys_error_at(p, open, XYL_ERR_INVALID_GRAMMAR, "'(' is never closed");
     }
+}
+
+static xyl_result check_arity(lsys_parser *p, size_t at, char sym, uint32_t nparam)
+{
+    if (nparam < p->g->limits.max_params) return XYL_OK;
+    return lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "module '%c' has more than %u parameters",
+                         sym, p->g->limits.max_params);
+}
+
+static xyl_result param_expr_item(lsys_parser *p, size_t *pos, size_t end, void *ctx)
+{
+    lsys_succ *m = ctx;
+    xyl_result r = check_arity(p, *pos, (char)m->sym, m->nparam);
+    if (r) return r;
+    if (!GROW(p, exprs, expr_count, expr_cap, p->g->expr_count + 1)) return oom(p, *pos);
+    lsys_expr e;
+    r = lsys_compile_expr(p, pos, end, &e);
+    if (r) return r;
+    p->g->exprs[p->g->expr_count++] = e;
+    ++m->nparam;
+    return XYL_OK;
 }
 
 /* Parses modules with parameter expressions from [*pos, end) into succs; brackets must balance. */
@@ -145,7 +163,7 @@ static xyl_result parse_successor(lsys_parser *p, size_t pos, size_t end, uint32
         ++pos;
         lsys_skip_space(s, &pos, end);
         if (pos < end && s[pos] == '(') {
-            xyl_result r = add_param_exprs(p, &pos, end, &m);
+            xyl_result r = parse_list(p, &pos, end, param_expr_item, &m);
             if (r) return r;
         }
         g->succs[g->succ_count++] = m;
@@ -204,34 +222,18 @@ static xyl_result declare_var(lsys_parser *p, size_t at, size_t n)
     return XYL_OK;
 }
 
-static xyl_result parse_formals(lsys_parser *p, size_t *pos, size_t end, lsys_pat *m)
+static xyl_result formal_item(lsys_parser *p, size_t *pos, size_t end, void *ctx)
 {
-    const char *s = p->src;
-    size_t open = (*pos)++;
-    for (;;) {
-        lsys_skip_space(s, pos, end);
-        size_t n = ident_len(s, *pos, end);
-        if (n == 0)
-            return lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR, "expected a parameter name");
-        if (m->nparam >= p->g->limits.max_params)
-            return lsys_error_at(p, *pos, XYL_ERR_LIMIT_EXCEEDED,
-                                 "module '%c' has more than %u parameters", m->sym,
-                                 p->g->limits.max_params);
-        xyl_result r = declare_var(p, *pos, n);
-        if (r) return r;
-        ++m->nparam;
-        *pos += n;
-        lsys_skip_space(s, pos, end);
-        if (*pos < end && s[*pos] == ',') {
-            ++*pos;
-            continue;
-        }
-        if (*pos < end && s[*pos] == ')') {
-            ++*pos;
-            return XYL_OK;
-        }
-        return lsys_error_at(p, open, XYL_ERR_INVALID_GRAMMAR, "'(' is never closed");
-    }
+    lsys_pat *m = ctx;
+    lsys_skip_space(p->src, pos, end);
+    size_t n = ident_len(p->src, *pos, end);
+    if (n == 0) return lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR, "expected a parameter name");
+    xyl_result r = check_arity(p, *pos, (char)m->sym, m->nparam);
+    if (!r) r = declare_var(p, *pos, n);
+    if (r) return r;
+    ++m->nparam;
+    *pos += n;
+    return XYL_OK;
 }
 
 /* Parses a run of pattern modules from [*pos, end) up to '<', '>' or end. */
@@ -255,7 +257,7 @@ static xyl_result parse_pattern(lsys_parser *p, size_t *pos, size_t end, bool br
         ++*pos;
         lsys_skip_space(s, pos, end);
         if (*pos < end && s[*pos] == '(') {
-            xyl_result r = parse_formals(p, pos, end, &m);
+            xyl_result r = parse_list(p, pos, end, formal_item, &m);
             if (r) return r;
         }
         g->pats[g->pat_count++] = m;

@@ -264,13 +264,23 @@ static xyl_result start_node(turtle *t, size_t i)
     return r;
 }
 
-static xyl_result draw(turtle *t, size_t i)
+/* Where F or f at module i moves the turtle; *stay when its length is 0 (no effect at all). */
+static xyl_result target(turtle *t, size_t i, xyl__dvec3 *to, bool *stay)
 {
     double len;
     xyl_result r = first_param(t, i, t->g->info.step, &len);
-    if (r != XYL_OK || len == 0.0) return r;
-    xyl__dvec3 to = xyl__d3_add(t->st.pos, xyl__d3_scale(t->st.frame.h, len));
-    if (!fits_float(to)) return position_error(t, i);
+    *stay = r != XYL_OK || len == 0.0;
+    if (*stay) return r;
+    *to = xyl__d3_add(t->st.pos, xyl__d3_scale(t->st.frame.h, len));
+    return fits_float(*to) ? XYL_OK : position_error(t, i);
+}
+
+static xyl_result draw(turtle *t, size_t i)
+{
+    xyl__dvec3 to;
+    bool stay;
+    xyl_result r = target(t, i, &to, &stay);
+    if (r != XYL_OK || stay) return r;
     if (t->st.node < 0 && (r = start_node(t, i)) != XYL_OK) return r;
     if (mergeable(t, to)) {
         t->nodes[t->st.node].pos = to;
@@ -285,11 +295,10 @@ static xyl_result draw(turtle *t, size_t i)
 
 static xyl_result move(turtle *t, size_t i)
 {
-    double len;
-    xyl_result r = first_param(t, i, t->g->info.step, &len);
-    if (r != XYL_OK || len == 0.0) return r;
-    xyl__dvec3 to = xyl__d3_add(t->st.pos, xyl__d3_scale(t->st.frame.h, len));
-    if (!fits_float(to)) return position_error(t, i);
+    xyl__dvec3 to;
+    bool stay;
+    xyl_result r = target(t, i, &to, &stay);
+    if (r != XYL_OK || stay) return r;
     t->st.pos = to;
     t->st.node = -1;
     t->st.anchor = NO_ANCHOR;
