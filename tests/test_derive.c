@@ -342,6 +342,47 @@ static void custom_allocator_sees_every_allocation(void **state)
     assert_int_equal(c.live, 0);
 }
 
+/* Non-parametric constant grammars take the byte path; an unused parametric production forces
+ * the same grammar through the general path. Both must give the same strings. */
+static void byte_path_and_general_path_agree(void **state)
+{
+    (void)state;
+    static const char *grammars[] = {
+        "axiom: F\nF -> F[+F]F[-F]F\n",
+        "axiom: X\nX -> F-[[X]+X]+F[+FX]-X\nF -> FF\n",
+        "axiom: A\nA -> B[C%D[E]F]G%A\nB -> [B]\n",
+        "axiom: A[B%C]D\nA -> AB\nB -> \n",
+        "axiom: F\nF -> F+F-F-F+F\n+ -> -\n",
+        "axiom: AAAAAAAAAAAAAAAAAAAA\nA -> ABCDEFGHIJKLMNOPQRSTUVWXYZ\n",
+    };
+    for (size_t i = 0; i < sizeof grammars / sizeof grammars[0]; ++i) {
+        char general[512];
+        snprintf(general, sizeof general, "%sZ(x) -> Z(x+1)\n", grammars[i]);
+        for (uint32_t depth = 0; depth <= 4; ++depth) {
+            char *a = tu_derive_text(grammars[i], depth, 1);
+            char *b = tu_derive_text(general, depth, 1);
+            if (strcmp(a, b) != 0) fail_msg("grammar %zu depth %u:\n  %s\n  %s", i, depth, a, b);
+            free(a);
+            free(b);
+        }
+    }
+}
+
+static void byte_path_refuses_oversized_steps_before_rewriting(void **state)
+{
+    (void)state;
+    xyl_grammar *g = tu_parse("axiom: F\nF -> FFFFFFFFFF\n");
+    xyl_derive_desc dd = {0};
+    dd.has_depth = true;
+    dd.depth = 12; /* 10^12 modules: refused from the predicted size, nothing is allocated */
+    xyl_lstring *s = NULL;
+    xyl_diag d = {0};
+    assert_int_equal(xyl_lsystem_derive(g, &dd, &s, &d), XYL_ERR_LIMIT_EXCEEDED);
+    assert_non_null(strstr(d.message, "step 9 exceeds the module count"));
+    assert_null(s);
+    xyl_grammar_destroy(g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -366,6 +407,8 @@ int main(void)
         cmocka_unit_test(every_preset_derives_deterministically),
         cmocka_unit_test(context_sensitive_preset_fires_its_signal),
         cmocka_unit_test(custom_allocator_sees_every_allocation),
+        cmocka_unit_test(byte_path_and_general_path_agree),
+        cmocka_unit_test(byte_path_refuses_oversized_steps_before_rewriting),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -28,23 +28,25 @@ static xyl_lstring *lstring_new(const char *text)
     size_t n = strlen(text);
     xyl_lstring *s = calloc(1, sizeof *s);
     assert_non_null(s);
-    s->mods = calloc(n + 1, sizeof *s->mods);
+    s->sym = calloc(n + 1, 1);
+    s->np = calloc(n + 1, 1);
+    s->poff = calloc(n + 1, sizeof *s->poff);
     s->params = calloc(n + 1, sizeof *s->params);
-    assert_true(s->mods && s->params);
+    assert_true(s->sym && s->np && s->poff && s->params);
     const char *p = text;
     while (*p) {
         if (*p == ' ') {
             ++p;
             continue;
         }
-        lsys_module *m = &s->mods[s->count++];
-        m->sym = (uint8_t)*p++;
-        m->param = (uint32_t)s->nparams;
+        size_t m = s->count++;
+        s->sym[m] = (uint8_t)*p++;
+        s->poff[m] = (uint32_t)s->nparams;
         if (*p != '(') continue;
         do {
             char *end;
             s->params[s->nparams++] = strtod(p + 1, &end);
-            m->nparam++;
+            s->np[m]++;
             p = end;
         } while (*p == ',');
         assert_int_equal(*p, ')');
@@ -57,7 +59,9 @@ static xyl_lstring *lstring_new(const char *text)
 
 static void lstring_free(xyl_lstring *s)
 {
-    free(s->mods);
+    free(s->sym);
+    free(s->np);
+    free(s->poff);
     free(s->params);
     free(s);
 }

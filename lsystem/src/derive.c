@@ -1,5 +1,10 @@
 /* Parallel rewriting: context matching (ABOP bracket rules), conditions, stochastic choice,
- * parametric successors, the cut symbol, and every bound checked on the way. */
+ * parametric successors, the cut symbol, and every bound checked on the way.
+ *
+ * Two paths share the string layout of lsys_internal.h. Grammars without parameters whose every
+ * production is constant (the classic bracketed plants) take the byte path: one counting pass
+ * gives the exact size of the next string, limits are checked before anything is allocated, and
+ * the write pass copies bytes. Everything else takes the general path, module by module. */
 #include <stdio.h>
 #include <string.h>
 
@@ -18,22 +23,57 @@ typedef struct deriver {
     bool has_cut;        /* next holds a '%' */
     uint32_t step;       /* 1-based derivation step, for messages */
     xyl_diag *diag;
+    bool bytes;          /* byte path (see step_bytes) */
+    uint64_t hist[256];  /* byte path: how often each symbol occurs in the current string */
+    int64_t depth_bound; /* byte path: an upper bound of the current string's bracket depth */
 } deriver;
 
 /* ---- strings ------------------------------------------------------------------------------- */
 
+/* sym, np and poff share one capacity: each grows by doubling from the same start, so all reach
+ * the same size. On failure the old arrays stay valid. */
 static bool reserve(xyl_lstring *s, size_t mods, size_t params)
 {
-    return xyl__grow(&s->alloc, (void **)&s->mods, &s->cap, s->count, mods, sizeof *s->mods) &&
-           xyl__grow(&s->alloc, (void **)&s->params, &s->pcap, s->nparams, params,
-                     sizeof *s->params);
+    const xyl_allocator *a = &s->alloc;
+    if (mods > s->cap) {
+        size_t c0 = s->cap, c1 = s->cap, c2 = s->cap;
+        if (!xyl__grow(a, (void **)&s->sym, &c0, s->count, mods, 1)) return false;
+        if (s->np && (!xyl__grow(a, (void **)&s->np, &c1, s->count, mods, 1) ||
+                      !xyl__grow(a, (void **)&s->poff, &c2, s->count, mods, sizeof *s->poff)))
+            return false;
+        s->cap = c0;
+    }
+    return xyl__grow(a, (void **)&s->params, &s->pcap, s->nparams, params, sizeof *s->params);
+}
+
+static xyl_lstring *new_string(const xyl_allocator *a, bool parametric)
+{
+    xyl_lstring *s = xyl__calloc(a, 1, sizeof *s);
+    if (!s) return NULL;
+    if (a) s->alloc = *a;
+    s->cap = s->pcap = 16;
+    s->sym = xyl__alloc(a, s->cap);
+    s->params = xyl__alloc(a, s->pcap * sizeof *s->params);
+    bool ok = s->sym && s->params;
+    if (parametric) {
+        s->np = xyl__alloc(a, s->cap);
+        s->poff = xyl__alloc(a, s->cap * sizeof *s->poff);
+        ok = ok && s->np && s->poff;
+    }
+    if (!ok) {
+        xyl_lstring_destroy(s);
+        return NULL;
+    }
+    return s;
 }
 
 void xyl_lstring_destroy(xyl_lstring *s)
 {
     if (!s) return;
     xyl_allocator a = s->alloc;
-    xyl__free(&a, s->mods);
+    xyl__free(&a, s->sym);
+    xyl__free(&a, s->np);
+    xyl__free(&a, s->poff);
     xyl__free(&a, s->params);
     xyl__free(&a, s);
 }
@@ -46,25 +86,25 @@ size_t xyl_lstring_count(const xyl_lstring *s)
 xyl_result xyl_lstring_module(const xyl_lstring *s, size_t index, xyl_module_view *out)
 {
     if (!s || !out || index >= s->count) return XYL_ERR_INVALID_ARGUMENT;
-    const lsys_module *m = &s->mods[index];
-    out->symbol = (char)m->sym;
-    out->param_count = m->nparam;
-    out->params = m->nparam ? s->params + m->param : NULL;
+    out->symbol = (char)s->sym[index];
+    out->param_count = lsys_np(s, index);
+    out->params = out->param_count ? lsys_par(s, index) : NULL;
     return XYL_OK;
 }
 
-static size_t format_module(const xyl_lstring *s, const lsys_module *m, char *out, size_t cap)
+static size_t format_module(const xyl_lstring *s, size_t i, char *out, size_t cap)
 {
     char tmp[32];
     size_t n = 0;
-    if (n < cap) out[n] = (char)m->sym;
+    if (n < cap) out[n] = (char)s->sym[i];
     ++n;
-    for (uint32_t k = 0; k < m->nparam; ++k) {
-        int w = snprintf(tmp, sizeof tmp, "%c%.9g", k ? ',' : '(', s->params[m->param + k]);
-        for (int i = 0; i < w; ++i, ++n)
-            if (n < cap) out[n] = tmp[i];
+    uint32_t np = lsys_np(s, i);
+    for (uint32_t k = 0; k < np; ++k) {
+        int w = snprintf(tmp, sizeof tmp, "%c%.9g", k ? ',' : '(', lsys_par(s, i)[k]);
+        for (int j = 0; j < w; ++j, ++n)
+            if (n < cap) out[n] = tmp[j];
     }
-    if (m->nparam) {
+    if (np) {
         if (n < cap) out[n] = ')';
         ++n;
     }
@@ -77,7 +117,7 @@ xyl_result xyl_lstring_format(const xyl_lstring *s, char *buffer, size_t capacit
     size_t n = 0;
     for (size_t i = 0; i < s->count; ++i) {
         size_t room = buffer && n < capacity ? capacity - n : 0;
-        n += format_module(s, &s->mods[i], buffer ? buffer + n : NULL, room);
+        n += format_module(s, i, buffer ? buffer + n : NULL, room);
     }
     *needed = n;
     if (!buffer) return XYL_OK;
@@ -90,8 +130,13 @@ xyl_result xyl_lstring_format(const xyl_lstring *s, char *buffer, size_t capacit
 
 static void bind(const xyl_lstring *s, size_t i, uint16_t var, double *vars)
 {
-    const lsys_module *m = &s->mods[i];
-    for (uint32_t k = 0; k < m->nparam; ++k) vars[var + k] = s->params[m->param + k];
+    uint32_t np = lsys_np(s, i);
+    if (np) memcpy(vars + var, lsys_par(s, i), np * sizeof *vars);
+}
+
+static bool same_module(const xyl_lstring *s, size_t i, const lsys_pat *pat)
+{
+    return s->sym[i] == pat->sym && lsys_np(s, i) == pat->nparam;
 }
 
 /* Index just before the '[' that opens the branch whose ']' is at i, or SIZE_MAX. */
@@ -99,7 +144,7 @@ static size_t skip_branch_left(const xyl_lstring *s, size_t i)
 {
     uint32_t depth = 0;
     for (;; --i) {
-        uint8_t c = s->mods[i].sym;
+        uint8_t c = s->sym[i];
         if (c == ']') ++depth;
         else if (c == '[' && --depth == 0) return i == 0 ? SIZE_MAX : i - 1;
         if (i == 0) return SIZE_MAX;
@@ -117,7 +162,7 @@ static bool match_left(const deriver *d, const lsys_prod *pr, size_t pos, double
         for (;;) {
             if (i == 0) return false;
             --i;
-            uint8_t c = s->mods[i].sym;
+            uint8_t c = s->sym[i];
             if (c == ']') {
                 i = skip_branch_left(s, i);
                 if (i == SIZE_MAX) return false;
@@ -127,20 +172,19 @@ static bool match_left(const deriver *d, const lsys_prod *pr, size_t pos, double
             if (c == '[' || d->g->ignore[c]) continue;
             break;
         }
-        if (s->mods[i].sym != pat->sym || s->mods[i].nparam != pat->nparam) return false;
+        if (!same_module(s, i, pat)) return false;
         bind(s, i, pat->var, vars);
     }
     return true;
 }
 
 /* Index of the ']' closing the branch that contains i (i inside it), or SIZE_MAX at top level. */
-static size_t find_close(const xyl_lstring *s, size_t i)
+static size_t find_close(const uint8_t *sym, size_t count, size_t i)
 {
     uint32_t depth = 0;
-    for (; i < s->count; ++i) {
-        uint8_t c = s->mods[i].sym;
-        if (c == '[') ++depth;
-        else if (c == ']' && depth-- == 0) return i;
+    for (; i < count; ++i) {
+        if (sym[i] == '[') ++depth;
+        else if (sym[i] == ']' && depth-- == 0) return i;
     }
     return SIZE_MAX;
 }
@@ -154,23 +198,22 @@ static bool match_right(const deriver *d, const lsys_prod *pr, size_t pos, doubl
     for (uint32_t j = 0; j < pr->right_count; ++j) {
         const lsys_pat *pat = &d->g->pats[pr->right_first + j];
         if (pat->sym == ']') {
-            i = find_close(s, i);
+            i = find_close(s->sym, s->count, i);
             if (i == SIZE_MAX) return false;
             ++i;
             continue;
         }
         for (; i < s->count; ++i) {
-            uint8_t c = s->mods[i].sym;
+            uint8_t c = s->sym[i];
             if (d->g->ignore[c]) continue;
             if (c == '[' && pat->sym != '[') {
-                i = find_close(s, i + 1);
+                i = find_close(s->sym, s->count, i + 1);
                 if (i == SIZE_MAX) return false;
                 continue;
             }
             break;
         }
-        if (i >= s->count) return false;
-        if (s->mods[i].sym != pat->sym || s->mods[i].nparam != pat->nparam) return false;
+        if (i >= s->count || !same_module(s, i, pat)) return false;
         bind(s, i, pat->var, vars);
         ++i;
     }
@@ -201,17 +244,27 @@ static xyl_result track(deriver *d, uint8_t sym)
     return XYL_OK;
 }
 
+/* Appends a module header; the caller writes np parameters at params[nparams ...). */
+static void push_module(xyl_lstring *n, uint8_t sym, uint32_t np)
+{
+    n->sym[n->count] = sym;
+    if (n->np) {
+        n->np[n->count] = (uint8_t)np;
+        n->poff[n->count] = (uint32_t)n->nparams;
+    }
+    ++n->count;
+}
+
 static xyl_result emit_copy(deriver *d, size_t i)
 {
-    const lsys_module *m = &d->cur->mods[i];
+    const xyl_lstring *c = d->cur;
     xyl_lstring *n = d->next;
-    if (!reserve(n, n->count + 1, n->nparams + m->nparam)) return oom(d);
-    lsys_module out = *m;
-    out.param = (uint32_t)n->nparams;
-    memcpy(n->params + n->nparams, d->cur->params + m->param, m->nparam * sizeof(double));
-    n->nparams += m->nparam;
-    n->mods[n->count++] = out;
-    return track(d, m->sym);
+    uint32_t np = lsys_np(c, i);
+    if (!reserve(n, n->count + 1, n->nparams + np)) return oom(d);
+    if (np) memcpy(n->params + n->nparams, lsys_par(c, i), np * sizeof(double));
+    push_module(n, c->sym[i], np);
+    n->nparams += np;
+    return track(d, c->sym[i]);
 }
 
 static xyl_result emit_constant(deriver *d, const lsys_prod *pr)
@@ -223,16 +276,19 @@ static xyl_result emit_constant(deriver *d, const lsys_prod *pr)
     if (d->depth + (uint32_t)pr->const_depth_max > d->limits.max_nesting)
         return fail_limit(d, "bracket nesting", d->limits.max_nesting);
     if (pr->const_count == 0) return XYL_OK; /* an erasing production */
-    lsys_module *out = n->mods + n->count;
-    memcpy(out, g->cmods + pr->const_first, pr->const_count * sizeof *out);
-    uint32_t base = (uint32_t)n->nparams;
-    for (uint32_t i = 0; i < pr->const_count; ++i) {
-        out[i].param += base;
-        d->has_cut |= out[i].sym == '%';
+    memcpy(n->sym + n->count, g->csyms + pr->const_first, pr->const_count);
+    if (n->np) {
+        const lsys_module *m = g->cmods + pr->const_first;
+        uint32_t base = (uint32_t)n->nparams;
+        for (uint32_t i = 0; i < pr->const_count; ++i) {
+            n->np[n->count + i] = m[i].nparam;
+            n->poff[n->count + i] = base + m[i].param;
+        }
+        if (np) memcpy(n->params + n->nparams, g->cparams + pr->const_pfirst, np * sizeof(double));
     }
-    if (np) memcpy(n->params + n->nparams, g->cparams + pr->const_pfirst, np * sizeof(double));
-    n->nparams += np;
     n->count += pr->const_count;
+    n->nparams += np;
+    d->has_cut |= pr->const_cut;
     return XYL_OK;
 }
 
@@ -243,7 +299,7 @@ static xyl_result emit_successor(deriver *d, const lsys_prod *pr)
     for (uint32_t i = 0; i < pr->succ_count; ++i) {
         const lsys_succ *m = &g->succs[pr->succ_first + i];
         if (!reserve(n, n->count + 1, n->nparams + m->nparam)) return oom(d);
-        lsys_module out = {m->sym, m->nparam, 0, (uint32_t)n->nparams};
+        double *out = n->params + n->nparams;
         for (uint32_t k = 0; k < m->nparam; ++k) {
             const lsys_expr *e = &g->exprs[m->expr + k];
             double v = e->constant ? g->code[e->first].k
@@ -253,9 +309,10 @@ static xyl_result emit_successor(deriver *d, const lsys_prod *pr)
                                  "production on line %u gave parameter %u of '%c' the value %g at "
                                  "step %u",
                                  pr->line, k + 1, m->sym, v, d->step);
-            n->params[n->nparams++] = v;
+            out[k] = v;
         }
-        n->mods[n->count++] = out;
+        push_module(n, m->sym, m->nparam);
+        n->nparams += m->nparam;
         xyl_result r = track(d, m->sym);
         if (r) return r;
     }
@@ -298,11 +355,12 @@ static xyl_result choose(deriver *d, const lsys_prod *pr, const lsys_prod **chos
 static xyl_result rewrite_general(deriver *d, size_t i, bool *done)
 {
     const xyl_grammar *g = d->g;
-    const lsys_module *m = &d->cur->mods[i];
+    uint8_t sym = d->cur->sym[i];
+    uint32_t np = lsys_np(d->cur, i);
     *done = false;
-    for (uint32_t k = 0; k < g->sym_count[m->sym]; ++k) {
-        const lsys_prod *pr = &g->prods[g->sym_prods[g->sym_first[m->sym] + k]];
-        if (pr->pred_nparam != m->nparam) continue;
+    for (uint32_t k = 0; k < g->sym_count[sym]; ++k) {
+        const lsys_prod *pr = &g->prods[g->sym_prods[g->sym_first[sym] + k]];
+        if (pr->pred_nparam != np) continue;
         if (pr->left_count && !match_left(d, pr, i, d->vars)) continue;
         if (pr->right_count && !match_right(d, pr, i, d->vars)) continue;
         bind(d->cur, i, pr->pred_var, d->vars);
@@ -332,16 +390,21 @@ static void apply_cut(xyl_lstring *s)
 {
     size_t w = 0, wp = 0;
     for (size_t i = 0; i < s->count;) {
-        if (s->mods[i].sym == '%') {
-            size_t close = find_close(s, i + 1);
+        if (s->sym[i] == '%') {
+            size_t close = find_close(s->sym, s->count, i + 1);
             i = close == SIZE_MAX ? s->count : close;
             continue;
         }
-        lsys_module m = s->mods[i++];
-        memmove(s->params + wp, s->params + m.param, m.nparam * sizeof(double));
-        m.param = (uint32_t)wp;
-        wp += m.nparam;
-        s->mods[w++] = m;
+        uint32_t np = lsys_np(s, i);
+        s->sym[w] = s->sym[i];
+        if (s->np) {
+            memmove(s->params + wp, s->params + s->poff[i], np * sizeof(double));
+            s->np[w] = (uint8_t)np;
+            s->poff[w] = (uint32_t)wp;
+            wp += np;
+        }
+        ++w;
+        ++i;
     }
     s->count = w;
     s->nparams = wp;
@@ -349,76 +412,183 @@ static void apply_cut(xyl_lstring *s)
 
 /* ---- the derivation loop ------------------------------------------------------------------- */
 
-static xyl_result check_size(deriver *d, const xyl_lstring *s)
+static xyl_result check_size(deriver *d, uint64_t count, uint64_t nparams)
 {
-    if ((uint64_t)s->count > d->limits.max_modules)
+    if (count > d->limits.max_modules)
         return fail_limit(d, "module count", (unsigned long long)d->limits.max_modules);
-    uint64_t bytes = (uint64_t)s->count * sizeof(lsys_module) + (uint64_t)s->nparams * sizeof(double);
-    if (bytes > d->limits.max_bytes || s->nparams > UINT32_MAX)
+    uint64_t per_module = d->next->np ? 1 + 1 + sizeof(uint32_t) : 1;
+    uint64_t bytes = count * per_module + nparams * sizeof(double);
+    if (bytes > d->limits.max_bytes || nparams > UINT32_MAX)
         return fail_limit(d, "byte", (unsigned long long)d->limits.max_bytes);
     return XYL_OK;
 }
 
-static xyl_result step(deriver *d)
+/* General path: module by module, any production kind. */
+static xyl_result step_general(deriver *d)
 {
     const xyl_grammar *g = d->g;
     const xyl_lstring *cur = d->cur;
     xyl_lstring *n = d->next;
-    n->count = 0;
-    n->nparams = 0;
-    d->depth = 0;
-    d->has_cut = false;
     if (!reserve(n, cur->count + cur->count / 2, cur->nparams + cur->nparams / 2)) return oom(d);
     for (size_t i = 0; i < cur->count; ++i) {
-        const lsys_module *m = &cur->mods[i];
+        uint8_t sym = cur->sym[i];
         xyl_result r = XYL_OK;
         bool done = false;
-        if (g->sym_count[m->sym] == 1) {
-            const lsys_prod *pr = &g->prods[g->sym_prods[g->sym_first[m->sym]]];
-            if (pr->is_constant && pr->pred_nparam == m->nparam) {
-                r = emit_constant(d, pr);
-                done = true;
-            }
+        int32_t k = g->constant_prod[sym];
+        if (k >= 0 && lsys_np(cur, i) == 0) {
+            r = emit_constant(d, &g->prods[k]);
+            done = true;
         }
-        if (!done && g->sym_count[m->sym] && !r) r = rewrite_general(d, i, &done);
+        if (!done && !r && g->sym_count[sym]) r = rewrite_general(d, i, &done);
         if (!done && !r) r = emit_copy(d, i);
-        if (!r) r = check_size(d, n);
+        if (!r) r = check_size(d, n->count, n->nparams);
         if (r) return r;
     }
-    if (d->has_cut) apply_cut(n);
     return XYL_OK;
+}
+
+/* ---- byte path ----------------------------------------------------------------------------- */
+
+/* Symbol counts and deepest bracket nesting of s, by one pass. */
+static int64_t measure_bytes(const xyl_grammar *g, const xyl_lstring *s, uint64_t *hist,
+                             bool rewrite)
+{
+    int64_t depth = 0, deepest = 0;
+    if (hist) memset(hist, 0, 256 * sizeof *hist);
+    for (size_t i = 0; i < s->count; ++i) {
+        uint8_t c = s->sym[i];
+        if (hist) ++hist[c];
+        int64_t top = depth + (rewrite ? g->byte_dmax[c] : c == '[');
+        if (top > deepest) deepest = top;
+        depth += rewrite ? g->byte_delta[c] : (c == '[') - (c == ']');
+    }
+    return deepest;
+}
+
+/* The next string's symbol counts follow from the current ones through the successors. */
+static void next_histogram(const xyl_grammar *g, const uint64_t *cur, uint64_t *next)
+{
+    memset(next, 0, 256 * sizeof *next);
+    for (int c = 0; c < 256; ++c) {
+        if (!cur[c]) continue;
+        const uint8_t *succ = g->byte_table + g->byte_src[c];
+        for (uint32_t j = 0; j < g->byte_len[c]; ++j) next[succ[j]] += cur[c];
+    }
+}
+
+/* Byte path: every symbol is copied or rewritten by one constant production without parameters.
+ * The next string's exact size comes from the symbol counts and its nesting from a bound (an
+ * exact pass runs only when the bound could reach the limit), so limits are checked before
+ * anything is allocated; the write pass copies each successor with one fixed 16-byte move when
+ * all successors are that short. */
+static xyl_result step_bytes(deriver *d)
+{
+    const xyl_grammar *g = d->g;
+    const xyl_lstring *cur = d->cur;
+    uint64_t hist[256], total = 0;
+    int32_t grow = 0;
+    next_histogram(g, d->hist, hist);
+    for (int c = 0; c < 256; ++c) {
+        total += hist[c];
+        if (d->hist[c] && g->byte_dmax[c] > grow) grow = g->byte_dmax[c];
+    }
+    int64_t bound = d->depth_bound + grow;
+    if (bound > (int64_t)d->limits.max_nesting) bound = measure_bytes(g, cur, NULL, true);
+    if (bound > (int64_t)d->limits.max_nesting)
+        return fail_limit(d, "bracket nesting", d->limits.max_nesting);
+    xyl_result r = check_size(d, total, 0);
+    if (r) return r;
+    xyl_lstring *n = d->next;
+    if (!reserve(n, (size_t)total + 16, 0)) return oom(d);
+    uint8_t *out = n->sym;
+    const uint8_t *table = g->byte_table, *in = cur->sym, *end = cur->sym + cur->count;
+    if (g->byte_max_len <= 16) {
+        for (const uint8_t *p = in; p < end; ++p) {
+            memcpy(out, table + g->byte_src[*p], 16);
+            out += g->byte_len[*p];
+        }
+    } else {
+        for (const uint8_t *p = in; p < end; ++p) {
+            memcpy(out, table + g->byte_src[*p], g->byte_len[*p]);
+            out += g->byte_len[*p];
+        }
+    }
+    n->count = (size_t)total;
+    memcpy(d->hist, hist, sizeof hist);
+    d->depth_bound = bound;
+    d->has_cut = hist['%'] != 0;
+    return XYL_OK;
+}
+
+/* After the axiom is loaded or a cut changed the string: exact counts and depth again. */
+static void remeasure(deriver *d, const xyl_lstring *s)
+{
+    if (d->bytes) d->depth_bound = measure_bytes(d->g, s, d->hist, false);
+}
+
+static xyl_result step(deriver *d)
+{
+    d->next->count = 0;
+    d->next->nparams = 0;
+    d->depth = 0;
+    d->has_cut = false;
+    xyl_result r = d->bytes ? step_bytes(d) : step_general(d);
+    if (!r && d->has_cut) {
+        apply_cut(d->next);
+        remeasure(d, d->next);
+    }
+    return r;
 }
 
 static xyl_result load_axiom(deriver *d, xyl_lstring *s)
 {
     const xyl_grammar *g = d->g;
+    d->next = s;
+    xyl_result r = check_size(d, g->axiom_count, g->axiom_nparams);
+    if (r) return r;
     if (!reserve(s, g->axiom_count, g->axiom_nparams)) return oom(d);
-    memcpy(s->mods, g->axiom, g->axiom_count * sizeof *s->mods);
-    memcpy(s->params, g->axiom_params, g->axiom_nparams * sizeof *s->params);
-    s->count = g->axiom_count;
-    s->nparams = g->axiom_nparams;
-    bool cut = false;
-    uint32_t depth = 0;
-    for (size_t i = 0; i < s->count; ++i) {
-        cut |= s->mods[i].sym == '%';
-        if (s->mods[i].sym == '[' && ++depth > d->limits.max_nesting)
-            return fail_limit(d, "bracket nesting", d->limits.max_nesting);
-        if (s->mods[i].sym == ']') --depth;
+    for (size_t i = 0; i < g->axiom_count; ++i) {
+        const lsys_module *m = &g->axiom[i];
+        push_module(s, m->sym, m->nparam);
+        if (m->nparam)
+            memcpy(s->params + s->nparams, g->axiom_params + m->param, m->nparam * sizeof(double));
+        s->nparams += m->nparam;
+        r = track(d, m->sym);
+        if (r) return r;
     }
-    if (cut) apply_cut(s);
-    return check_size(d, s);
+    if (d->has_cut) apply_cut(s);
+    remeasure(d, s);
+    return XYL_OK;
 }
 
-static xyl_lstring *new_string(const xyl_allocator *a)
+/* Byte path without cuts: the symbol counts predict every step's size, so both strings are
+ * allocated once, and a string that would pass the module or byte limit is refused before any
+ * rewriting. (A cut shrinks strings unpredictably; then sizes are found step by step.) */
+static xyl_result presize(deriver *d, uint32_t depth, xyl_lstring *a, xyl_lstring *b)
 {
-    xyl_lstring *s = xyl__calloc(a, 1, sizeof *s);
-    if (s && a) s->alloc = *a;
-    return s;
+    const xyl_grammar *g = d->g;
+    for (int c = 0; c < 256; ++c)
+        if (g->byte_cut[c]) return XYL_OK;
+    uint64_t hist[256], next[256], largest = a->count;
+    memcpy(hist, d->hist, sizeof hist);
+    for (uint32_t k = 0; k < depth; ++k) {
+        next_histogram(g, hist, next);
+        uint64_t total = 0;
+        for (int c = 0; c < 256; ++c) total += next[c];
+        d->step = k + 1;
+        xyl_result r = check_size(d, total, 0);
+        if (r) return r;
+        if (total > largest) largest = total;
+        memcpy(hist, next, sizeof hist);
+    }
+    size_t cap = (size_t)largest + 16;
+    return reserve(a, cap, 0) && reserve(b, cap, 0) ? XYL_OK : oom(d);
 }
 
 static xyl_result run(deriver *d, uint32_t depth, xyl_lstring **a, xyl_lstring **b)
 {
     xyl_result r = load_axiom(d, *a);
+    if (!r && d->bytes) r = presize(d, depth, *a, *b);
     for (uint32_t k = 0; k < depth && !r; ++k) {
         d->step = k + 1;
         d->cur = *a;
@@ -450,11 +620,15 @@ xyl_result xyl_lsystem_derive(const xyl_grammar *g, const xyl_derive_desc *desc,
                          "derivation depth %u exceeds the limit of %u", depth, d.limits.max_depth);
     d.rng.state = desc->has_seed ? desc->seed : g->info.seed;
     const xyl_allocator *a = &desc->alloc;
-    xyl_lstring *sa = new_string(a), *sb = new_string(a);
-    d.vars = xyl__calloc(a, g->max_vars + 1, sizeof(double));
-    d.stack = xyl__calloc(a, g->max_stack + 1, sizeof(double));
-    d.weights = xyl__calloc(a, g->prod_count + 1, sizeof(double));
-    bool ok = sa && sb && d.vars && d.stack && d.weights;
+    d.bytes = g->all_constant && !g->parametric;
+    xyl_lstring *sa = new_string(a, g->parametric), *sb = new_string(a, g->parametric);
+    bool ok = sa && sb;
+    if (!d.bytes) { /* scratch for expressions and stochastic choice */
+        d.vars = xyl__calloc(a, g->max_vars + 1, sizeof(double));
+        d.stack = xyl__calloc(a, g->max_stack + 1, sizeof(double));
+        d.weights = xyl__calloc(a, g->prod_count + 1, sizeof(double));
+        ok = ok && d.vars && d.stack && d.weights;
+    }
     xyl_result r = ok ? run(&d, depth, &sa, &sb) : oom(&d);
     xyl__free(a, d.weights);
     xyl__free(a, d.vars);

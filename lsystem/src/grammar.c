@@ -646,19 +646,74 @@ static xyl_result precompile(lsys_parser *p, lsys_prod *pr)
     for (uint32_t i = 0; i < pr->succ_count; ++i) {
         const lsys_succ *m = &g->succs[pr->succ_first + i];
         if (!GROW(p, cmods, cmod_count, cmod_cap, g->cmod_count + 1) ||
+            !GROW(p, csyms, cmod_count, csym_cap, g->cmod_count + 1) ||
             !GROW(p, cparams, cparam_count, cparam_cap, g->cparam_count + m->nparam))
             return oom(p, 0);
         lsys_module mod = {m->sym, m->nparam, 0,
                            (uint32_t)(g->cparam_count - pr->const_pfirst)};
         for (uint32_t k = 0; k < m->nparam; ++k)
             g->cparams[g->cparam_count++] = g->code[g->exprs[m->expr + k].first].k;
+        g->csyms[g->cmod_count] = m->sym;
         g->cmods[g->cmod_count++] = mod;
+        pr->const_cut |= m->sym == '%';
         depth += m->sym == '[' ? 1 : m->sym == ']' ? -1 : 0;
         if (depth > pr->const_depth_max) pr->const_depth_max = depth;
     }
     pr->const_count = pr->succ_count;
     pr->const_pcount = (uint32_t)(g->cparam_count - pr->const_pfirst);
     return XYL_OK;
+}
+
+#define BYTE_PAD 16 /* derive.c copies successors 16 bytes at a time */
+
+/* The byte path's per-symbol tables (see xyl_grammar): a copied symbol is its own one-byte
+ * successor, stored after the precompiled ones. */
+static bool build_byte_tables(xyl_grammar *g)
+{
+    size_t n = g->cmod_count;
+    g->byte_table = xyl__calloc(&g->alloc, n + 256 + BYTE_PAD, 1);
+    if (!g->byte_table) return false;
+    if (n) memcpy(g->byte_table, g->csyms, n);
+    g->byte_max_len = 1;
+    for (int c = 0; c < 256; ++c) {
+        int32_t k = g->constant_prod[c];
+        if (k < 0) {
+            g->byte_table[n + (size_t)c] = (uint8_t)c;
+            g->byte_src[c] = (uint32_t)(n + (size_t)c);
+            g->byte_len[c] = 1;
+            g->byte_delta[c] = c == '[' ? 1 : c == ']' ? -1 : 0;
+            g->byte_dmax[c] = c == '[' ? 1 : 0;
+            g->byte_cut[c] = c == '%';
+            continue;
+        }
+        const lsys_prod *pr = &g->prods[k];
+        g->byte_src[c] = pr->const_first;
+        g->byte_len[c] = pr->const_count;
+        g->byte_delta[c] = 0; /* successors are balanced */
+        g->byte_dmax[c] = pr->const_depth_max;
+        g->byte_cut[c] = pr->const_cut;
+        if (pr->const_count > g->byte_max_len) g->byte_max_len = pr->const_count;
+    }
+    return true;
+}
+
+/* Tables derive.c dispatches on: whether any module can carry parameters, and per symbol the one
+ * constant production that always rewrites it (or -1). */
+static bool classify(xyl_grammar *g)
+{
+    g->parametric = g->axiom_nparams > 0;
+    for (size_t i = 0; i < g->succ_count; ++i) g->parametric |= g->succs[i].nparam > 0;
+    g->all_constant = true;
+    for (int c = 0; c < 256; ++c) {
+        g->constant_prod[c] = -1;
+        if (g->sym_count[c] == 0) continue;
+        uint32_t k = g->sym_prods[g->sym_first[c]];
+        const lsys_prod *pr = &g->prods[k];
+        bool always = g->sym_count[c] == 1 && pr->is_constant && pr->pred_nparam == 0;
+        if (always) g->constant_prod[c] = (int32_t)k;
+        g->all_constant &= always;
+    }
+    return !g->all_constant || g->parametric || build_byte_tables(g);
 }
 
 static xyl_result finalize(lsys_parser *p)
@@ -689,6 +744,7 @@ static xyl_result finalize(lsys_parser *p)
             if (r) return r;
         }
     }
+    if (!classify(g)) return oom(p, 0);
     g->info.production_count = g->prod_count;
     return XYL_OK;
 }
@@ -700,7 +756,7 @@ void xyl_grammar_destroy(xyl_grammar *g)
     if (!g) return;
     xyl_allocator a = g->alloc;
     void *arrays[] = {g->axiom, g->axiom_params, g->prods, g->pats, g->succs, g->exprs,
-                      g->code, g->cmods, g->cparams, g->sym_prods};
+                      g->code, g->cmods, g->csyms, g->cparams, g->sym_prods, g->byte_table};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&a, arrays[i]);
     xyl__free(&a, g);
 }

@@ -16,7 +16,8 @@
 
 /* ---- module strings ------------------------------------------------------------------------ */
 
-/* 8 bytes per module; parameters live in one double array, module i's at params[param]. */
+/* A module record of the grammar (axiom, precompiled successors): symbol, arity, parameters at
+ * param in the owning array. */
 typedef struct lsys_module {
     uint8_t sym;
     uint8_t nparam;
@@ -24,13 +25,29 @@ typedef struct lsys_module {
     uint32_t param;
 } lsys_module;
 
+/* Structure of arrays: one byte per module for its symbol; grammars that can produce parameters
+ * also keep a parameter count and the offset of the first parameter per module. A grammar
+ * without parameters thus derives one byte per module, which is what makes large derivations
+ * memory-bound no earlier than they must be. */
 struct xyl_lstring {
     xyl_allocator alloc;
-    lsys_module *mods;
-    size_t count, cap;
+    uint8_t *sym;      /* count symbols */
+    uint8_t *np;       /* parameters per module; NULL when the string holds none */
+    uint32_t *poff;    /* index of each module's first parameter in params; NULL with np */
+    size_t count, cap; /* modules, and the capacity of sym (and np, poff) */
     double *params;
     size_t nparams, pcap;
 };
+
+static inline uint32_t lsys_np(const xyl_lstring *s, size_t i)
+{
+    return s->np ? s->np[i] : 0u;
+}
+/* Module i's parameters; only meaningful when lsys_np(s, i) > 0. */
+static inline const double *lsys_par(const xyl_lstring *s, size_t i)
+{
+    return s->params + s->poff[i];
+}
 
 /* Fills limits' zero fields from base, then from the built-in defaults. */
 void lsys_resolve_limits(xyl_lsystem_limits *limits, const xyl_lsystem_limits *base);
@@ -89,6 +106,7 @@ typedef struct lsys_prod {
     uint32_t const_first, const_count; /* precompiled successor: cmods[] */
     uint32_t const_pfirst, const_pcount; /* its parameters: cparams[] */
     int32_t const_depth_max;           /* highest bracket depth inside, relative */
+    bool const_cut;                    /* the precompiled successor holds a '%' */
 } lsys_prod;
 
 struct xyl_grammar {
@@ -113,11 +131,26 @@ struct xyl_grammar {
     lsys_insn *code;
     size_t code_count;
     lsys_module *cmods;
+    uint8_t *csyms;             /* cmods' symbols alone, for byte strings */
     size_t cmod_count;
     double *cparams;
     size_t cparam_count;
     uint32_t max_stack;
     uint32_t max_vars;
+    bool parametric;            /* some module of the axiom or a successor has parameters */
+    bool all_constant;          /* every symbol is copied or rewritten by one constant production */
+    int32_t constant_prod[256]; /* that production per symbol, or -1 (copy or general) */
+
+    /* Byte path tables (all_constant && !parametric): what symbol c becomes is
+     * byte_table[byte_src[c] .. + byte_len[c]); the table is padded so 16 bytes can always be
+     * read. Nesting: a copy of c goes byte_dmax[c] deeper at most and ends byte_delta[c] deeper. */
+    uint8_t *byte_table;
+    uint32_t byte_src[256];
+    uint32_t byte_len[256];
+    int32_t byte_dmax[256];
+    int32_t byte_delta[256];
+    uint8_t byte_cut[256];
+    uint32_t byte_max_len;
 
     /* Productions by predecessor symbol in file order, group members excluded. */
     uint32_t sym_first[256];

@@ -32,7 +32,7 @@ struct lsys_parser {
     uint32_t var_count;
 
     /* growable arrays of the grammar being built */
-    size_t prod_cap, pat_cap, succ_cap, expr_cap, code_cap, cmod_cap, cparam_cap;
+    size_t prod_cap, pat_cap, succ_cap, expr_cap, code_cap, cmod_cap, csym_cap, cparam_cap;
     size_t axiom_cap, axiom_pcap;
 
     lsys_name *heads; /* per production: its head text (contexts, predecessor, condition) */

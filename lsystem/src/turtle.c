@@ -150,30 +150,24 @@ static bool fits_float(xyl__dvec3 v)
     return fabs(v.x) <= FLOAT_MAX && fabs(v.y) <= FLOAT_MAX && fabs(v.z) <= FLOAT_MAX;
 }
 
-static const lsys_module *module_at(const turtle *t, size_t i)
-{
-    return &t->s->mods[i];
-}
-
 /* The first parameter (extra ones are ignored), or fallback when the module has none. */
 static xyl_result first_param(const turtle *t, size_t i, double fallback, double *v)
 {
-    const lsys_module *m = module_at(t, i);
-    if (m->nparam == 0) {
+    if (lsys_np(t->s, i) == 0) {
         *v = fallback;
         return XYL_OK;
     }
-    *v = t->s->params[m->param];
+    *v = lsys_par(t->s, i)[0];
     if (isfinite(*v)) return XYL_OK;
     return xyl__fail(t->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)i,
-                     "module %zu ('%c') has a non-finite parameter", i, (char)m->sym);
+                     "module %zu ('%c') has a non-finite parameter", i, (char)t->s->sym[i]);
 }
 
 static xyl_result position_error(const turtle *t, size_t i)
 {
     return xyl__fail(t->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)i,
                      "module %zu ('%c') moves the turtle out of the float range", i,
-                     (char)module_at(t, i)->sym);
+                     (char)t->s->sym[i]);
 }
 
 /* Grammar widths become radii; a radius must be a positive float. */
@@ -372,12 +366,12 @@ static xyl_result pop(turtle *t, size_t i)
 static xyl_result turn(turtle *t, size_t i)
 {
     double a = t->g->info.angle;
-    if (module_at(t, i)->nparam) {
+    if (lsys_np(t->s, i)) {
         xyl_result r = first_param(t, i, 0.0, &a);
         if (r != XYL_OK) return r;
         a *= DEG_TO_RAD;
     }
-    lsys_turtle_rotate(&t->st.frame, (char)module_at(t, i)->sym, a);
+    lsys_turtle_rotate(&t->st.frame, (char)t->s->sym[i], a);
     return XYL_OK;
 }
 
@@ -396,9 +390,9 @@ static size_t skip_branch(const xyl_lstring *s, size_t i)
 {
     size_t level = 0;
     for (size_t j = i + 1; j < s->count; ++j) {
-        if (s->mods[j].sym == '[') {
+        if (s->sym[j] == '[') {
             ++level;
-        } else if (s->mods[j].sym == ']') {
+        } else if (s->sym[j] == ']') {
             if (level == 0) return j;
             --level;
         }
@@ -409,7 +403,7 @@ static size_t skip_branch(const xyl_lstring *s, size_t i)
 static xyl_result step(turtle *t, size_t i, size_t *next)
 {
     *next = i + 1;
-    switch (module_at(t, i)->sym) {
+    switch (t->s->sym[i]) {
     case 'F': return draw(t, i);
     case 'f': return move(t, i);
     case '[': return push(t, i);
@@ -418,7 +412,7 @@ static xyl_result step(turtle *t, size_t i, size_t *next)
     case 'T': return set_elasticity(t, i);
     case 'L': return add_leaf(t, i);
     case '%': *next = skip_branch(t->s, i); return XYL_OK;
-    case '|': case '$': lsys_turtle_rotate(&t->st.frame, (char)module_at(t, i)->sym, 0.0);
+    case '|': case '$': lsys_turtle_rotate(&t->st.frame, (char)t->s->sym[i], 0.0);
         return XYL_OK;
     case '+': case '-': case '&': case '^': case '\\': case '/': return turn(t, i);
     default: return XYL_OK;
