@@ -176,7 +176,7 @@ static xyl_result need_token(parser *p, token *t, const char *what)
 
 static xyl_result need_record_end(parser *p)
 {
-    token t;
+    token t = {0};
     char buf[40];
     if (!next_token(p, &t)) return XYL_OK;
     return fail_at(p, XYL_ERR_PARSE, t.col, "unexpected '%s' after the end of the record",
@@ -307,7 +307,7 @@ static num_status parse_real(const token *t, float *out)
 
 static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *col)
 {
-    token t;
+    token t = {0};
     char buf[40];
     xyl_result r = need_token(p, &t, what);
     if (r != XYL_OK) return r;
@@ -340,7 +340,7 @@ static xyl_result vec3_field(parser *p, const char *what, xyl_vec3 *v)
 
 static xyl_result int_field(parser *p, const char *what, int64_t *out, uint32_t *col)
 {
-    token t;
+    token t = {0};
     char buf[40];
     xyl_result r = need_token(p, &t, what);
     if (r != XYL_OK) return r;
@@ -351,7 +351,7 @@ static xyl_result int_field(parser *p, const char *what, int64_t *out, uint32_t 
 
 static xyl_result node_id(parser *p)
 {
-    token t;
+    token t = {0};
     char buf[40];
     uint64_t id;
     xyl_result r = need_token(p, &t, "the node id");
@@ -445,7 +445,7 @@ static xyl_result parse_leaf(parser *p)
 
 static xyl_result parse_header(parser *p, const token *kw)
 {
-    token t;
+    token t = {0};
     char buf[40];
     uint64_t version;
     if (!tok_is(kw, "xylem-skeleton"))
@@ -468,7 +468,7 @@ static xyl_result parse_header(parser *p, const token *kw)
 static xyl_result parse_count(parser *p, const token *kw, const char *word, uint64_t max,
                               size_t *out)
 {
-    token t;
+    token t = {0};
     char buf[40];
     uint64_t v;
     if (!tok_is(kw, word))

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# L-system benchmark: installs the peer (npm package lindenmayer, pinned in samples/bench/),
+# builds bench_lsystem in Release and runs it; the figures go to the terminal and to
+# $BUILD_DIR/bench_lsystem.txt. docs/BENCHMARKS.md explains the table.
+#
+#   scripts/bench.sh                 # full sizes (about a minute)
+#   scripts/bench.sh --quick         # smoke sizes; any bench_lsystem option is passed through
+#   BUILD_DIR=build-foo scripts/bench.sh
+#
+# Without node/npm it tries apt-get (Debian/Ubuntu); if that is not possible the benchmark still
+# runs and reports the peer as not available.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+BUILD_DIR="${BUILD_DIR:-build-release}"
+PEER_DIR=samples/bench
+
+have_node() { command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1; }
+
+install_node() {
+    have_node && return 0
+    if ! command -v apt-get >/dev/null 2>&1; then
+        echo "bench.sh: no node/npm and no apt-get" >&2
+        return 1
+    fi
+    local sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        if ! command -v sudo >/dev/null 2>&1; then
+            echo "bench.sh: need root to install nodejs" >&2
+            return 1
+        fi
+        sudo=sudo
+    fi
+    echo "bench.sh: installing nodejs and npm with apt-get"
+    $sudo apt-get update -qq && $sudo apt-get install -y -qq nodejs npm
+}
+
+# npm ci only when node_modules is missing or older than the lock file.
+install_peer() {
+    local stamp="$PEER_DIR/node_modules/.package-lock.json"
+    if [ -f "$stamp" ] && [ ! "$PEER_DIR/package-lock.json" -nt "$stamp" ]; then
+        return 0
+    fi
+    echo "bench.sh: npm ci in $PEER_DIR"
+    (cd "$PEER_DIR" && npm ci --no-audit --no-fund --loglevel=error)
+}
+
+if install_node && install_peer; then
+    :
+else
+    echo "bench.sh: continuing without the lindenmayer peer" >&2
+fi
+
+# The generator is only chosen for a fresh build folder; an existing one keeps its own.
+generator=()
+if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; then
+    generator=(-G Ninja)
+fi
+cmake -S . -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$BUILD_DIR" --target bench_lsystem
+
+results="$BUILD_DIR/bench_lsystem.txt"
+if commit="$(git rev-parse --short HEAD 2>/dev/null)"; then
+    git diff --quiet HEAD || commit="$commit (with local changes)"
+else
+    commit=unknown
+fi
+cpu="$(lscpu 2>/dev/null | sed -n 's/^Model name:[[:space:]]*//p' || true)"
+set +e
+{
+    echo "date:    $(date -u '+%Y-%m-%d %H:%M UTC')"
+    echo "commit:  $commit"
+    echo "cpu:     ${cpu:-unknown}, $(nproc 2>/dev/null || echo '?') cores"
+    echo "node:    $(node --version 2>/dev/null || echo 'not installed')"
+    echo "command: $BUILD_DIR/samples/bench_lsystem $*"
+    echo
+    "$BUILD_DIR/samples/bench_lsystem" "$@"
+} 2>&1 | tee "$results"
+status=${PIPESTATUS[0]}
+set -e
+echo
+echo "bench.sh: results written to $results (exit status $status)"
+exit "$status"
