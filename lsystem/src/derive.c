@@ -479,8 +479,8 @@ static void next_histogram(const xyl_grammar *g, const uint64_t *cur, uint64_t *
 /* Byte path: every symbol is copied or rewritten by one constant production without parameters.
  * The next string's exact size comes from the symbol counts and its nesting from a bound (an
  * exact pass runs only when the bound could reach the limit), so limits are checked before
- * anything is allocated; the write pass copies each successor with one fixed 16-byte move when
- * all successors are that short. */
+ * anything is allocated; the write pass copies each successor with one fixed 16- or 32-byte
+ * move when all successors are that short. */
 static xyl_result step_bytes(deriver *d)
 {
     const xyl_grammar *g = d->g;
@@ -499,12 +499,17 @@ static xyl_result step_bytes(deriver *d)
     xyl_result r = check_size(d, total, 0);
     if (r) return r;
     xyl_lstring *n = d->next;
-    if (!reserve(n, (size_t)total + 16, 0)) return oom(d);
+    if (!reserve(n, (size_t)total + 32, 0)) return oom(d);
     uint8_t *out = n->sym;
     const uint8_t *table = g->byte_table, *in = cur->sym, *end = cur->sym + cur->count;
     if (g->byte_max_len <= 16) {
         for (const uint8_t *p = in; p < end; ++p) {
             memcpy(out, table + g->byte_src[*p], 16);
+            out += g->byte_len[*p];
+        }
+    } else if (g->byte_max_len <= 32) {
+        for (const uint8_t *p = in; p < end; ++p) {
+            memcpy(out, table + g->byte_src[*p], 32);
             out += g->byte_len[*p];
         }
     } else {
@@ -581,7 +586,7 @@ static xyl_result presize(deriver *d, uint32_t depth, xyl_lstring *a, xyl_lstrin
         if (total > largest) largest = total;
         memcpy(hist, next, sizeof hist);
     }
-    size_t cap = (size_t)largest + 16;
+    size_t cap = (size_t)largest + 32;
     return reserve(a, cap, 0) && reserve(b, cap, 0) ? XYL_OK : oom(d);
 }
 

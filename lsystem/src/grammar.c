@@ -664,7 +664,7 @@ static xyl_result precompile(lsys_parser *p, lsys_prod *pr)
     return XYL_OK;
 }
 
-#define BYTE_PAD 16 /* derive.c copies successors 16 bytes at a time */
+#define BYTE_PAD 32 /* derive.c copies short successors 16 or 32 bytes at a time */
 
 /* The byte path's per-symbol tables (see xyl_grammar): a copied symbol is its own one-byte
  * successor, stored after the precompiled ones. */

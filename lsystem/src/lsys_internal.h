@@ -142,7 +142,7 @@ struct xyl_grammar {
     int32_t constant_prod[256]; /* that production per symbol, or -1 (copy or general) */
 
     /* Byte path tables (all_constant && !parametric): what symbol c becomes is
-     * byte_table[byte_src[c] .. + byte_len[c]); the table is padded so 16 bytes can always be
+     * byte_table[byte_src[c] .. + byte_len[c]); the table is padded so 32 bytes can always be
      * read. Nesting: a copy of c goes byte_dmax[c] deeper at most and ends byte_delta[c] deeper. */
     uint8_t *byte_table;
     uint32_t byte_src[256];
