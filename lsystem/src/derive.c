@@ -32,7 +32,7 @@ typedef struct deriver {
 
 /* sym, np and poff share one capacity: each grows by doubling from the same start, so all reach
  * the same size. On failure the old arrays stay valid. */
-static bool reserve(xyl_lstring *s, size_t mods, size_t params)
+static bool reserve_slow(xyl_lstring *s, size_t mods, size_t params)
 {
     const xyl_allocator *a = &s->alloc;
     if (mods > s->cap) {
@@ -44,6 +44,11 @@ static bool reserve(xyl_lstring *s, size_t mods, size_t params)
         s->cap = c0;
     }
     return xyl__grow(a, (void **)&s->params, &s->pcap, s->nparams, params, sizeof *s->params);
+}
+
+static inline bool reserve(xyl_lstring *s, size_t mods, size_t params)
+{
+    return (mods <= s->cap && params <= s->pcap) || reserve_slow(s, mods, params);
 }
 
 static xyl_lstring *new_string(const xyl_allocator *a, bool parametric)
@@ -128,10 +133,17 @@ xyl_result xyl_lstring_format(const xyl_lstring *s, char *buffer, size_t capacit
 
 /* ---- context matching ---------------------------------------------------------------------- */
 
+/* Modules carry a handful of parameters: a plain loop beats the block copy a memcpy of unknown
+ * size becomes. */
+static inline void copy_params(double *to, const double *from, uint32_t n)
+{
+    for (uint32_t k = 0; k < n; ++k) to[k] = from[k];
+}
+
 static void bind(const xyl_lstring *s, size_t i, uint16_t var, double *vars)
 {
     uint32_t np = lsys_np(s, i);
-    if (np) memcpy(vars + var, lsys_par(s, i), np * sizeof *vars);
+    if (np) copy_params(vars + var, lsys_par(s, i), np);
 }
 
 static bool same_module(const xyl_lstring *s, size_t i, const lsys_pat *pat)
@@ -261,7 +273,7 @@ static xyl_result emit_copy(deriver *d, size_t i)
     xyl_lstring *n = d->next;
     uint32_t np = lsys_np(c, i);
     if (!reserve(n, n->count + 1, n->nparams + np)) return oom(d);
-    if (np) memcpy(n->params + n->nparams, lsys_par(c, i), np * sizeof(double));
+    if (np) copy_params(n->params + n->nparams, lsys_par(c, i), np);
     push_module(n, c->sym[i], np);
     n->nparams += np;
     return track(d, c->sym[i]);
@@ -296,9 +308,9 @@ static xyl_result emit_successor(deriver *d, const lsys_prod *pr)
 {
     const xyl_grammar *g = d->g;
     xyl_lstring *n = d->next;
+    if (!reserve(n, n->count + pr->succ_count, n->nparams + pr->succ_pcount)) return oom(d);
     for (uint32_t i = 0; i < pr->succ_count; ++i) {
         const lsys_succ *m = &g->succs[pr->succ_first + i];
-        if (!reserve(n, n->count + 1, n->nparams + m->nparam)) return oom(d);
         double *out = n->params + n->nparams;
         for (uint32_t k = 0; k < m->nparam; ++k) {
             const lsys_expr *e = &g->exprs[m->expr + k];

@@ -376,6 +376,7 @@ static xyl_result parse_production(lsys_parser *p, size_t pos, size_t end)
     if (r) return r;
     r = parse_successor(p, body, end, &pr.succ_first, &pr.succ_count);
     if (r) return r;
+    for (uint32_t i = 0; i < pr.succ_count; ++i) pr.succ_pcount += g->succs[pr.succ_first + i].nparam;
     pr.nvars = p->var_count;
     if (pr.nvars > g->max_vars) g->max_vars = pr.nvars;
     g->prods[g->prod_count++] = pr;

@@ -99,6 +99,7 @@ typedef struct lsys_prod {
     int32_t cond;                      /* exprs[] index or -1 */
     int32_t weight;                    /* exprs[] index or -1 (deterministic) */
     uint32_t succ_first, succ_count;   /* succs[] */
+    uint32_t succ_pcount;              /* parameters of the whole successor */
     uint32_t nvars;
     uint32_t group_next;               /* next member of its stochastic group, or UINT32_MAX */
     bool group_member;                 /* not the group's first production */
