@@ -13,6 +13,7 @@
 #ifndef XYL_COMMON_H
 #define XYL_COMMON_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 

@@ -116,6 +116,138 @@ XYL_API xyl_result xyl_skeleton_write_text(const xyl_skeleton *skeleton, xyl_ske
 XYL_API xyl_result xyl_skeleton_write_file(const xyl_skeleton *skeleton, const char *path,
                                            xyl_skel_format format, xyl_diag *diag);
 
+/* ---- meshes ---------------------------------------------------------------------------------
+ *
+ * A polygon mesh of quads and triangles (stems are quads; Loop subdivision gives triangles) with
+ * per-vertex position, normal, UV and branch id, and a triangulated view of every face for
+ * PN-triangles and exporters. Faces are counter-clockwise seen from outside. A quad (a, b, c, d)
+ * is triangulated as (a, b, c), (a, c, d). The arrays belong to the mesh. */
+
+typedef struct xyl_mesh {
+    const xyl_vec3 *positions;
+    const xyl_vec3 *normals;      /* unit, one per vertex */
+    const float *uvs;             /* 2 per vertex: u around the branch, v along it */
+    const uint32_t *branch_ids;   /* one per vertex */
+    size_t vertex_count;
+    const uint32_t *quads;        /* 4 vertex indices per quad */
+    size_t quad_count;
+    const uint32_t *triangles;    /* 3 vertex indices per triangle face */
+    size_t triangle_count;
+    const uint32_t *face_branches; /* one per face, quads first, then triangles */
+    const uint32_t *tri_view;     /* 3 indices per triangle: quads split, then the triangles */
+    size_t tri_view_count;        /* 2 * quad_count + triangle_count */
+} xyl_mesh;
+
+typedef struct xyl_mesh_limits {
+    uint64_t max_vertices; /* default (0): 1 << 26 */
+    uint64_t max_faces;    /* default (0): 1 << 26 */
+} xyl_mesh_limits;
+
+typedef struct xyl_mesh_desc {
+    const xyl_vec3 *positions;  /* required when vertex_count > 0 */
+    const xyl_vec3 *normals;    /* optional: NULL computes area-weighted smooth normals */
+    const float *uvs;           /* optional: NULL means all 0 */
+    const uint32_t *branch_ids; /* optional: NULL means all 0 */
+    size_t vertex_count;
+    const uint32_t *quads;
+    size_t quad_count;
+    const uint32_t *triangles;
+    size_t triangle_count;
+    const uint32_t *face_branches; /* optional: NULL means all 0 */
+    xyl_mesh_limits limits;
+    xyl_allocator alloc;
+} xyl_mesh_desc;
+
+/* Validates (indices in range, finite numbers, no face repeating a vertex), copies, and builds
+ * the triangulated view. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arrays with counts, an index out
+ * of range or repeated within a face: diag.index is the face, quads first), XYL_ERR_NON_FINITE,
+ * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched. */
+XYL_API xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag);
+XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
+
+/* ---- subdivision (OpenSubdiv) -------------------------------------------------------------- */
+
+typedef enum xyl_subdivision {
+    XYL_SUBDIVIDE_NONE = 0,
+    XYL_SUBDIVIDE_CATMARK = 1, /* Catmull-Clark: every face becomes quads */
+    XYL_SUBDIVIDE_LOOP = 2     /* Loop: triangles only (quads are triangulated first) */
+} xyl_subdivision;
+
+typedef struct xyl_subdivide_desc {
+    xyl_subdivision scheme;  /* NONE copies the mesh */
+    xyl_mesh_limits limits;  /* of the refined mesh */
+    xyl_allocator alloc;
+} xyl_subdivide_desc;
+
+/* One uniform level of refinement through OpenSubdiv Far. Positions and UVs are interpolated
+ * (vertex and varying), face branch ids are inherited from the parent face, vertex branch ids
+ * from the nearest parent vertex, normals are recomputed (smooth). Errors: XYL_ERR_INVALID_ARGUMENT,
+ * XYL_ERR_UNSUPPORTED (topology OpenSubdiv refuses), XYL_ERR_LIMIT_EXCEEDED,
+ * XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivide_desc *desc,
+                                      xyl_mesh **out, xyl_diag *diag);
+
+/* ---- export -------------------------------------------------------------------------------- */
+
+typedef enum xyl_mesh_format {
+    XYL_MESH_FORMAT_OBJ = 0, /* Wavefront OBJ with v/vt/vn and quad and triangle faces */
+    XYL_MESH_FORMAT_GLB = 1  /* glTF 2.0 binary: POSITION, NORMAL, TEXCOORD_0, _BRANCH_ID, indices */
+} xyl_mesh_format;
+
+/* Count-then-fill, as xyl_skeleton_write_text (bytes; GLB output is binary). */
+XYL_API xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format,
+                                         void *buffer, size_t capacity, size_t *needed);
+/* Writes through a temporary file and a rename; path is never half-written. */
+XYL_API xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path,
+                                       xyl_mesh_format format, xyl_diag *diag);
+
+/* ---- checks -------------------------------------------------------------------------------- */
+
+typedef struct xyl_mesh_report {
+    size_t vertices, edges, faces;
+    int64_t euler;                 /* V - E + F */
+    size_t components;             /* connected by shared edges */
+    size_t boundary_edges;         /* used by one face */
+    size_t nonmanifold_edges;      /* used by three or more faces */
+    size_t misoriented_edges;      /* used twice in the same direction */
+    size_t nonmanifold_vertices;   /* whose faces do not form one fan */
+    size_t degenerate_faces;       /* zero area (relative to the mesh size) */
+    size_t duplicate_faces;        /* the same vertex set as another face */
+    size_t unused_vertices;        /* in no face */
+    bool closed_manifold;          /* all of the counts above that must be 0 are 0 */
+} xyl_mesh_report;
+
+/* Topology and geometry statistics of a mesh. Errors: XYL_ERR_INVALID_ARGUMENT,
+ * XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_mesh_check(const xyl_mesh *mesh, xyl_mesh_report *report, xyl_diag *diag);
+
+/* Pairs of triangles of the triangulated view that intersect although they share no vertex
+ * (robust triangle-triangle test with a broad phase). Writes up to capacity pairs (2 triangle
+ * indices each) into pairs (may be NULL) and the total count into *count. */
+XYL_API xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs,
+                                               size_t capacity, size_t *count, xyl_diag *diag);
+
+/* ---- stems: the mesh of a skeleton ---------------------------------------------------------- */
+
+typedef enum xyl_normal_mode {
+    XYL_NORMALS_BRANCH = 0, /* a vertex averages only its own branch's faces (Skjermo 2008) */
+    XYL_NORMALS_SMOOTH = 1  /* a vertex averages all its faces */
+} xyl_normal_mode;
+
+typedef struct xyl_stems_desc {
+    uint32_t sides;               /* ring sides k, 3..32; default (0): 4 */
+    xyl_normal_mode normals;
+    xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
+    bool keep_control_radius;     /* default false: rings are inflated by 6/(4 + 2cos(2pi/k))
+                                     before Catmull-Clark so the surface keeps the radius */
+    xyl_mesh_limits limits;
+    xyl_allocator alloc;
+} xyl_stems_desc;
+
+/* One closed quad mesh around the whole skeleton (docs/stems.md). */
+XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                                   xyl_mesh **out, xyl_diag *diag);
+
 #ifdef __cplusplus
 }
 #endif

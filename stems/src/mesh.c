@@ -1,0 +1,229 @@
+/* Meshes: validation, ownership, normals and the triangulated view. */
+#include <string.h>
+
+#include "mesh_internal.h"
+
+void xyl__mesh_arrays_free(xyl__mesh_arrays *a, const xyl_allocator *alloc)
+{
+    xyl__free(alloc, a->positions);
+    xyl__free(alloc, a->normals);
+    xyl__free(alloc, a->uvs);
+    xyl__free(alloc, a->branch_ids);
+    xyl__free(alloc, a->quads);
+    xyl__free(alloc, a->triangles);
+    xyl__free(alloc, a->face_branches);
+    memset(a, 0, sizeof *a);
+}
+
+static xyl__dvec3 face_normal(const xyl_vec3 *p, const uint32_t *f, int n)
+{
+    /* Twice the area-weighted normal: cross of the diagonals for a quad, of two edges for a
+     * triangle. */
+    xyl__dvec3 a = xyl__from_f3(p[f[0]]), b = xyl__from_f3(p[f[1]]), c = xyl__from_f3(p[f[2]]);
+    if (n == 3) return xyl__d3_cross(xyl__d3_sub(b, a), xyl__d3_sub(c, a));
+    xyl__dvec3 d = xyl__from_f3(p[f[3]]);
+    return xyl__d3_cross(xyl__d3_sub(c, a), xyl__d3_sub(d, b));
+}
+
+static void accumulate(const xyl__mesh_arrays *a, const uint32_t *face_branch, xyl__dvec3 *acc,
+                       bool own_branch_only)
+{
+    size_t faces = a->quad_count + a->triangle_count;
+    for (size_t f = 0; f < faces; ++f) {
+        bool quad = f < a->quad_count;
+        const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
+        int n = quad ? 4 : 3;
+        xyl__dvec3 fn = face_normal(a->positions, idx, n);
+        for (int k = 0; k < n; ++k) {
+            uint32_t v = idx[k];
+            if (own_branch_only && face_branch && a->branch_ids &&
+                face_branch[f] != a->branch_ids[v])
+                continue;
+            acc[v] = xyl__d3_add(acc[v], fn);
+        }
+    }
+}
+
+xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_branch,
+                             const xyl_allocator *alloc, xyl_vec3 *out)
+{
+    /* Sums run in double: a vertex of a fine mesh collects many small face normals. */
+    size_t n = a->vertex_count ? a->vertex_count : 1;
+    xyl__dvec3 *own = xyl__calloc(alloc, n, sizeof *own);
+    xyl__dvec3 *all = face_branch ? xyl__calloc(alloc, n, sizeof *all) : NULL;
+    if (!own || (face_branch && !all)) {
+        xyl__free(alloc, own);
+        xyl__free(alloc, all);
+        return XYL_ERR_OUT_OF_MEMORY;
+    }
+    accumulate(a, face_branch, own, true);
+    if (all) accumulate(a, NULL, all, false);
+    for (size_t v = 0; v < a->vertex_count; ++v) {
+        xyl__dvec3 sum = own[v];
+        if (all && !(xyl__d3_dot(sum, sum) > XYL__EPS_NORMALIZE)) sum = all[v];
+        out[v] = xyl__to_f3(xyl__d3_normalize_or(sum, xyl__d3(0, 1, 0)));
+    }
+    xyl__free(alloc, own);
+    xyl__free(alloc, all);
+    return XYL_OK;
+}
+
+/* ---- the public mesh ---------------------------------------------------------------------- */
+
+static xyl_result check_face(const uint32_t *f, int n, size_t vertex_count, size_t index,
+                             xyl_diag *diag)
+{
+    for (int k = 0; k < n; ++k) {
+        if (f[k] >= vertex_count)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)index,
+                             "face %zu uses vertex %u of %zu", index, f[k], vertex_count);
+        for (int j = 0; j < k; ++j)
+            if (f[j] == f[k])
+                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)index,
+                                 "face %zu repeats vertex %u", index, f[k]);
+    }
+    return XYL_OK;
+}
+
+static bool finite3(xyl_vec3 v)
+{
+    return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
+}
+
+static xyl_result validate(const xyl_mesh_desc *d, xyl_diag *diag)
+{
+    uint64_t max_v = d->limits.max_vertices ? d->limits.max_vertices : XYL__MESH_DEFAULT_MAX_VERTICES;
+    uint64_t max_f = d->limits.max_faces ? d->limits.max_faces : XYL__MESH_DEFAULT_MAX_FACES;
+    if ((d->vertex_count && !d->positions) || (d->quad_count && !d->quads) ||
+        (d->triangle_count && !d->triangles))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "array is NULL but count is not 0");
+    if ((uint64_t)d->vertex_count > max_v || d->vertex_count > UINT32_MAX ||
+        (uint64_t)d->quad_count + d->triangle_count > max_f)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%zu vertices and %zu faces exceed the limits (%llu, %llu)",
+                         d->vertex_count, d->quad_count + d->triangle_count,
+                         (unsigned long long)max_v, (unsigned long long)max_f);
+    for (size_t v = 0; v < d->vertex_count; ++v) {
+        bool ok = finite3(d->positions[v]) && (!d->normals || finite3(d->normals[v])) &&
+                  (!d->uvs || (isfinite(d->uvs[2 * v]) && isfinite(d->uvs[2 * v + 1])));
+        if (!ok)
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
+                             "vertex %zu has a non-finite position, normal or UV", v);
+    }
+    for (size_t f = 0; f < d->quad_count; ++f) {
+        xyl_result r = check_face(d->quads + 4 * f, 4, d->vertex_count, f, diag);
+        if (r) return r;
+    }
+    for (size_t f = 0; f < d->triangle_count; ++f) {
+        xyl_result r = check_face(d->triangles + 3 * f, 3, d->vertex_count, d->quad_count + f, diag);
+        if (r) return r;
+    }
+    return XYL_OK;
+}
+
+/* Copies count * size bytes of src (or zeroes when src is NULL) into a new array. */
+static void *dup_or_zero(const xyl_allocator *a, const void *src, size_t count, size_t size,
+                         bool *ok)
+{
+    void *p = xyl__calloc(a, count ? count : 1, size);
+    if (!p) *ok = false;
+    else if (src && count) memcpy(p, src, count * size);
+    return p;
+}
+
+xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag)
+{
+    if (!desc || !out)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "desc and out must not be NULL");
+    xyl_result r = validate(desc, diag);
+    if (r) return r;
+    const xyl_allocator *al = &desc->alloc;
+    bool ok = true;
+    xyl__mesh_arrays a;
+    memset(&a, 0, sizeof a);
+    a.vertex_count = desc->vertex_count;
+    a.quad_count = desc->quad_count;
+    a.triangle_count = desc->triangle_count;
+    a.positions = dup_or_zero(al, desc->positions, a.vertex_count, sizeof *a.positions, &ok);
+    if (desc->normals) a.normals = dup_or_zero(al, desc->normals, a.vertex_count, sizeof *a.normals, &ok);
+    a.uvs = dup_or_zero(al, desc->uvs, a.vertex_count, 2 * sizeof *a.uvs, &ok);
+    a.branch_ids = dup_or_zero(al, desc->branch_ids, a.vertex_count, sizeof *a.branch_ids, &ok);
+    a.quads = dup_or_zero(al, desc->quads, a.quad_count, 4 * sizeof *a.quads, &ok);
+    a.triangles = dup_or_zero(al, desc->triangles, a.triangle_count, 3 * sizeof *a.triangles, &ok);
+    a.face_branches = dup_or_zero(al, desc->face_branches, a.quad_count + a.triangle_count,
+                                  sizeof *a.face_branches, &ok);
+    if (!ok) {
+        xyl__mesh_arrays_free(&a, al);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the mesh");
+    }
+    return xyl__mesh_adopt(&a, al, out, diag);
+}
+
+static uint32_t *triangulate(const xyl__mesh_arrays *a, const xyl_allocator *alloc)
+{
+    size_t tris = 2 * a->quad_count + a->triangle_count;
+    uint32_t *t = xyl__calloc(alloc, tris ? tris : 1, 3 * sizeof *t);
+    if (!t) return NULL;
+    uint32_t *w = t;
+    for (size_t f = 0; f < a->quad_count; ++f) {
+        const uint32_t *q = a->quads + 4 * f;
+        const uint32_t split[6] = {q[0], q[1], q[2], q[0], q[2], q[3]};
+        memcpy(w, split, sizeof split);
+        w += 6;
+    }
+    if (a->triangle_count) memcpy(w, a->triangles, a->triangle_count * 3 * sizeof *t);
+    return t;
+}
+
+xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_mesh **out,
+                           xyl_diag *diag)
+{
+    xyl__mesh *m = xyl__calloc(alloc, 1, sizeof *m);
+    uint32_t *tv = m ? triangulate(a, alloc) : NULL;
+    bool ok = m && tv;
+    if (ok && !a->face_branches) {
+        size_t faces = a->quad_count + a->triangle_count;
+        a->face_branches = xyl__calloc(alloc, faces ? faces : 1, sizeof *a->face_branches);
+        ok = a->face_branches != NULL;
+    }
+    if (ok && !a->normals) {
+        a->normals = xyl__calloc(alloc, a->vertex_count ? a->vertex_count : 1, sizeof *a->normals);
+        ok = a->normals && xyl__mesh_normals(a, NULL, alloc, a->normals) == XYL_OK;
+    }
+    if (!ok) {
+        xyl__free(alloc, m);
+        xyl__free(alloc, tv);
+        xyl__mesh_arrays_free(a, alloc);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the mesh");
+    }
+    if (alloc) m->alloc = *alloc;
+    m->a = *a;
+    m->tri_view = tv;
+    xyl_mesh *p = &m->pub;
+    p->positions = a->positions;
+    p->normals = a->normals;
+    p->uvs = a->uvs;
+    p->branch_ids = a->branch_ids;
+    p->vertex_count = a->vertex_count;
+    p->quads = a->quads;
+    p->quad_count = a->quad_count;
+    p->triangles = a->triangles;
+    p->triangle_count = a->triangle_count;
+    p->face_branches = a->face_branches;
+    p->tri_view = tv;
+    p->tri_view_count = 2 * a->quad_count + a->triangle_count;
+    memset(a, 0, sizeof *a);
+    *out = p;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+void xyl_mesh_destroy(xyl_mesh *mesh)
+{
+    if (!mesh) return;
+    xyl__mesh *m = (xyl__mesh *)mesh;
+    xyl_allocator al = m->alloc;
+    xyl__mesh_arrays_free(&m->a, &al);
+    xyl__free(&al, m->tri_view);
+    xyl__free(&al, m);
+}
