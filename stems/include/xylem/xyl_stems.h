@@ -227,27 +227,6 @@ XYL_API xyl_result xyl_mesh_check(const xyl_mesh *mesh, xyl_mesh_report *report,
 XYL_API xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs,
                                                size_t capacity, size_t *count, xyl_diag *diag);
 
-/* ---- stems: the mesh of a skeleton ---------------------------------------------------------- */
-
-typedef enum xyl_normal_mode {
-    XYL_NORMALS_BRANCH = 0, /* a vertex averages only its own branch's faces (Skjermo 2008) */
-    XYL_NORMALS_SMOOTH = 1  /* a vertex averages all its faces */
-} xyl_normal_mode;
-
-typedef struct xyl_stems_desc {
-    uint32_t sides;               /* ring sides k, 3..32; default (0): 4 */
-    xyl_normal_mode normals;
-    xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
-    bool keep_control_radius;     /* default false: rings are inflated by 6/(4 + 2cos(2pi/k))
-                                     before Catmull-Clark so the surface keeps the radius */
-    xyl_mesh_limits limits;
-    xyl_allocator alloc;
-} xyl_stems_desc;
-
-/* One closed quad mesh around the whole skeleton (docs/stems.md). */
-XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                                   xyl_mesh **out, xyl_diag *diag);
-
 #ifdef __cplusplus
 }
 #endif
