@@ -1369,9 +1369,37 @@ static void write_file_rejects_bad_arguments(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* The stem mesher's hard cases (tests/data/stems, made by scripts/make_hard_cases.py) are valid
+ * skeletons: at least 40 of them, each one read without error. */
+static void every_stem_hard_case_reads(void **state)
+{
+    (void)state;
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/stems", XYL_TEST_DATA);
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int count = 0;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        size_t n = strlen(e->d_name);
+        if (n < 6 || strcmp(e->d_name + n - 5, ".skel") != 0) continue;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        xyl_skeleton *s = NULL;
+        xyl_diag diag = {0};
+        xyl_result r = xyl_skeleton_read_file(path, NULL, &s, &diag);
+        if (r != XYL_OK) fail_msg("%s: %s", e->d_name, diag.message);
+        assert_true(s->node_count >= 1);
+        xyl_skeleton_destroy(s);
+        ++count;
+    }
+    closedir(d);
+    assert_true(count >= 40);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(every_stem_hard_case_reads),
         cmocka_unit_test(create_copies_arrays_and_derives_counts),
         cmocka_unit_test(create_larger_radius_child_continues_branch),
         cmocka_unit_test(create_radius_tie_goes_to_first_child),
