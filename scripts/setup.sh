@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages xylem needs to build, test and fuzz. Idempotent: when every
-# package is present it prints nothing and touches nothing. Run as root (or with sudo).
+# Installs the Debian 12 packages xylem needs to build, test and fuzz, and the npm package of the
+# glTF-Validator in tests/gltf. Idempotent: when everything is present it prints nothing and
+# touches nothing. Run as root (or with sudo).
 set -euo pipefail
 
 packages=(
   cmake ninja-build pkg-config gcc g++ make git
   clang libclang-rt-14-dev   # ASan/UBSan and libFuzzer runtimes for clang 14
   libcmocka-dev              # test framework
+  libosd-dev                 # OpenSubdiv 3.5 (Far), for stems/ subdivision
 )
 
 missing=()
@@ -15,11 +17,29 @@ for p in "${packages[@]}"; do
     missing+=("$p")
   fi
 done
-[ ${#missing[@]} -eq 0 ] && exit 0
+# node and npm run the Khronos glTF-Validator (tests/gltf). A node that is already there, from
+# whatever source, is kept: Debian's npm would conflict with a node that bundles its own.
+if ! command -v node >/dev/null 2>&1; then
+  missing+=(nodejs npm)
+elif ! command -v npm >/dev/null 2>&1; then
+  missing+=(npm)
+fi
 
-echo "setup: installing ${missing[*]}"
-sudo_cmd=()
-[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
-export DEBIAN_FRONTEND=noninteractive
-"${sudo_cmd[@]}" apt-get update -qq
-"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=()
+  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The glTF-Validator at the version tests/gltf/package-lock.json pins. npm writes
+# node_modules/.package-lock.json last, so it stamps a finished install; a newer lock file (a
+# version bump) or a missing stamp reinstalls.
+gltf_dir="$(cd "$(dirname "$0")/../tests/gltf" && pwd)"
+stamp="$gltf_dir/node_modules/.package-lock.json"
+if [ ! -f "$stamp" ] || [ "$gltf_dir/package-lock.json" -nt "$stamp" ]; then
+  echo "setup: installing the glTF-Validator (npm ci in tests/gltf)"
+  (cd "$gltf_dir" && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
+fi

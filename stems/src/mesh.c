@@ -156,6 +156,9 @@ xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *
         xyl__mesh_arrays_free(&a, al);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the mesh");
     }
+    /* the mesh promises unit normals: caller normals are normalised (zero ones become +y) */
+    for (size_t v = 0; a.normals && v < a.vertex_count; ++v)
+        a.normals[v] = xyl__to_f3(xyl__d3_normalize_or(xyl__from_f3(a.normals[v]), xyl__d3(0, 1, 0)));
     return xyl__mesh_adopt(&a, al, out, diag);
 }
 

@@ -1,0 +1,53 @@
+/* One uniform level of subdivision through OpenSubdiv Far (stems/src/subdivide.cpp, the only C++
+ * file of the library). Not installed. See docs/subdivision.md. */
+#ifndef XYL_SUBDIVIDE_H
+#define XYL_SUBDIVIDE_H
+
+#ifdef __cplusplus
+/* The internal C headers are not C++-aware: the standard headers they use come first, outside
+ * the block (C++ wrappers of them hold templates), then every declaration gets C linkage. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+extern "C" {
+#endif
+
+#include "mesh_internal.h"
+
+/* Refines in once with scheme into out (arrays from alloc; out->normals stays NULL for CATMARK
+ * and LOOP, so the caller computes the normals it wants). Catmark gives quads only, Loop
+ * triangles only (quads (a, b, c, d) are split into (a, b, c), (a, c, d) first); faces keep the
+ * input's orientation. Positions are interpolated in double (vertex rule), UVs linearly
+ * (varying), face branch ids are inherited from the parent face, vertex branch ids by the rules
+ * in docs/subdivision.md. XYL_SUBDIVIDE_NONE copies every array, normals included. Missing
+ * uvs / branch_ids / face_branches in the input read as zeros; out's arrays are never NULL.
+ * The input is validated (NULL arrays with counts, indices out of range or repeated within a
+ * face: XYL_ERR_INVALID_ARGUMENT; a non-finite position, normal or UV: XYL_ERR_NON_FINITE,
+ * diag.index = the vertex); the refined counts
+ * are checked against limits (NULL = defaults) before anything large is allocated
+ * (XYL_ERR_LIMIT_EXCEEDED). Other errors: XYL_ERR_UNSUPPORTED (OpenSubdiv refuses the topology,
+ * or counts beyond its int indices), XYL_ERR_OUT_OF_MEMORY. On failure *out is zeroed and
+ * nothing is left allocated. No C++ exception leaves this function. */
+xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme,
+                          const xyl_mesh_limits *limits, const xyl_allocator *alloc,
+                          xyl__mesh_arrays *out, xyl_diag *diag);
+
+/* Measures, with OpenSubdiv's own limit evaluation (Far::PrimvarRefiner::Limit after one
+ * Catmark level), the limit radius of a mid-section ring vertex of a long capped prism whose
+ * k-gon rings have radius 1, and writes it to *factor. ARCHITECTURE §5 predicts
+ * (4 + 2 cos(2π/k)) / 6; the mesher inflates rings by the inverse. k in 3..32, else
+ * XYL_ERR_INVALID_ARGUMENT; XYL_ERR_OUT_OF_MEMORY, XYL_ERR_UNSUPPORTED as above. */
+xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor);
+
+/* The same probe's radius after `levels` (0..6) uniform Catmark levels without the limit
+ * evaluation: (3 + cos(2π/k)) / 4 after one, converging to the limit factor. A check on the
+ * above that does not trust PrimvarRefiner::Limit. */
+xyl_result xyl__subdivide_refined_radius_factor(uint32_t k, uint32_t levels, double *factor);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* XYL_SUBDIVIDE_H */
