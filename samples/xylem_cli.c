@@ -20,6 +20,8 @@ enum { EXIT_USAGE = 64, EXIT_DATA = 65, EXIT_NOINPUT = 66, EXIT_OSERR = 71, EXIT
 typedef struct options {
     const char *preset;
     const char *grammar_path;
+    const char *skeleton_path;
+    xyl_stems_desc stems;
     const char *out;
     bool has_seed, has_depth, merge;
     uint64_t seed;
@@ -39,6 +41,10 @@ static const char usage_text[] =
     "           [--radius-exponent X] [--tip-radius R] [--angles grammar|murray]\n"
     "           [--merge-collinear] --out FILE.skel|FILE.obj\n"
     "                               grow the branch skeleton and write it\n"
+    "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
+    "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
+    "           --out FILE.glb|FILE.obj\n"
+    "                               wrap the skeleton in one closed quad mesh and write it\n"
     "\n"
     "source: --preset NAME (default: the default tree) or --grammar FILE\n"
     "exit codes: 0 ok, 64 usage, 65 bad input, 66 unreadable input, 71 out of memory,\n"
@@ -105,6 +111,31 @@ static bool parse_double(const char *s, double *out)
     return true;
 }
 
+static int parse_mesh_option(options *o, const char *opt, const char *val)
+{
+    xyl_stems_desc *m = &o->stems;
+    uint64_t u;
+    if (strcmp(opt, "--sides") == 0) {
+        if (!parse_u64(val, 32, &u) || u < 3)
+            return usage_error("--sides takes a whole number from 3 to 32, not '%s'", val);
+        m->sides = (uint32_t)u;
+    } else if (strcmp(opt, "--subdivide") == 0) {
+        if (strcmp(val, "none") == 0) m->subdivision = XYL_SUBDIVIDE_NONE;
+        else if (strcmp(val, "catmark") == 0) m->subdivision = XYL_SUBDIVIDE_CATMARK;
+        else if (strcmp(val, "loop") == 0) m->subdivision = XYL_SUBDIVIDE_LOOP;
+        else return usage_error("--subdivide takes none, catmark or loop, not '%s'", val);
+    } else if (strcmp(opt, "--normals") == 0) {
+        if (strcmp(val, "branch") == 0) m->normals = XYL_NORMALS_BRANCH;
+        else if (strcmp(val, "smooth") == 0) m->normals = XYL_NORMALS_SMOOTH;
+        else return usage_error("--normals takes branch or smooth, not '%s'", val);
+    } else if (strcmp(opt, "--skeleton") == 0) {
+        o->skeleton_path = val;
+    } else {
+        return usage_error("unknown option '%s'", opt);
+    }
+    return 0;
+}
+
 static int parse_turtle_option(options *o, const char *opt, const char *val)
 {
     xyl_turtle_desc *t = &o->turtle;
@@ -124,7 +155,7 @@ static int parse_turtle_option(options *o, const char *opt, const char *val)
         if (!parse_double(val, &t->tip_radius) || !(t->tip_radius > 0.0) || t->tip_radius > 1e30)
             return usage_error("--tip-radius takes a positive number, not '%s'", val);
     } else {
-        return usage_error("unknown option '%s'", opt);
+        return parse_mesh_option(o, opt, val);
     }
     return 0;
 }
@@ -290,16 +321,21 @@ static bool ends_with(const char *s, const char *suffix)
     return n >= m && strcmp(s + n - m, suffix) == 0;
 }
 
+/* The exit code of writing path: an output the system refuses is 73, other errors as usual. */
+static int written(const char *path, xyl_result r, const xyl_diag *d)
+{
+    if (r == XYL_ERR_IO) {
+        fprintf(stderr, "xylem: %s: %s\n", path, d->message);
+        return EXIT_CANTCREAT;
+    }
+    return r ? report(path, r, d) : 0;
+}
+
 static int write_skeleton(const xyl_skeleton *sk, const char *path)
 {
     xyl_skel_format fmt = ends_with(path, ".obj") ? XYL_SKEL_FORMAT_OBJ : XYL_SKEL_FORMAT_SKEL;
     xyl_diag d = {0};
-    xyl_result r = xyl_skeleton_write_file(sk, path, fmt, &d);
-    if (r == XYL_ERR_IO) {
-        fprintf(stderr, "xylem: %s: %s\n", path, d.message);
-        return EXIT_CANTCREAT;
-    }
-    return r ? report(path, r, &d) : 0;
+    return written(path, xyl_skeleton_write_file(sk, path, fmt, &d), &d);
 }
 
 static int grow(const options *o, const xyl_grammar *g, const char *source, double t0)
@@ -345,6 +381,70 @@ static int cmd_skeleton(const options *o)
     return rc;
 }
 
+/* The skeleton the options name: a .skel file, or grown from a grammar. */
+static int load_skeleton(const options *o, xyl_skeleton **sk, const char **source)
+{
+    if (o->skeleton_path) {
+        *source = o->skeleton_path;
+        xyl_diag d = {0};
+        xyl_result r = xyl_skeleton_read_file(o->skeleton_path, NULL, sk, &d);
+        return r ? report(o->skeleton_path, r, &d) : 0;
+    }
+    xyl_grammar *g = NULL;
+    xyl_lstring *s = NULL;
+    int rc = load_grammar(o, &g, source);
+    if (!rc) rc = derive_string(o, g, *source, &s);
+    if (!rc) {
+        xyl_diag d = {0};
+        xyl_result r = xyl_lsystem_interpret(g, s, &o->turtle, sk, &d);
+        if (r) rc = report(*source, r, &d);
+    }
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return rc;
+}
+
+static int write_mesh(const xyl_mesh *m, const char *path)
+{
+    xyl_mesh_format fmt = ends_with(path, ".obj") ? XYL_MESH_FORMAT_OBJ : XYL_MESH_FORMAT_GLB;
+    xyl_diag d = {0};
+    return written(path, xyl_mesh_write_file(m, path, fmt, &d), &d);
+}
+
+static int cmd_mesh(const options *o)
+{
+    if (!o->out) return usage_error("%s", "'mesh' needs --out FILE.glb or FILE.obj");
+    if (!ends_with(o->out, ".glb") && !ends_with(o->out, ".obj"))
+        return usage_error("--out must end in .glb or .obj, not '%s'", o->out);
+    if (o->skeleton_path && (o->preset || o->grammar_path))
+        return usage_error("%s", "give --skeleton or a grammar source, not both");
+    double t0 = now_seconds();
+    xyl_skeleton *sk = NULL;
+    xyl_mesh *m = NULL;
+    const char *source = NULL;
+    int rc = load_skeleton(o, &sk, &source);
+    double t1 = now_seconds();
+    xyl_diag d = {0};
+    if (!rc) {
+        xyl_result r = xyl_stems_build(sk, &o->stems, &m, &d);
+        if (r) rc = report(source, r, &d);
+    }
+    double t2 = now_seconds();
+    if (!rc) rc = write_mesh(m, o->out);
+    if (!rc) {
+        printf("%s: %zu nodes -> %zu vertices, %zu quads, %zu triangles (%zu in the triangulated "
+               "view)\n",
+               source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
+               m->tri_view_count);
+        printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
+               (t2 - t1) * 1e3, (now_seconds() - t2) * 1e3);
+        printf("wrote %s\n", o->out);
+    }
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -365,8 +465,10 @@ int main(int argc, char **argv)
     options o;
     memset(&o, 0, sizeof o);
     bool derive = strcmp(cmd, "derive") == 0, skeleton = strcmp(cmd, "skeleton") == 0;
-    if (!derive && !skeleton) return usage_error("unknown command '%s'", cmd);
+    bool mesh = strcmp(cmd, "mesh") == 0;
+    if (!derive && !skeleton && !mesh) return usage_error("unknown command '%s'", cmd);
     int rc = parse_options(argc, argv, &o);
     if (rc) return rc;
+    if (mesh) return cmd_mesh(&o);
     return derive ? cmd_derive(&o) : cmd_skeleton(&o);
 }

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# The main job: builds xylem and grows the built-in default tree, writing out/tree.skel (the
-# skeleton text format) and out/tree.obj (polylines for any viewer).
+# The main job: builds xylem and grows the built-in default tree, writing out/tree.glb (its
+# closed stem mesh, glTF 2.0 binary), out/tree.skel (the skeleton text format) and out/tree.obj
+# (skeleton polylines for any viewer).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cmake -S . -B build-release -G Ninja -DCMAKE_BUILD_TYPE=Release -DXYL_BUILD_TESTS=OFF >/dev/null
 cmake --build build-release --target xylem_cli >/dev/null
 mkdir -p out
-./build-release/samples/xylem skeleton --out out/tree.skel
+./build-release/samples/xylem mesh --out out/tree.glb
+./build-release/samples/xylem skeleton --out out/tree.skel >/dev/null
 ./build-release/samples/xylem skeleton --out out/tree.obj >/dev/null
-echo "wrote out/tree.obj"
+echo "wrote out/tree.skel and out/tree.obj"

@@ -82,5 +82,21 @@ expect 64 "bad extension" -- "$XYLEM" skeleton --out "$tmp/tree.png"
 expect 73 "unwritable output" -- "$XYLEM" skeleton --out "$tmp/no/such/dir/tree.skel"
 [ -z "$(ls "$tmp" | grep tmp-)" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: temporary files left behind"; }
 
+expect 0 "mesh .glb" -- "$XYLEM" mesh --out "$tmp/tree.glb"
+contains "vertices" "mesh summary"
+head -c 4 "$tmp/tree.glb" | grep -q "glTF" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: .glb magic"; }
+expect 0 "mesh .obj from a .skel" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --sides 6 --out "$tmp/s.obj"
+grep -q '^f ' "$tmp/s.obj" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: obj has no faces"; }
+expect 0 "mesh subdivided" -- "$XYLEM" mesh --preset faycal-leaves --subdivide catmark --normals smooth --out "$tmp/f.glb"
+expect 64 "sides above 32" -- "$XYLEM" mesh --sides 40 --out "$tmp/x.glb"
+expect 65 "odd sides unsupported" -- "$XYLEM" mesh --sides 5 --out "$tmp/x.glb"
+contains "odd ring sides" "odd sides message"
+expect 64 "bad subdivision" -- "$XYLEM" mesh --subdivide cubic --out "$tmp/x.glb"
+expect 64 "mesh needs --out" -- "$XYLEM" mesh
+expect 64 "skeleton and preset" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --preset abop-1.24a --out "$tmp/x.glb"
+expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out "$tmp/x.glb"
+expect 65 "broken skeleton" -- "$XYLEM" mesh --skeleton "$data/skel/bad_parent.skel" --out "$tmp/x.glb"
+expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
+
 echo "test_cli: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -181,9 +181,9 @@ typedef struct xyl_subdivide_desc {
 
 /* One uniform level of refinement through OpenSubdiv Far. Positions and UVs are interpolated
  * (vertex and varying), face branch ids are inherited from the parent face, vertex branch ids
- * from the nearest parent vertex, normals are recomputed (smooth). Errors: XYL_ERR_INVALID_ARGUMENT,
- * XYL_ERR_UNSUPPORTED (topology OpenSubdiv refuses), XYL_ERR_LIMIT_EXCEEDED,
- * XYL_ERR_OUT_OF_MEMORY. */
+ * follow the rules of docs/subdivision.md, normals are recomputed (smooth). Errors:
+ * XYL_ERR_INVALID_ARGUMENT, XYL_ERR_NON_FINITE, XYL_ERR_UNSUPPORTED (topology OpenSubdiv refuses),
+ * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivide_desc *desc,
                                       xyl_mesh **out, xyl_diag *diag);
 
@@ -217,15 +217,44 @@ typedef struct xyl_mesh_report {
     bool closed_manifold;          /* all of the counts above that must be 0 are 0 */
 } xyl_mesh_report;
 
-/* Topology and geometry statistics of a mesh. Errors: XYL_ERR_INVALID_ARGUMENT,
- * XYL_ERR_OUT_OF_MEMORY. */
+/* Topology and geometry statistics of a mesh (definitions and the one tolerance:
+ * docs/mesh-checks.md). Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, a bad index
+ * or a vertex repeated in a face: diag.index = the face), XYL_ERR_NON_FINITE,
+ * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_check(const xyl_mesh *mesh, xyl_mesh_report *report, xyl_diag *diag);
 
-/* Pairs of triangles of the triangulated view that intersect although they share no vertex
- * (robust triangle-triangle test with a broad phase). Writes up to capacity pairs (2 triangle
- * indices each) into pairs (may be NULL) and the total count into *count. */
+/* Pairs of triangles of the triangulated view whose intersection is more than the vertices they
+ * share (robust triangle-triangle test, BVH broad phase; docs/mesh-checks.md). Writes the pairs
+ * (i, j), i < j, sorted, 2 indices each: the first `capacity` of them into pairs (NULL with
+ * capacity 0 only counts), and the total into *count. Errors: as xyl_mesh_check, plus
+ * XYL_ERR_INVALID_ARGUMENT for pairs NULL with capacity > 0. */
 XYL_API xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs,
                                                size_t capacity, size_t *count, xyl_diag *diag);
+
+/* ---- stems: the mesh of a skeleton ---------------------------------------------------------- */
+
+typedef enum xyl_normal_mode {
+    XYL_NORMALS_BRANCH = 0, /* a vertex averages only its own branch's faces (Skjermo 2008) */
+    XYL_NORMALS_SMOOTH = 1  /* a vertex averages all its faces */
+} xyl_normal_mode;
+
+typedef struct xyl_stems_desc {
+    uint32_t sides;               /* ring sides k: even, 4..32 (odd k: XYL_ERR_UNSUPPORTED for
+                                     now); default (0): 4 */
+    xyl_normal_mode normals;
+    xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
+    bool keep_control_radius;     /* default false: with Catmull-Clark, rings are inflated by
+                                     6/(4 + 2cos(2pi/k)) so the limit surface keeps the radius */
+    xyl_mesh_limits limits;
+    xyl_allocator alloc;
+} xyl_stems_desc;
+
+/* One closed quad mesh around the whole skeleton: a tube per branch, children grown out of their
+ * parent (docs/stems.md). desc may be NULL. Errors: XYL_ERR_INVALID_ARGUMENT,
+ * XYL_ERR_UNSUPPORTED (odd sides; more children at one node than its fork bands hold),
+ * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                                   xyl_mesh **out, xyl_diag *diag);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,652 @@
+/* The stem mesher: one closed quad mesh around a whole skeleton (docs/stems.md).
+ *
+ * Every branch is a tube of k-vertex rings (rotation-minimising frames, caps at both ends). A
+ * lateral child is grown out of its parent by Euler operators that keep a closed oriented genus-0
+ * manifold so: rings are inserted around the fork (loop insertion), the child takes a patch of
+ * parent quads whose boundary has k vertices and the patch is replaced by a bridge to the child's
+ * first ring (face extrusion). Topology is therefore right by construction; geometry (where the
+ * rings go) decides only whether surfaces intersect. */
+#include <string.h>
+
+#include "mesh_internal.h"
+#include "stems_internal.h"
+#include "subdivide.h"
+
+
+/* ---- output buffers ------------------------------------------------------------------------ */
+
+static bool out_reserve(stems *s, size_t verts, size_t quads)
+{
+    const xyl_allocator *a = &s->alloc;
+    size_t c0 = s->vcap, c1 = s->vcap, c2 = s->vcap, q0 = s->qcap, q1 = s->qcap;
+    if (verts > s->vcap) {
+        if (!xyl__grow(a, (void **)&s->pos, &c0, s->nv, verts, sizeof *s->pos) ||
+            !xyl__grow(a, (void **)&s->uv, &c1, s->nv, verts, 2 * sizeof *s->uv) ||
+            !xyl__grow(a, (void **)&s->vbranch, &c2, s->nv, verts, sizeof *s->vbranch))
+            return false;
+        s->vcap = c0;
+    }
+    if (quads > s->qcap) {
+        if (!xyl__grow(a, (void **)&s->quads, &q0, s->nq, quads, 4 * sizeof *s->quads) ||
+            !xyl__grow(a, (void **)&s->fbranch, &q1, s->nq, quads, sizeof *s->fbranch))
+            return false;
+        s->qcap = q0;
+    }
+    return true;
+}
+
+static xyl_result oom(stems *s)
+{
+    return xyl__fail(s->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the stem mesh");
+}
+
+/* Appends a quad; its branch is the branch being built. */
+static void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t branch)
+{
+    uint32_t *q = s->quads + 4 * s->nq;
+    q[0] = a;
+    q[1] = b;
+    q[2] = c;
+    q[3] = d;
+    s->fbranch[s->nq++] = branch;
+}
+
+/* ---- rings --------------------------------------------------------------------------------- */
+
+/* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
+ * counter-clockwise seen from +t. Returns the first vertex index. */
+static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, double r, double v,
+                         uint32_t branch)
+{
+    uint32_t first = (uint32_t)s->nv;
+    xyl__dvec3 w = xyl__d3_cross(t, u);
+    for (uint32_t j = 0; j < s->k; ++j) {
+        double a = 2.0 * XYL__PI * (double)j / (double)s->k, rr = r * s->inflate;
+        xyl__dvec3 p = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(u, rr * cos(a)),
+                                                  xyl__d3_scale(w, rr * sin(a))));
+        s->pos[s->nv] = xyl__to_f3(p);
+        s->uv[2 * s->nv] = (float)((double)j / (double)s->k);
+        s->uv[2 * s->nv + 1] = (float)v;
+        s->vbranch[s->nv++] = branch;
+    }
+    return first;
+}
+
+/* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead. */
+static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
+{
+    for (uint32_t j = 0; j < s->k; ++j) {
+        uint32_t j1 = (j + 1) % s->k;
+        put_quad(s, a + j, a + j1, b + j1, b + j, branch);
+    }
+}
+
+/* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
+ * the tube leaves behind it (a tip), false for one it starts from (a root). */
+static void put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
+{
+    for (uint32_t j = 1; j + 2 < s->k; j += 2) {
+        uint32_t a = ring, b = ring + j, c = ring + j + 1, d = ring + j + 2;
+        if (forward) put_quad(s, a, b, c, d, branch);
+        else put_quad(s, a, d, c, b, branch);
+    }
+}
+
+/* Rotation-minimising frame transport (double reflection, Wang et al. 2008): the reference
+ * vector u at (x0, t0) carried to (x1, t1). */
+static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dvec3 x1,
+                            xyl__dvec3 t1)
+{
+    xyl__dvec3 v1 = xyl__d3_sub(x1, x0);
+    double c1 = xyl__d3_dot(v1, v1);
+    xyl__dvec3 uL = u, tL = t0;
+    if (c1 > XYL__EPS_NORMALIZE) {
+        uL = xyl__d3_sub(u, xyl__d3_scale(v1, 2.0 / c1 * xyl__d3_dot(v1, u)));
+        tL = xyl__d3_sub(t0, xyl__d3_scale(v1, 2.0 / c1 * xyl__d3_dot(v1, t0)));
+    }
+    xyl__dvec3 v2 = xyl__d3_sub(t1, tL);
+    double c2 = xyl__d3_dot(v2, v2);
+    if (c2 > XYL__EPS_NORMALIZE) uL = xyl__d3_sub(uL, xyl__d3_scale(v2, 2.0 / c2 * xyl__d3_dot(v2, uL)));
+    /* re-orthogonalise against t1: rounding must not tilt the ring plane */
+    uL = xyl__d3_sub(uL, xyl__d3_scale(t1, xyl__d3_dot(uL, t1)));
+    return xyl__d3_normalize_or(uL, xyl__d3_any_orthogonal(t1));
+}
+
+/* ---- skeleton structure -------------------------------------------------------------------- */
+
+static xyl_result index_children(stems *s)
+{
+    size_t n = s->sk->node_count;
+    s->child_start = xyl__calloc(&s->alloc, n + 1, sizeof *s->child_start);
+    s->child_list = xyl__calloc(&s->alloc, n ? n : 1, sizeof *s->child_list);
+    if (!s->child_start || !s->child_list) return oom(s);
+    for (size_t i = 0; i < n; ++i)
+        if (s->sk->nodes[i].parent >= 0) ++s->child_start[s->sk->nodes[i].parent + 1];
+    for (size_t i = 0; i < n; ++i) s->child_start[i + 1] += s->child_start[i];
+    uint32_t *fill = xyl__calloc(&s->alloc, n ? n : 1, sizeof *fill);
+    if (!fill) return oom(s);
+    for (size_t i = 0; i < n; ++i) {
+        int32_t p = s->sk->nodes[i].parent;
+        if (p >= 0) s->child_list[s->child_start[p] + fill[p]++] = (uint32_t)i;
+    }
+    xyl__free(&s->alloc, fill);
+    return XYL_OK;
+}
+
+/* The child that continues n's branch (same branch id), or UINT32_MAX at a tip. */
+static uint32_t main_child(const stems *s, uint32_t n)
+{
+    for (uint32_t c = s->child_start[n]; c < s->child_start[n + 1]; ++c)
+        if (s->sk->nodes[s->child_list[c]].branch == s->sk->nodes[n].branch) return s->child_list[c];
+    return UINT32_MAX;
+}
+
+static xyl__dvec3 node_pos(const stems *s, uint32_t n)
+{
+    return xyl__from_f3(s->sk->nodes[n].pos);
+}
+
+static xyl_result collect_chain(stems *s, uint32_t start)
+{
+    s->nchain = 0;
+    for (uint32_t n = start; n != UINT32_MAX; n = main_child(s, n)) {
+        if (!xyl__grow(&s->alloc, (void **)&s->chain, &s->ccap, s->nchain, s->nchain + 1,
+                       sizeof *s->chain))
+            return oom(s);
+        s->chain[s->nchain++] = n;
+    }
+    return XYL_OK;
+}
+
+/* Stations along the chain: coincident nodes share one; nodes not clearly ahead of a child's
+ * bridge ring are merged into the first station that is (docs/stems.md). */
+static xyl_result make_stations(stems *s, const stems_ring *bridge)
+{
+    s->nstations = 0;
+    size_t first = 0;
+    for (size_t i = 0; i < s->nchain; ++i) {
+        xyl__dvec3 p = node_pos(s, s->chain[i]);
+        double r = s->sk->nodes[s->chain[i]].radius;
+        bool behind = bridge && xyl__d3_dot(xyl__d3_sub(p, bridge->centre), bridge->tangent) <
+                                    bridge->radius;
+        bool same = s->nstations &&
+                    xyl__d3_len(xyl__d3_sub(p, s->stations[s->nstations - 1].p)) <= 1e-6 * r;
+        if (behind && i + 1 < s->nchain) continue;
+        if (same) {
+            s->stations[s->nstations - 1].last = (uint32_t)i;
+            first = i + 1;
+            continue;
+        }
+        if (behind) p = xyl__d3_add(bridge->centre, xyl__d3_scale(bridge->tangent, 2 * bridge->radius));
+        if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, s->nstations + 1,
+                       sizeof *s->stations))
+            return oom(s);
+        stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
+        s->stations[s->nstations++] = st;
+        first = i + 1;
+    }
+    return XYL_OK;
+}
+
+/* ---- rings along one branch ---------------------------------------------------------------- */
+
+/* Adds a ring and the band of quads from the previous ring of this branch to it. */
+static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r, uint32_t station,
+                           uint32_t branch)
+{
+    if (!out_reserve(s, s->nv + s->k, s->nq + s->k) ||
+        !xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + 1,
+                   sizeof *s->rings) ||
+        !xyl__grow(&s->alloc, (void **)&s->ring_station, &s->rscap, s->nrings, s->nrings + 1,
+                   sizeof *s->ring_station))
+        return oom(s);
+    stems_ring ring;
+    memset(&ring, 0, sizeof ring);
+    ring.centre = c;
+    ring.tangent = t;
+    ring.radius = r;
+    ring.band = UINT32_MAX;
+    if (s->nrings) {
+        stems_ring *prev = &s->rings[s->nrings - 1];
+        ring.u = transport(prev->u, prev->centre, prev->tangent, c, t);
+        double mean_r = 0.5 * (prev->radius + r);
+        ring.v = prev->v + xyl__d3_len(xyl__d3_sub(c, prev->centre)) / (2.0 * XYL__PI * mean_r);
+    } else {
+        ring.u = xyl__d3_any_orthogonal(t);
+    }
+    ring.first = put_ring(s, c, t, ring.u, r, ring.v, branch);
+    if (s->nrings) {
+        stems_ring *prev = &s->rings[s->nrings - 1];
+        prev->band = (uint32_t)s->nq;
+        put_band(s, prev->first, ring.first, branch);
+    }
+    s->ring_station[s->nrings] = station;
+    s->rings[s->nrings++] = ring;
+    return XYL_OK;
+}
+
+static size_t lateral_count(const stems *s, const stems_station *st)
+{
+    size_t n = 0;
+    for (uint32_t i = st->first; i <= st->last; ++i) {
+        uint32_t node = s->chain[i];
+        n += s->child_start[node + 1] - s->child_start[node];
+        n -= main_child(s, node) != UINT32_MAX;
+    }
+    return n;
+}
+
+static xyl__dvec3 dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
+{
+    return xyl__d3_normalize_or(xyl__d3_sub(b, a), fallback);
+}
+
+/* Tangent of station i: the bisector of its segments (the first and last take their one). */
+static void station_frame(const stems *s, size_t i, xyl__dvec3 start_dir, xyl__dvec3 *t_in,
+                          xyl__dvec3 *t_out)
+{
+    const stems_station *st = s->stations;
+    *t_in = i ? dir_between(st[i - 1].p, st[i].p, start_dir) : start_dir;
+    *t_out = i + 1 < s->nstations ? dir_between(st[i].p, st[i + 1].p, *t_in) : *t_in;
+}
+
+/* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
+ * delta, so the bands between them offer patches to the lateral children. */
+static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
+                             uint32_t branch, size_t laterals)
+{
+    const stems_station *st = &s->stations[i];
+    uint32_t strip = s->k / 2 - 1, per_band = s->k / strip;
+    /* twice the patches the children need, so each still has a choice; never a fixed cap, so a
+     * fork can always hold all its children */
+    size_t want = (2 * laterals + per_band - 1) / per_band;
+    if (want < 2) want = 2;
+    double seg_in = i ? xyl__d3_len(xyl__d3_sub(st->p, s->stations[i - 1].p)) : 0.0;
+    double seg_out = i + 1 < s->nstations ? xyl__d3_len(xyl__d3_sub(s->stations[i + 1].p, st->p)) : 0.0;
+    size_t behind = seg_in > 0.0 ? (seg_out > 0.0 ? want / 2 : want) : 0;
+    size_t ahead = seg_out > 0.0 ? want - behind : 0;
+    double lat_r = 0.0;
+    for (uint32_t c = st->first; c <= st->last; ++c) {
+        uint32_t node = s->chain[c];
+        for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j)
+            if (s->sk->nodes[s->child_list[j]].radius > lat_r) lat_r = s->sk->nodes[s->child_list[j]].radius;
+    }
+    double d_in = behind ? fmin(lat_r, 0.45 * seg_in / (double)behind) : 0.0;
+    double d_out = ahead ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : 0.0;
+    xyl_result r = XYL_OK;
+    for (size_t m = behind; m >= 1 && !r; --m)
+        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r,
+                     (uint32_t)i, branch);
+    if (!r) r = add_ring(s, st->p, t, st->r, (uint32_t)i, branch);
+    for (size_t m = 1; m <= ahead && !r; ++m)
+        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r,
+                     (uint32_t)i, branch);
+    return r;
+}
+
+/* ---- patches and bridges ------------------------------------------------------------------- */
+
+/* The quads of band b, columns c .. c + strip - 1 (mod k). */
+static uint32_t strip_quad(const stems *s, uint32_t band, uint32_t c, uint32_t j)
+{
+    return band + (c + j) % s->k;
+}
+
+static bool strip_free(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
+{
+    for (uint32_t j = 0; j < strip; ++j)
+        if (s->taken[strip_quad(s, band, c, j)]) return false;
+    return true;
+}
+
+static xyl__dvec3 strip_normal(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
+{
+    xyl__dvec3 n = xyl__d3(0, 0, 0);
+    for (uint32_t j = 0; j < strip; ++j) {
+        const uint32_t *q = s->quads + 4 * strip_quad(s, band, c, j);
+        xyl__dvec3 a = xyl__from_f3(s->pos[q[0]]), b = xyl__from_f3(s->pos[q[1]]);
+        xyl__dvec3 cc = xyl__from_f3(s->pos[q[2]]), d = xyl__from_f3(s->pos[q[3]]);
+        n = xyl__d3_add(n, xyl__d3_cross(xyl__d3_sub(cc, a), xyl__d3_sub(d, b)));
+    }
+    return xyl__d3_normalize_or(n, xyl__d3(0, 1, 0));
+}
+
+/* The strip's outline, counter-clockwise seen from outside: ring a's vertices c .. c + strip,
+ * then ring b's back from c + strip to c. */
+static void strip_loop(const stems *s, uint32_t ring_a, uint32_t ring_b, uint32_t c,
+                       uint32_t strip, uint32_t *loop)
+{
+    uint32_t n = 0;
+    for (uint32_t j = 0; j <= strip; ++j) loop[n++] = ring_a + (c + j) % s->k;
+    for (uint32_t j = strip + 1; j-- > 0;) loop[n++] = ring_b + (c + j) % s->k;
+}
+
+typedef struct patch {
+    uint32_t ring;   /* index into s->rings of the ring behind the band */
+    uint32_t column;
+    double score;
+} patch;
+
+/* Best free patch for direction d among the bands between rings lo .. hi. */
+static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 d)
+{
+    uint32_t strip = s->k / 2 - 1;
+    patch best = {UINT32_MAX, 0, -2.0};
+    for (size_t r = lo; r < hi; ++r) {
+        uint32_t band = s->rings[r].band;
+        for (uint32_t c = 0; c < s->k; ++c) {
+            if (!strip_free(s, band, c, strip)) continue;
+            double score = xyl__d3_dot(strip_normal(s, band, c, strip), d);
+            if (score > best.score) {
+                patch p = {(uint32_t)r, c, score};
+                best = p;
+            }
+        }
+    }
+    return best;
+}
+
+/* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
+static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
+{
+    uint32_t strip = s->k / 2 - 1, loop[64];
+    const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
+    uint32_t band = a->band, branch = s->sk->nodes[child].branch;
+    strip_loop(s, a->first, b->first, p.column, strip, loop);
+    xyl__dvec3 n = strip_normal(s, band, p.column, strip), centroid = xyl__d3(0, 0, 0);
+    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[loop[j]]));
+    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
+    for (uint32_t j = 0; j < strip; ++j) s->taken[strip_quad(s, band, p.column, j)] = 1;
+    double r = s->sk->nodes[child].radius, h = fmax(r, 0.25 * parent_r);
+    stems_ring ring;
+    memset(&ring, 0, sizeof ring);
+    ring.centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
+    ring.tangent = n;
+    xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[loop[0]]), centroid);
+    to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
+    ring.u = xyl__d3_normalize_or(to0, xyl__d3_any_orthogonal(n));
+    ring.radius = r;
+    ring.band = UINT32_MAX;
+    if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
+    ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
+    for (uint32_t j = 0; j < s->k; ++j) {
+        uint32_t j1 = (j + 1) % s->k;
+        put_quad(s, loop[j], loop[j1], ring.first + j1, ring.first + j, branch);
+    }
+    if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
+                   sizeof *s->pending))
+        return oom(s);
+    stems_pending pend = {child, ring};
+    s->pending[s->npending++] = pend;
+    return XYL_OK;
+}
+
+/* Direction in which a child leaves its fork node: towards its first node that is not at the
+ * fork, else any direction across the parent. */
+static xyl__dvec3 child_direction(const stems *s, uint32_t fork, uint32_t child, xyl__dvec3 across)
+{
+    xyl__dvec3 f = node_pos(s, fork);
+    for (uint32_t n = child; n != UINT32_MAX; n = main_child(s, n)) {
+        xyl__dvec3 d = xyl__d3_sub(node_pos(s, n), f);
+        if (xyl__d3_len(d) > 1e-6 * s->sk->nodes[fork].radius) return xyl__d3_normalize_or(d, across);
+    }
+    return across;
+}
+
+/* taken[] covers every quad written so far; new entries start free. */
+static xyl_result grow_taken(stems *s)
+{
+    size_t old = s->tcap;
+    if (s->qcap <= old) return XYL_OK;
+    if (!xyl__grow(&s->alloc, (void **)&s->taken, &s->tcap, old, s->qcap, 1)) return oom(s);
+    memset(s->taken + old, 0, s->tcap - old);
+    return XYL_OK;
+}
+
+/* Attaches every lateral child of station i to a patch among rings lo .. hi. */
+static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
+{
+    const stems_station *st = &s->stations[i];
+    xyl_result r = grow_taken(s);
+    if (r) return r;
+    for (uint32_t c = st->first; c <= st->last && st->first != UINT32_MAX; ++c) {
+        uint32_t node = s->chain[c], main = main_child(s, node);
+        for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
+            uint32_t child = s->child_list[j];
+            if (child == main) continue;
+            xyl__dvec3 across = xyl__d3_any_orthogonal(s->rings[lo].tangent);
+            patch p = choose_patch(s, lo, hi, child_direction(s, node, child, across));
+            if (p.ring == UINT32_MAX)
+                return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
+                                 "node %u has more children than its %zu fork bands can hold",
+                                 node, hi - lo);
+            r = bridge(s, p, child, st->r);
+            if (r) return r;
+        }
+    }
+    return XYL_OK;
+}
+
+/* ---- branches ------------------------------------------------------------------------------ */
+
+/* A chain that collapsed to one station still gets a tube: a second, node-less station one
+ * diameter further on. */
+static xyl_result ensure_two_stations(stems *s, xyl__dvec3 dir)
+{
+    if (s->nstations >= 2) return XYL_OK;
+    if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, 2, sizeof *s->stations))
+        return oom(s);
+    stems_station *a = &s->stations[0];
+    stems_station b = {xyl__d3_add(a->p, xyl__d3_scale(dir, 2.0 * a->r)), a->r, UINT32_MAX, 0};
+    s->stations[s->nstations++] = b;
+    return XYL_OK;
+}
+
+typedef struct fork_span {
+    size_t station, lo, hi; /* rings lo .. hi surround the fork */
+} fork_span;
+
+/* Rings for every station of the current chain; forks get extra rings. Records the ring span
+ * of each fork in spans (capacity nstations). */
+static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, uint32_t branch, fork_span *spans,
+                               size_t *nspans)
+{
+    *nspans = 0;
+    for (size_t i = 0; i < s->nstations; ++i) {
+        xyl__dvec3 t_in, t_out;
+        station_frame(s, i, start_dir, &t_in, &t_out);
+        xyl__dvec3 t = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
+        size_t laterals = s->stations[i].first == UINT32_MAX ? 0 : lateral_count(s, &s->stations[i]);
+        size_t lo = s->nrings;
+        xyl_result r = laterals ? fork_rings(s, i, t_in, t, t_out, branch, laterals)
+                                : add_ring(s, s->stations[i].p, t, s->stations[i].r, (uint32_t)i,
+                                           branch);
+        if (r) return r;
+        if (laterals) {
+            fork_span sp = {i, lo, s->nrings - 1};
+            spans[(*nspans)++] = sp;
+        }
+    }
+    return XYL_OK;
+}
+
+static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
+{
+    uint32_t branch = s->sk->nodes[start].branch;
+    xyl_result r = collect_chain(s, start);
+    if (!r) r = make_stations(s, from);
+    if (r) return r;
+    xyl__dvec3 dir = from ? from->tangent : xyl__d3(0, 1, 0);
+    if (!from && s->nchain > 1)
+        dir = dir_between(node_pos(s, s->chain[0]), node_pos(s, s->chain[s->nchain - 1]), dir);
+    r = ensure_two_stations(s, dir);
+    if (r) return r;
+    s->nrings = 0;
+    if (from) { /* the bridge ring is this branch's first ring */
+        if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings) ||
+            !xyl__grow(&s->alloc, (void **)&s->ring_station, &s->rscap, 0, 1, sizeof *s->ring_station))
+            return oom(s);
+        s->rings[0] = *from;
+        s->ring_station[0] = UINT32_MAX;
+        s->nrings = 1;
+    }
+    fork_span *spans = xyl__calloc(&s->alloc, s->nstations, sizeof *spans);
+    if (!spans) return oom(s);
+    size_t nspans = 0;
+    r = branch_rings(s, dir, branch, spans, &nspans);
+    if (!r && !out_reserve(s, s->nv, s->nq + s->k)) r = oom(s);
+    if (!r) {
+        if (!from) put_cap(s, s->rings[0].first, false, branch);
+        put_cap(s, s->rings[s->nrings - 1].first, true, branch);
+    }
+    for (size_t f = 0; f < nspans && !r; ++f)
+        r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
+    xyl__free(&s->alloc, spans);
+    return r;
+}
+
+static xyl_result build_all(stems *s)
+{
+    xyl_result r = index_children(s);
+    for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
+        if (s->sk->nodes[i].parent >= 0) continue;
+        r = build_branch(s, (uint32_t)i, NULL);
+        while (!r && s->npending) {
+            stems_pending p = s->pending[--s->npending];
+            r = build_branch(s, p.node, &p.bridge);
+        }
+        if (!r && (uint64_t)s->nv > s->max_vertices)
+            r = xyl__fail(s->diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                          "the stem mesh needs more than %llu vertices",
+                          (unsigned long long)s->max_vertices);
+    }
+    return r;
+}
+
+/* ---- public entry -------------------------------------------------------------------------- */
+
+static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xyl_mesh **out,
+                             xyl_diag *diag)
+{
+    if (!sk || !out)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "skeleton and out must not be NULL");
+    uint32_t k = d->sides ? d->sides : 4;
+    if (k < 3 || k > 32)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "sides must be 3..32, not %u", k);
+    if (k % 2)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "odd ring sides (%u) are not supported yet: a quad patch never has an "
+                         "odd boundary (docs/stems.md)", k);
+    if ((unsigned)d->normals > XYL_NORMALS_SMOOTH || (unsigned)d->subdivision > XYL_SUBDIVIDE_LOOP)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "unknown normal mode or scheme");
+    return XYL_OK;
+}
+
+/* Drops the quads that became bridges and hands the arrays over. */
+static void take_arrays(stems *s, xyl__mesh_arrays *a)
+{
+    size_t w = 0;
+    for (size_t q = 0; q < s->nq; ++q) {
+        if (q < s->tcap && s->taken[q]) continue;
+        memmove(s->quads + 4 * w, s->quads + 4 * q, 4 * sizeof *s->quads);
+        s->fbranch[w++] = s->fbranch[q];
+    }
+    memset(a, 0, sizeof *a);
+    a->positions = s->pos;
+    a->uvs = s->uv;
+    a->branch_ids = s->vbranch;
+    a->vertex_count = s->nv;
+    a->quads = s->quads;
+    a->quad_count = w;
+    a->face_branches = s->fbranch;
+    s->pos = NULL;
+    s->uv = NULL;
+    s->vbranch = NULL;
+    s->quads = NULL;
+    s->fbranch = NULL;
+}
+
+static void free_state(stems *s)
+{
+    void *arrays[] = {s->child_start, s->child_list, s->pos, s->uv, s->vbranch, s->quads,
+                      s->fbranch, s->taken, s->chain, s->stations, s->rings, s->ring_station,
+                      s->pending};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
+}
+
+/* Normals of the mesh before the patches were dropped: a parent vertex on a joint still sees its
+ * branch's full tube, so its normal is the parent's own (Skjermo 2008). */
+static xyl_result normals_with_patches(stems *s, const xyl_stems_desc *d, xyl_vec3 **out)
+{
+    xyl__mesh_arrays view;
+    memset(&view, 0, sizeof view);
+    view.positions = s->pos;
+    view.branch_ids = s->vbranch;
+    view.vertex_count = s->nv;
+    view.quads = s->quads;
+    view.quad_count = s->nq;
+    view.face_branches = s->fbranch;
+    *out = NULL;
+    if (d->normals == XYL_NORMALS_SMOOTH) return XYL_OK; /* smooth ones see the final surface */
+    *out = xyl__calloc(&s->alloc, s->nv ? s->nv : 1, sizeof **out);
+    if (!*out) return oom(s);
+    return xyl__mesh_normals(&view, s->fbranch, &s->alloc, *out) == XYL_OK ? XYL_OK : oom(s);
+}
+
+static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, xyl_mesh **out)
+{
+    xyl_result r = XYL_OK;
+    if (a->normals) return xyl__mesh_adopt(a, &s->alloc, out, s->diag);
+    if (d->subdivision != XYL_SUBDIVIDE_NONE) {
+        xyl__mesh_arrays fine;
+        r = xyl__subdivide(a, d->subdivision, &d->limits, &s->alloc, &fine, s->diag);
+        xyl__mesh_arrays_free(a, &s->alloc);
+        if (r) return r;
+        *a = fine;
+    }
+    a->normals = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, sizeof *a->normals);
+    if (!a->normals) r = oom(s);
+    if (!r) {
+        const uint32_t *fb = d->normals == XYL_NORMALS_BRANCH ? a->face_branches : NULL;
+        if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = oom(s);
+    }
+    if (r) {
+        xyl__mesh_arrays_free(a, &s->alloc);
+        return r;
+    }
+    return xyl__mesh_adopt(a, &s->alloc, out, s->diag);
+}
+
+xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                           xyl_mesh **out, xyl_diag *diag)
+{
+    static const xyl_stems_desc zero;
+    if (!desc) desc = &zero;
+    xyl_result r = check_desc(skeleton, desc, out, diag);
+    if (r) return r;
+    stems s;
+    memset(&s, 0, sizeof s);
+    s.sk = skeleton;
+    s.k = desc->sides ? desc->sides : 4;
+    s.alloc = desc->alloc;
+    s.diag = diag;
+    s.max_vertices = desc->limits.max_vertices ? desc->limits.max_vertices : XYL__MESH_DEFAULT_MAX_VERTICES;
+    s.max_faces = desc->limits.max_faces ? desc->limits.max_faces : XYL__MESH_DEFAULT_MAX_FACES;
+    bool inflate = desc->subdivision == XYL_SUBDIVIDE_CATMARK && !desc->keep_control_radius;
+    s.inflate = inflate ? 6.0 / (4.0 + 2.0 * cos(2.0 * XYL__PI / (double)s.k)) : 1.0;
+    r = build_all(&s);
+    if (!r && (uint64_t)s.nq > s.max_faces)
+        r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                      "the stem mesh needs more than %llu faces", (unsigned long long)s.max_faces);
+    xyl__mesh_arrays a;
+    memset(&a, 0, sizeof a);
+    xyl_vec3 *normals = NULL;
+    if (!r && desc->subdivision == XYL_SUBDIVIDE_NONE) r = normals_with_patches(&s, desc, &normals);
+    if (!r) {
+        take_arrays(&s, &a);
+        a.normals = normals;
+    }
+    free_state(&s);
+    if (r) return r;
+    return finish(&s, desc, &a, out);
+}

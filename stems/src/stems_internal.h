@@ -1,0 +1,65 @@
+/* The stem mesher's state (stems_build.c). Not installed. */
+#ifndef XYL_STEMS_INTERNAL_H
+#define XYL_STEMS_INTERNAL_H
+
+#include "mesh_internal.h"
+
+/* One ring of a branch tube, and the patch bookkeeping of the band that follows it. */
+typedef struct stems_ring {
+    uint32_t first;     /* first of its k vertices */
+    xyl__dvec3 centre, tangent, u;
+    double radius;
+    double v;           /* texture v: arc length / (2 pi radius) along the branch */
+    uint32_t band;      /* first quad of the band from this ring to the next */
+} stems_ring;
+
+/* A place along a branch where a ring goes: one or more coincident skeleton nodes. */
+typedef struct stems_station {
+    xyl__dvec3 p;
+    double r;
+    uint32_t first, last; /* chain indices of the nodes merged here */
+} stems_station;
+
+/* A lateral child waiting for its branch to be built from its bridge ring. */
+typedef struct stems_pending {
+    uint32_t node;      /* the child's first skeleton node */
+    stems_ring bridge;  /* the ring its bridge ends in */
+} stems_pending;
+
+typedef struct stems {
+    const xyl_skeleton *sk;
+    uint32_t k;
+    double inflate;     /* ring radius factor: 6 / (4 + 2 cos(2 pi / k)) before Catmull-Clark */
+    xyl_allocator alloc;
+    xyl_diag *diag;
+    uint64_t max_vertices, max_faces;
+
+    /* children of every node: child_list[child_start[n] .. child_start[n + 1]) */
+    uint32_t *child_start, *child_list;
+
+    /* output */
+    xyl_vec3 *pos;
+    float *uv;
+    uint32_t *vbranch;
+    size_t nv, vcap;
+    uint32_t *quads, *fbranch;
+    size_t nq, qcap;
+    uint8_t *taken; /* per quad: replaced by a child's bridge */
+    size_t tcap;
+
+    /* the branch being built */
+    uint32_t *chain;
+    size_t nchain, ccap;
+    stems_station *stations;
+    size_t nstations, scap;
+    stems_ring *rings;
+    size_t nrings, rcap;
+    uint32_t *ring_station; /* per ring: its station, or UINT32_MAX for an inserted ring */
+    size_t rscap;
+
+    stems_pending *pending;
+    size_t npending, pcap;
+    uint32_t buds;          /* children reduced to a bud (never leave the parent) */
+} stems;
+
+#endif

@@ -1,0 +1,269 @@
+/* The stem mesher on every hard case and preset: closed oriented manifold with characteristic 2
+ * per root, self-intersection counts, per-branch normals, determinism, errors. */
+#include <dirent.h>
+#include <math.h>
+
+#include "test_util.h"
+
+/* Hard cases whose meshes still intersect themselves (docs/stems.md, "Open"): the tubes of
+ * overlapping siblings and thick children are not merged yet. Every other case must have none,
+ * and these must stay manifold. */
+static const char *const known_intersecting[] = {
+    "binary_depth7.skel", "fork_siblings_1deg.skel", "fork_up_down.skel",
+    "spokes_16.skel",     "spokes_8_thick.skel",
+};
+
+static bool is_known_intersecting(const char *name)
+{
+    for (size_t i = 0; i < sizeof known_intersecting / sizeof known_intersecting[0]; ++i)
+        if (strcmp(name, known_intersecting[i]) == 0) return true;
+    return false;
+}
+
+static xyl_mesh *build(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
+                       xyl_normal_mode normals)
+{
+    xyl_stems_desc d = {0};
+    d.sides = k;
+    d.subdivision = sub;
+    d.normals = normals;
+    xyl_mesh *m = NULL;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_stems_build(sk, &d, &m, &diag);
+    if (r != XYL_OK) fail_msg("build: %s: %s", xyl_result_string(r), diag.message);
+    return m;
+}
+
+static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char *what)
+{
+    xyl_mesh_report rep;
+    assert_int_equal(xyl_mesh_check(m, &rep, NULL), XYL_OK);
+    if (!rep.closed_manifold || rep.euler != 2 * (int64_t)sk->root_count ||
+        rep.components != sk->root_count)
+        fail_msg("%s: closed %d euler %lld components %zu (roots %u) boundary %zu nonmanifold "
+                 "%zu/%zu misoriented %zu degenerate %zu duplicate %zu",
+                 what, rep.closed_manifold, (long long)rep.euler, rep.components, sk->root_count,
+                 rep.boundary_edges, rep.nonmanifold_edges, rep.nonmanifold_vertices,
+                 rep.misoriented_edges, rep.degenerate_faces, rep.duplicate_faces);
+    for (size_t v = 0; v < m->vertex_count; ++v)
+        assert_true(isfinite(m->positions[v].x) && isfinite(m->positions[v].y) &&
+                    isfinite(m->positions[v].z));
+}
+
+typedef void (*case_fn)(const char *name, const xyl_skeleton *sk, void *ctx);
+
+static int for_each_hard_case(case_fn fn, void *ctx)
+{
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/stems", XYL_TEST_DATA);
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int count = 0;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        size_t n = strlen(e->d_name);
+        if (n < 6 || strcmp(e->d_name + n - 5, ".skel") != 0) continue;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        xyl_skeleton *sk = NULL;
+        assert_int_equal(xyl_skeleton_read_file(path, NULL, &sk, NULL), XYL_OK);
+        fn(e->d_name, sk, ctx);
+        xyl_skeleton_destroy(sk);
+        ++count;
+    }
+    closedir(d);
+    return count;
+}
+
+/* ---- topology ------------------------------------------------------------------------------ */
+
+typedef struct topo_ctx {
+    uint32_t k;
+    xyl_subdivision sub;
+} topo_ctx;
+
+static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    const topo_ctx *t = ctx;
+    xyl_mesh *m = build(sk, t->k, t->sub, XYL_NORMALS_BRANCH);
+    char what[256];
+    snprintf(what, sizeof what, "%s k=%u subdivision=%d", name, t->k, (int)t->sub);
+    assert_closed(m, sk, what);
+    if (t->sub == XYL_SUBDIVIDE_NONE) {
+        assert_int_equal(m->triangle_count, 0); /* all quads */
+    }
+    xyl_mesh_destroy(m);
+}
+
+static void every_hard_case_is_a_closed_manifold(void **state)
+{
+    (void)state;
+    static const uint32_t sides[] = {4, 6, 8};
+    for (size_t i = 0; i < sizeof sides / sizeof sides[0]; ++i) {
+        topo_ctx t = {sides[i], XYL_SUBDIVIDE_NONE};
+        assert_true(for_each_hard_case(check_topology, &t) >= 40);
+    }
+}
+
+static void every_hard_case_stays_closed_after_subdivision(void **state)
+{
+    (void)state;
+    topo_ctx cc = {4, XYL_SUBDIVIDE_CATMARK}, loop = {4, XYL_SUBDIVIDE_LOOP};
+    for_each_hard_case(check_topology, &cc);
+    for_each_hard_case(check_topology, &loop);
+}
+
+static xyl_skeleton *grow_preset(const char *name)
+{
+    xyl_grammar *g = tu_parse(xyl_lsystem_preset_source(name));
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
+    assert_int_equal(xyl_lsystem_interpret(g, s, NULL, &sk, NULL), XYL_OK);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return sk;
+}
+
+static void every_preset_is_a_closed_manifold(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, name);
+        xyl_mesh_destroy(m);
+        m = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, name);
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+}
+
+/* ---- self-intersection --------------------------------------------------------------------- */
+
+static void check_intersections(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    int *clean = ctx;
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    size_t count = 0;
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    if (is_known_intersecting(name)) {
+        if (count == 0) fail_msg("%s no longer intersects: remove it from the known list", name);
+    } else {
+        if (count != 0) fail_msg("%s: %zu intersecting triangle pairs", name, count);
+        ++*clean;
+    }
+    xyl_mesh_destroy(m);
+}
+
+static void hard_cases_do_not_intersect_themselves(void **state)
+{
+    (void)state;
+    int clean = 0;
+    int total = for_each_hard_case(check_intersections, &clean);
+    assert_int_equal(clean, total - (int)(sizeof known_intersecting / sizeof known_intersecting[0]));
+}
+
+/* ---- normals ------------------------------------------------------------------------------- */
+
+/* Worst angle (degrees) between the parent's vertex normals and the radial direction of the
+ * vertical parent cylinder, over the parent's vertices away from the fork's band. */
+static double parent_normal_error(const xyl_mesh *m, uint32_t parent_branch, double y_lo,
+                                  double y_hi)
+{
+    double worst = 0.0;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        if (m->branch_ids[v] != parent_branch) continue;
+        xyl_vec3 p = m->positions[v], n = m->normals[v];
+        if (p.y < y_lo || p.y > y_hi) continue;
+        double rl = sqrt((double)p.x * p.x + (double)p.z * p.z);
+        double c = ((double)n.x * p.x + (double)n.z * p.z) / rl;
+        double a = acos(fmin(1.0, fmax(-1.0, c))) * 180.0 / 3.14159265358979323846;
+        if (a > worst) worst = a;
+    }
+    return worst;
+}
+
+static void branch_normals_keep_the_parent_cylindrical_at_a_joint(void **state)
+{
+    (void)state;
+    /* a vertical parent (radius 0.1, nodes every 1.0) with a horizontal child at y = 1 */
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0}, {{0, 2, 0}, 0.1f, 1, 0, 0},
+        {{0, 3, 0}, 0.1f, 2, 0, 0},  {{1, 1, 0}, 0.05f, 1, 0, 0}, {{2, 1, 0}, 0.05f, 4, 0, 0},
+    };
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 6;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_mesh *branch = build(sk, 8, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    xyl_mesh *smooth = build(sk, 8, XYL_SUBDIVIDE_NONE, XYL_NORMALS_SMOOTH);
+    uint32_t parent = sk->nodes[0].branch;
+    /* the rings of the joint band sit within 0.1 of y = 1; caps at both ends are excluded */
+    double eb = parent_normal_error(branch, parent, 0.5, 2.5);
+    double es = parent_normal_error(smooth, parent, 0.5, 2.5);
+    print_message("parent normal error: branch %.3f deg, smooth %.3f deg\n", eb, es);
+    assert_true(eb < 1.0);
+    assert_true(es > eb);
+    xyl_mesh_destroy(branch);
+    xyl_mesh_destroy(smooth);
+    xyl_skeleton_destroy(sk);
+}
+
+/* ---- determinism, errors ------------------------------------------------------------------- */
+
+static void identical_input_gives_identical_meshes(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset(xyl_lsystem_default_preset());
+    xyl_mesh *a = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
+    xyl_mesh *b = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
+    assert_int_equal(a->vertex_count, b->vertex_count);
+    assert_int_equal(a->quad_count, b->quad_count);
+    assert_memory_equal(a->positions, b->positions, a->vertex_count * sizeof *a->positions);
+    assert_memory_equal(a->normals, b->normals, a->vertex_count * sizeof *a->normals);
+    assert_memory_equal(a->quads, b->quads, a->quad_count * 4 * sizeof *a->quads);
+    xyl_mesh_destroy(a);
+    xyl_mesh_destroy(b);
+    xyl_skeleton_destroy(sk);
+}
+
+static void bad_options_and_limits_return_their_codes(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset("abop-1.24a");
+    xyl_stems_desc d = {0};
+    xyl_mesh *m = (xyl_mesh *)(uintptr_t)1;
+    xyl_diag diag = {0};
+    d.sides = 2;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.sides = 33;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.sides = 5;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_UNSUPPORTED);
+    d.sides = 4;
+    d.limits.max_vertices = 1000;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    d.limits.max_vertices = 0;
+    d.normals = (xyl_normal_mode)7;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_stems_build(NULL, NULL, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_ptr_equal(m, (xyl_mesh *)(uintptr_t)1);
+    xyl_skeleton_destroy(sk);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(every_hard_case_is_a_closed_manifold),
+        cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
+        cmocka_unit_test(every_preset_is_a_closed_manifold),
+        cmocka_unit_test(hard_cases_do_not_intersect_themselves),
+        cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
+        cmocka_unit_test(identical_input_gives_identical_meshes),
+        cmocka_unit_test(bad_options_and_limits_return_their_codes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

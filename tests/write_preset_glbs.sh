@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Writes every preset's stem mesh as .glb into $1 (plain, and with one Catmull-Clark and one Loop
+# level) for the gltf_validator test. $XYLEM is the CLI.
+set -euo pipefail
+: "${XYLEM:?set XYLEM to the xylem binary}"
+out=$1
+mkdir -p "$out"
+for p in $("$XYLEM" presets | cut -d' ' -f1); do
+  "$XYLEM" mesh --preset "$p" --out "$out/stems-$p.glb" >/dev/null
+  "$XYLEM" mesh --preset "$p" --subdivide catmark --out "$out/stems-$p-catmark.glb" >/dev/null
+  "$XYLEM" mesh --preset "$p" --subdivide loop --sides 6 --out "$out/stems-$p-loop.glb" >/dev/null
+done
+echo "wrote $(ls "$out"/stems-*.glb | wc -l) preset meshes to $out"
