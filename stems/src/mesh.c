@@ -50,13 +50,17 @@ xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_bra
     /* Sums run in double: a vertex of a fine mesh collects many small face normals. */
     size_t n = a->vertex_count ? a->vertex_count : 1;
     xyl__dvec3 *own = xyl__calloc(alloc, n, sizeof *own);
-    xyl__dvec3 *all = face_branch ? xyl__calloc(alloc, n, sizeof *all) : NULL;
-    if (!own || (face_branch && !all)) {
+    if (!own) return XYL_ERR_OUT_OF_MEMORY;
+    accumulate(a, face_branch, own, true);
+    /* only a vertex without faces of its own branch needs the all-faces sum */
+    bool lonely = false;
+    for (size_t v = 0; face_branch && v < a->vertex_count && !lonely; ++v)
+        lonely = !(xyl__d3_dot(own[v], own[v]) > XYL__EPS_NORMALIZE);
+    xyl__dvec3 *all = lonely ? xyl__calloc(alloc, n, sizeof *all) : NULL;
+    if (lonely && !all) {
         xyl__free(alloc, own);
-        xyl__free(alloc, all);
         return XYL_ERR_OUT_OF_MEMORY;
     }
-    accumulate(a, face_branch, own, true);
     if (all) accumulate(a, NULL, all, false);
     for (size_t v = 0; v < a->vertex_count; ++v) {
         xyl__dvec3 sum = own[v];

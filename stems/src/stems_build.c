@@ -60,10 +60,10 @@ static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, dou
 {
     uint32_t first = (uint32_t)s->nv;
     xyl__dvec3 w = xyl__d3_cross(t, u);
+    double rr = r * s->inflate;
     for (uint32_t j = 0; j < s->k; ++j) {
-        double a = 2.0 * XYL__PI * (double)j / (double)s->k, rr = r * s->inflate;
-        xyl__dvec3 p = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(u, rr * cos(a)),
-                                                  xyl__d3_scale(w, rr * sin(a))));
+        xyl__dvec3 p = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(u, rr * s->cos_a[j]),
+                                                  xyl__d3_scale(w, rr * s->sin_a[j])));
         s->pos[s->nv] = xyl__to_f3(p);
         s->uv[2 * s->nv] = (float)((double)j / (double)s->k);
         s->uv[2 * s->nv + 1] = (float)v;
@@ -109,7 +109,9 @@ static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dve
     if (c2 > XYL__EPS_NORMALIZE) uL = xyl__d3_sub(uL, xyl__d3_scale(v2, 2.0 / c2 * xyl__d3_dot(v2, uL)));
     /* re-orthogonalise against t1: rounding must not tilt the ring plane */
     uL = xyl__d3_sub(uL, xyl__d3_scale(t1, xyl__d3_dot(uL, t1)));
-    return xyl__d3_normalize_or(uL, xyl__d3_any_orthogonal(t1));
+    double l2 = xyl__d3_dot(uL, uL);
+    if (!(l2 > XYL__EPS_NORMALIZE) || !isfinite(l2)) return xyl__d3_any_orthogonal(t1);
+    return xyl__d3_scale(uL, 1.0 / sqrt(l2));
 }
 
 /* ---- skeleton structure -------------------------------------------------------------------- */
@@ -130,15 +132,21 @@ static xyl_result index_children(stems *s)
         if (p >= 0) s->child_list[s->child_start[p] + fill[p]++] = (uint32_t)i;
     }
     xyl__free(&s->alloc, fill);
+    s->main = xyl__alloc(&s->alloc, (n ? n : 1) * sizeof *s->main);
+    if (!s->main) return oom(s);
+    for (size_t i = 0; i < n; ++i) {
+        s->main[i] = UINT32_MAX;
+        for (uint32_t c = s->child_start[i]; c < s->child_start[i + 1]; ++c)
+            if (s->sk->nodes[s->child_list[c]].branch == s->sk->nodes[i].branch)
+                s->main[i] = s->child_list[c];
+    }
     return XYL_OK;
 }
 
 /* The child that continues n's branch (same branch id), or UINT32_MAX at a tip. */
-static uint32_t main_child(const stems *s, uint32_t n)
+static inline uint32_t main_child(const stems *s, uint32_t n)
 {
-    for (uint32_t c = s->child_start[n]; c < s->child_start[n + 1]; ++c)
-        if (s->sk->nodes[s->child_list[c]].branch == s->sk->nodes[n].branch) return s->child_list[c];
-    return UINT32_MAX;
+    return s->main[n];
 }
 
 static xyl__dvec3 node_pos(const stems *s, uint32_t n)
@@ -508,6 +516,15 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 static xyl_result build_all(stems *s)
 {
     xyl_result r = index_children(s);
+    for (uint32_t j = 0; j < s->k; ++j) {
+        double a = 2.0 * XYL__PI * (double)j / (double)s->k;
+        s->cos_a[j] = cos(a);
+        s->sin_a[j] = sin(a);
+    }
+    /* a ring per node plus the fork rings and bridges: reserving once avoids regrowth copies
+     * (untouched capacity costs no memory traffic) */
+    size_t guess = 3 * s->sk->node_count + 16;
+    if (!r && !out_reserve(s, guess * s->k, guess * s->k)) r = oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
         r = build_branch(s, (uint32_t)i, NULL);
@@ -568,7 +585,7 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a)
 
 static void free_state(stems *s)
 {
-    void *arrays[] = {s->child_start, s->child_list, s->pos, s->uv, s->vbranch, s->quads,
+    void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->quads,
                       s->fbranch, s->taken, s->chain, s->stations, s->rings, s->ring_station,
                       s->pending};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);

@@ -36,6 +36,8 @@ typedef struct stems {
 
     /* children of every node: child_list[child_start[n] .. child_start[n + 1]) */
     uint32_t *child_start, *child_list;
+    uint32_t *main;      /* per node: the child continuing its branch, or UINT32_MAX */
+    double cos_a[32], sin_a[32]; /* ring vertex directions, j = 0 .. k - 1 */
 
     /* output */
     xyl_vec3 *pos;
