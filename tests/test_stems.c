@@ -212,6 +212,57 @@ static void branch_normals_keep_the_parent_cylindrical_at_a_joint(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* ---- subdivision keeps the radius --------------------------------------------------------- */
+
+/* Mean distance from the y axis of the vertices with y in (lo, hi). */
+static double mean_radius(const xyl_mesh *m, double lo, double hi)
+{
+    double sum = 0.0;
+    size_t n = 0;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        xyl_vec3 p = m->positions[v];
+        if (p.y <= lo || p.y >= hi) continue;
+        sum += sqrt((double)p.x * p.x + (double)p.z * p.z);
+        ++n;
+    }
+    assert_true(n > 0);
+    return sum / (double)n;
+}
+
+/* The mesher inflates rings by 6 / (4 + 2 cos(2 pi / k)) before one Catmull-Clark level; the
+ * LIMIT surface must then have the skeleton's radius. Five more levels bring the control mesh
+ * within (limit gap) / 4^5 of the limit, far inside the 1 % allowed. */
+static void catmull_clark_limit_keeps_the_skeleton_radius(void **state)
+{
+    (void)state;
+    xyl_skel_node nodes[] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0},
+                             {{0, 2, 0}, 0.1f, 1, 0, 0},  {{0, 3, 0}, 0.1f, 2, 0, 0},
+                             {{0, 4, 0}, 0.1f, 3, 0, 0}};
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 5;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    static const uint32_t sides[] = {4, 6, 8};
+    for (size_t i = 0; i < 3; ++i) {
+        xyl_mesh *m = build(sk, sides[i], XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
+        for (int level = 0; level < 5; ++level) {
+            xyl_subdivide_desc sd = {0};
+            sd.scheme = XYL_SUBDIVIDE_CATMARK;
+            xyl_mesh *finer = NULL;
+            assert_int_equal(xyl_mesh_subdivide(m, &sd, &finer, NULL), XYL_OK);
+            xyl_mesh_destroy(m);
+            m = finer;
+        }
+        double r = mean_radius(m, 1.5, 2.5);
+        print_message("k = %u: limit radius %.6f of 0.1 (%.3f %%)\n", sides[i], r,
+                      (r / 0.1 - 1.0) * 100.0);
+        assert_true(fabs(r / 0.1 - 1.0) < 0.01);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
 /* ---- determinism, errors ------------------------------------------------------------------- */
 
 static void identical_input_gives_identical_meshes(void **state)
@@ -262,6 +313,7 @@ int main(void)
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(hard_cases_do_not_intersect_themselves),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
+        cmocka_unit_test(catmull_clark_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(identical_input_gives_identical_meshes),
         cmocka_unit_test(bad_options_and_limits_return_their_codes),
     };

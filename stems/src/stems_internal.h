@@ -29,7 +29,7 @@ typedef struct stems_pending {
 typedef struct stems {
     const xyl_skeleton *sk;
     uint32_t k;
-    double inflate;     /* ring radius factor: 6 / (4 + 2 cos(2 pi / k)) before Catmull-Clark */
+    double inflate;     /* ring radius factor before Catmull-Clark: 1 / mean limit radius */
     xyl_allocator alloc;
     xyl_diag *diag;
     uint64_t max_vertices, max_faces;

@@ -243,8 +243,9 @@ typedef struct xyl_stems_desc {
                                      now); default (0): 4 */
     xyl_normal_mode normals;
     xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
-    bool keep_control_radius;     /* default false: with Catmull-Clark, rings are inflated by
-                                     6/(4 + 2cos(2pi/k)) so the limit surface keeps the radius */
+    bool keep_control_radius;     /* default false: with Catmull-Clark, rings are inflated so
+                                     the limit surface's MEAN radius is the skeleton's (1.522
+                                     for k = 4; docs/stems.md) */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_stems_desc;
