@@ -335,16 +335,29 @@ typedef struct patch {
     double score;
 } patch;
 
-/* Best free patch for direction d among the bands between rings lo .. hi. */
-static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 d)
+static xyl__dvec3 strip_centre(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
+{
+    xyl__dvec3 sum = xyl__d3(0, 0, 0);
+    for (uint32_t j = 0; j < strip; ++j) {
+        const uint32_t *q = s->quads + 4 * strip_quad(s, band, c, j);
+        for (int v = 0; v < 4; ++v) sum = xyl__d3_add(sum, xyl__from_f3(s->pos[q[v]]));
+    }
+    return xyl__d3_scale(sum, 1.0 / (4.0 * strip));
+}
+
+/* Best free patch for direction d among the bands between rings lo .. hi: the one facing d
+ * most, and lying in direction d from the fork node (so a child leaning forward takes a band
+ * ahead of the node, one leaning back a band behind). */
+static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d)
 {
     uint32_t strip = s->k / 2 - 1;
-    patch best = {UINT32_MAX, 0, -2.0};
+    patch best = {UINT32_MAX, 0, -4.0};
     for (size_t r = lo; r < hi; ++r) {
         uint32_t band = s->rings[r].band;
         for (uint32_t c = 0; c < s->k; ++c) {
             if (!strip_free(s, band, c, strip)) continue;
-            double score = xyl__d3_dot(strip_normal(s, band, c, strip), d);
+            xyl__dvec3 to = xyl__d3_normalize_or(xyl__d3_sub(strip_centre(s, band, c, strip), node), d);
+            double score = xyl__d3_dot(strip_normal(s, band, c, strip), d) + xyl__d3_dot(to, d);
             if (score > best.score) {
                 patch p = {(uint32_t)r, c, score};
                 best = p;
@@ -365,7 +378,12 @@ static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
     for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[loop[j]]));
     centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
     for (uint32_t j = 0; j < strip; ++j) s->taken[strip_quad(s, band, p.column, j)] = 1;
-    double r = s->sk->nodes[child].radius, h = fmax(r, 0.25 * parent_r);
+    /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
+     * tube widens to its own radius over its first segment */
+    double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
+    double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
+    double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
+    double h = fmax(r, 0.25 * parent_r);
     stems_ring ring;
     memset(&ring, 0, sizeof ring);
     ring.centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
@@ -423,7 +441,7 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
             uint32_t child = s->child_list[j];
             if (child == main) continue;
             xyl__dvec3 across = xyl__d3_any_orthogonal(s->rings[lo].tangent);
-            patch p = choose_patch(s, lo, hi, child_direction(s, node, child, across));
+            patch p = choose_patch(s, lo, hi, node_pos(s, node), child_direction(s, node, child, across));
             if (p.ring == UINT32_MAX)
                 return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                                  "node %u has more children than its %zu fork bands can hold",
