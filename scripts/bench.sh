@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
-# L-system benchmark: installs the peer (npm package lindenmayer, pinned in samples/bench/),
-# builds bench_lsystem in Release and runs it; the figures go to the terminal and to
-# $BUILD_DIR/bench_lsystem.txt. docs/BENCHMARKS.md explains the table.
+# Benchmarks: installs the peers (npm packages lindenmayer and @dgreenheck/ez-tree, pinned in
+# samples/bench/), builds bench_lsystem and bench_stems in Release and runs them one after the
+# other; the figures go to the terminal and to $BUILD_DIR/bench_lsystem.txt and
+# $BUILD_DIR/bench_stems.txt. docs/BENCHMARKS.md explains the tables.
 #
-#   scripts/bench.sh                 # full sizes (about a minute)
-#   scripts/bench.sh --quick         # smoke sizes; any bench_lsystem option is passed through
+#   scripts/bench.sh                 # full sizes (a few minutes)
+#   scripts/bench.sh --quick         # smoke sizes; options are passed to both benchmarks
 #   BUILD_DIR=build-foo scripts/bench.sh
+#
+# Both benchmarks take --quick, --no-peer, --repeats N and --node PATH (--peer-script would name
+# one script for both: run the binaries directly for that).
 #
 # Without node/npm it tries apt-get (Debian/Ubuntu); if that is not possible the benchmark still
 # runs and reports the peer as not available.
@@ -48,7 +52,7 @@ install_peer() {
 if install_node && install_peer; then
     :
 else
-    echo "bench.sh: continuing without the lindenmayer peer" >&2
+    echo "bench.sh: continuing without the node peers" >&2
 fi
 
 # The generator is only chosen for a fresh build folder; an existing one keeps its own.
@@ -57,27 +61,40 @@ if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; the
     generator=(-G Ninja)
 fi
 cmake -S . -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD_DIR" --target bench_lsystem
+cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems
 
-results="$BUILD_DIR/bench_lsystem.txt"
 if commit="$(git rev-parse --short HEAD 2>/dev/null)"; then
     git diff --quiet HEAD || commit="$commit (with local changes)"
 else
     commit=unknown
 fi
 cpu="$(lscpu 2>/dev/null | sed -n 's/^Model name:[[:space:]]*//p' || true)"
-set +e
-{
-    echo "date:    $(date -u '+%Y-%m-%d %H:%M UTC')"
-    echo "commit:  $commit"
-    echo "cpu:     ${cpu:-unknown}, $(nproc 2>/dev/null || echo '?') cores"
-    echo "node:    $(node --version 2>/dev/null || echo 'not installed')"
-    echo "command: $BUILD_DIR/samples/bench_lsystem $*"
+
+# run_bench NAME ARGS...: runs $BUILD_DIR/samples/NAME, tees into $BUILD_DIR/NAME.txt, and
+# returns its exit status.
+run_bench() {
+    local name="$1"
+    shift
+    local results="$BUILD_DIR/$name.txt"
+    set +e
+    {
+        echo "date:    $(date -u '+%Y-%m-%d %H:%M UTC')"
+        echo "commit:  $commit"
+        echo "cpu:     ${cpu:-unknown}, $(nproc 2>/dev/null || echo '?') cores"
+        echo "node:    $(node --version 2>/dev/null || echo 'not installed')"
+        echo "command: $BUILD_DIR/samples/$name $*"
+        echo
+        "$BUILD_DIR/samples/$name" "$@"
+    } 2>&1 | tee "$results"
+    local rc=${PIPESTATUS[0]}
+    set -e
     echo
-    "$BUILD_DIR/samples/bench_lsystem" "$@"
-} 2>&1 | tee "$results"
-status=${PIPESTATUS[0]}
-set -e
+    echo "bench.sh: results written to $results (exit status $rc)"
+    return "$rc"
+}
+
+status=0
+run_bench bench_lsystem "$@" || status=$?
 echo
-echo "bench.sh: results written to $results (exit status $status)"
+run_bench bench_stems "$@" || status=$?
 exit "$status"

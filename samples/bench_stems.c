@@ -1,0 +1,789 @@
+/* bench_stems: meshing throughput of xyl_stems_build on L-system trees from 10^3 to 10^6
+ * segments, the whole pipeline (derive + turtle + mesh) on the same trees, and the npm package
+ * `@dgreenheck/ez-tree` (samples/bench/eztree_bench.mjs) on trees of comparable triangle counts
+ * in the same run.
+ *
+ *   bench_stems [--quick] [--no-peer] [--repeats N] [--peer-script PATH] [--node PATH]
+ *
+ * Every figure is the median of N samples (CLOCK_MONOTONIC); trees above LARGE_SEGMENTS segments
+ * take at most LARGE_REPEATS samples, and a sample of a fast case runs it several times back to
+ * back so that one sample lasts at least 5 ms (1 ms with --quick). Only the calls themselves are
+ * timed: destroying their results is not. Single-threaded; pin it with taskset for steadier
+ * figures. scripts/bench.sh installs the peer, builds in Release and runs this.
+ *
+ * Exit status: 0, also when a throughput target is missed or the peer is unavailable; 1 when
+ * a grammar fails to parse or derive or a mesh fails to build; 2 on bad usage. */
+#define _POSIX_C_SOURCE 200809L
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <xylem/xyl_lsystem.h>
+#include <xylem/xyl_stems.h>
+
+#define MAX_SAMPLES 101
+#define MAX_BATCH 100000u
+#define LARGE_SEGMENTS 500000u
+#define LARGE_REPEATS 5
+#define MAX_DEPTH 18
+#define PEER_SCRIPT "samples/bench/eztree_bench.mjs"
+#define PEER_HINT "ez-tree: not available (run scripts/bench.sh to install)"
+#define PEER_MAX 16
+#define TARGET_PEER_RATIO 20.0
+#define TARGET_VERTEX_RATE 1e7
+
+/* ABOP figure 2.7 (Aono & Kunii's sympodial tree, the preset abop-2.7-sympodial) with every
+ * internode drawn as four segments, as real branches are several segments long, and a light
+ * gravitropism that bends them. Widths shrink by 0.707 at each binary fork (da Vinci: the two
+ * children's cross-sections add up to the parent's) and the turtle takes them as radii
+ * (XYL_RADIUS_GRAMMAR): the trunk keeps its width at every depth and no segment is shorter than
+ * 1.7 radii. The pipe rule starts from a fixed tip radius, so its trunk would thicken with the
+ * tip count (512 tip radii at depth 18) while the lengths stay the same.
+ * Depth d gives 4 (2^d - 1) segments. */
+static const char tree_source[] =
+    "#define r1 0.9   // contraction ratio, first child\n"
+    "#define r2 0.7   // contraction ratio, second child\n"
+    "#define a1 10    // branching angle, first child\n"
+    "#define a2 60    // branching angle, second child\n"
+    "#define wr 0.707 // width ratio at a fork\n"
+    "#tropism 0 -1 0 0.05\n"
+    "axiom: A(1,0.25)\n"
+    "p1: A(l,w) : * -> !(w)F(l/4)F(l/4)F(l/4)F(l/4)[&(a1)B(l*r1,w*wr)]/(180)[&(a2)B(l*r2,w*wr)]\n"
+    "p2: B(l,w) : * -> !(w)F(l/4)F(l/4)F(l/4)F(l/4)[+(a1)$B(l*r1,w*wr)][-(a2)$B(l*r2,w*wr)]\n";
+
+#define TREE_NAME "sympodial, 4 segments per internode"
+
+/* The size ladder: about 10^3, 10^4, 3 10^4, 10^5 and 10^6 segments. */
+static const uint32_t ladder_full[] = {8, 11, 13, 15, 18};
+static const uint32_t ladder_quick[] = {5, 8};
+#define MIDDLE_FULL 15  /* depth of the k = 8 and Catmull-Clark rows */
+#define MIDDLE_QUICK 8
+
+typedef struct options {
+    bool quick;
+    bool peer;
+    int repeats;
+    double min_sample_s;     /* a sample of a fast case repeats it until it lasts this long */
+    const char *peer_script; /* NULL: look next to the working directory and the executable */
+    const char *node;
+    const char *argv0;
+} options;
+
+/* ---- timing -------------------------------------------------------------------------------- */
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+/* One timed call: does the work, returns in *seconds how long the measured part took. */
+typedef xyl_result (*job_fn)(void *ctx, double *seconds, xyl_diag *diag);
+
+typedef struct timing {
+    double median_s, min_s;
+    int samples;
+    unsigned batch; /* calls per sample */
+} timing;
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median_of(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static xyl_result run_batch(job_fn job, void *ctx, unsigned batch, double *seconds, xyl_diag *diag)
+{
+    double sum = 0.0;
+    for (unsigned b = 0; b < batch; ++b) {
+        double t = 0.0;
+        xyl_result r = job(ctx, &t, diag);
+        if (r) return r;
+        sum += t;
+    }
+    *seconds = sum / batch;
+    return XYL_OK;
+}
+
+/* A warm-up call picks the batch size; then the median of `repeats` samples. */
+static xyl_result measure(const options *o, int repeats, job_fn job, void *ctx, timing *out,
+                          xyl_diag *diag)
+{
+    double first = 0.0, v[MAX_SAMPLES];
+    xyl_result r = job(ctx, &first, diag);
+    if (r) return r;
+    double want = ceil(o->min_sample_s / (first > 1e-9 ? first : 1e-9));
+    unsigned batch = want < 1.0 ? 1u : want > MAX_BATCH ? MAX_BATCH : (unsigned)want;
+    for (int i = 0; i < repeats; ++i)
+        if ((r = run_batch(job, ctx, batch, &v[i], diag))) return r;
+    out->samples = repeats;
+    out->batch = batch;
+    out->median_s = median_of(v, repeats);
+    out->min_s = v[0];
+    return XYL_OK;
+}
+
+static double rate(double count, double seconds)
+{
+    return seconds > 0.0 ? count / seconds : 0.0;
+}
+
+static void report_error(const char *what, xyl_result r, const xyl_diag *diag)
+{
+    printf("%s: error: %s", what, xyl_result_string(r));
+    if (diag->message[0]) printf(" (%s)", diag->message);
+    printf("\n");
+}
+
+/* ---- growing the trees --------------------------------------------------------------------- */
+
+static xyl_result derive_at(const xyl_grammar *g, uint32_t depth, xyl_lstring **out,
+                            xyl_diag *diag)
+{
+    xyl_derive_desc dd = {0};
+    dd.has_depth = true;
+    dd.depth = depth;
+    return xyl_lsystem_derive(g, &dd, out, diag);
+}
+
+static xyl_result interpret(const xyl_grammar *g, const xyl_lstring *s, xyl_skeleton **out,
+                            xyl_diag *diag)
+{
+    xyl_turtle_desc td = {0};
+    td.radius_mode = XYL_RADIUS_GRAMMAR;
+    return xyl_lsystem_interpret(g, s, &td, out, diag);
+}
+
+static xyl_result grow(const xyl_grammar *g, uint32_t depth, xyl_skeleton **out, xyl_diag *diag)
+{
+    xyl_lstring *s = NULL;
+    xyl_result r = derive_at(g, depth, &s, diag);
+    if (!r) r = interpret(g, s, out, diag);
+    xyl_lstring_destroy(s);
+    return r;
+}
+
+static size_t segments_of(const xyl_skeleton *sk)
+{
+    return sk->node_count - sk->root_count;
+}
+
+/* ---- jobs: meshing alone, and the whole pipeline ------------------------------------------- */
+
+typedef struct mesh_job {
+    const xyl_skeleton *sk;
+    xyl_stems_desc desc;
+    size_t vertices, triangles; /* of the last mesh built */
+} mesh_job;
+
+static xyl_result mesh_once(void *ctx, double *seconds, xyl_diag *diag)
+{
+    mesh_job *j = ctx;
+    xyl_mesh *m = NULL;
+    double t0 = now_s();
+    xyl_result r = xyl_stems_build(j->sk, &j->desc, &m, diag);
+    *seconds = now_s() - t0;
+    if (r) return r;
+    j->vertices = m->vertex_count;
+    j->triangles = m->tri_view_count;
+    xyl_mesh_destroy(m);
+    return XYL_OK;
+}
+
+typedef struct pipeline_job {
+    const xyl_grammar *g;
+    uint32_t depth;
+    size_t triangles;
+} pipeline_job;
+
+/* Derive, turtle and mesh back to back; the three results are destroyed after the clock stops. */
+static xyl_result pipeline_once(void *ctx, double *seconds, xyl_diag *diag)
+{
+    pipeline_job *j = ctx;
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    xyl_mesh *m = NULL;
+    double t0 = now_s();
+    xyl_result r = derive_at(j->g, j->depth, &s, diag);
+    if (!r) r = interpret(j->g, s, &sk, diag);
+    if (!r) r = xyl_stems_build(sk, NULL, &m, diag);
+    *seconds = now_s() - t0;
+    if (!r) j->triangles = m->tri_view_count;
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+    xyl_lstring_destroy(s);
+    return r;
+}
+
+/* ---- one tree size: skeleton, mesh timing, pipeline timing --------------------------------- */
+
+typedef struct size_result {
+    bool ok;
+    size_t segments, vertices, triangles;
+    timing mesh, pipeline;
+} size_result;
+
+static int repeats_for(const options *o, size_t segments)
+{
+    return segments > LARGE_SEGMENTS && o->repeats > LARGE_REPEATS ? LARGE_REPEATS : o->repeats;
+}
+
+static xyl_result measure_mesh(const options *o, const xyl_skeleton *sk,
+                               const xyl_stems_desc *desc, mesh_job *j, timing *t,
+                               xyl_diag *diag)
+{
+    j->sk = sk;
+    j->desc = *desc;
+    return measure(o, repeats_for(o, segments_of(sk)), mesh_once, j, t, diag);
+}
+
+/* Measures depth `depth` once; later calls return the stored figures. */
+static xyl_result measure_size(const options *o, const xyl_grammar *g, uint32_t depth,
+                               size_result *res, xyl_diag *diag)
+{
+    if (res->ok) return XYL_OK;
+    xyl_skeleton *sk = NULL;
+    xyl_stems_desc desc = {0};
+    mesh_job mj = {0};
+    xyl_result r = grow(g, depth, &sk, diag);
+    if (!r) r = measure_mesh(o, sk, &desc, &mj, &res->mesh, diag);
+    if (!r) {
+        res->segments = segments_of(sk);
+        res->vertices = mj.vertices;
+        res->triangles = mj.triangles;
+        pipeline_job pj = {g, depth, 0};
+        r = measure(o, repeats_for(o, res->segments), pipeline_once, &pj, &res->pipeline, diag);
+    }
+    xyl_skeleton_destroy(sk);
+    res->ok = !r;
+    return r;
+}
+
+/* ---- 1. the ladder ------------------------------------------------------------------------- */
+
+static void print_skeleton_row(uint32_t depth, const xyl_skeleton *sk)
+{
+    printf("%5u %9zu %6u %10zu %8u %6u\n", depth, sk->node_count, sk->root_count,
+           segments_of(sk), sk->branch_count, sk->max_order);
+}
+
+static int bench_skeletons(const xyl_grammar *g, const uint32_t *depths, size_t n)
+{
+    int failures = 0;
+    printf("\n== skeletons: %s, grammar radii ==\n", TREE_NAME);
+    printf("%5s %9s %6s %10s %8s %6s\n", "depth", "nodes", "roots", "segments", "branches",
+           "order");
+    for (size_t i = 0; i < n; ++i) {
+        xyl_diag diag = {0};
+        xyl_skeleton *sk = NULL;
+        xyl_result r = grow(g, depths[i], &sk, &diag);
+        if (r) {
+            report_error("grow", r, &diag);
+            ++failures;
+        } else {
+            print_skeleton_row(depths[i], sk);
+        }
+        xyl_skeleton_destroy(sk);
+    }
+    return failures;
+}
+
+static void print_mesh_header(void)
+{
+    printf("%-14s %10s %10s %10s %9s %7s %8s %8s %7s %7s %4s\n", "case", "segments",
+           "vertices", "triangles", "median ms", "Mseg/s", "Mvert/s", "Mtri/s", "ns/tri",
+           "ns/seg", "N");
+}
+
+static void print_mesh_row(const char *label, size_t segments, size_t vertices, size_t triangles,
+                           const timing *t)
+{
+    double s = t->median_s;
+    printf("%-14s %10zu %10zu %10zu %9.3f %7.2f %8.2f %8.2f %7.1f %7.1f %4d\n", label, segments,
+           vertices, triangles, s * 1e3, rate((double)segments, s) / 1e6,
+           rate((double)vertices, s) / 1e6, rate((double)triangles, s) / 1e6,
+           s * 1e9 / (double)triangles, s * 1e9 / (double)segments, t->samples);
+}
+
+static int bench_ladder(const options *o, const xyl_grammar *g, const uint32_t *depths, size_t n,
+                        size_result *by_depth)
+{
+    int failures = 0;
+    printf("\n== mesh: xyl_stems_build (k = 4, no subdivision, branch normals) ==\n");
+    print_mesh_header();
+    for (size_t i = 0; i < n; ++i) {
+        xyl_diag diag = {0};
+        size_result *res = &by_depth[depths[i]];
+        char label[32];
+        snprintf(label, sizeof label, "depth %u", depths[i]);
+        xyl_result r = measure_size(o, g, depths[i], res, &diag);
+        if (r) {
+            report_error(label, r, &diag);
+            ++failures;
+            continue;
+        }
+        print_mesh_row(label, res->segments, res->vertices, res->triangles, &res->mesh);
+    }
+    return failures;
+}
+
+static void print_linearity(const uint32_t *depths, size_t n, const size_result *by_depth)
+{
+    double lo = 0.0, hi = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const size_result *res = &by_depth[depths[i]];
+        if (!res->ok) continue;
+        double ns = res->mesh.median_s * 1e9 / (double)res->segments;
+        if (lo == 0.0 || ns < lo) lo = ns;
+        if (ns > hi) hi = ns;
+    }
+    if (lo > 0.0)
+        printf("linearity: mesh time per segment %.1f .. %.1f ns over the ladder (max/min %.2f)\n",
+               lo, hi, hi / lo);
+}
+
+/* k = 8 and Catmull-Clark pre-subdivision at one size. */
+static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth)
+{
+    static const struct {
+        const char *label;
+        uint32_t sides;
+        xyl_subdivision scheme;
+    } variants[] = {{"k=8", 8, XYL_SUBDIVIDE_NONE}, {"k=4 catmark", 4, XYL_SUBDIVIDE_CATMARK}};
+    xyl_diag diag = {0};
+    xyl_skeleton *sk = NULL;
+    xyl_result r = grow(g, depth, &sk, &diag);
+    if (r) {
+        report_error("grow", r, &diag);
+        return 1;
+    }
+    int failures = 0;
+    printf("\n== mesh: variants at depth %u ==\n", depth);
+    print_mesh_header();
+    for (size_t i = 0; i < sizeof variants / sizeof variants[0]; ++i) {
+        xyl_stems_desc desc = {0};
+        desc.sides = variants[i].sides;
+        desc.subdivision = variants[i].scheme;
+        mesh_job j = {0};
+        timing t = {0};
+        if ((r = measure_mesh(o, sk, &desc, &j, &t, &diag))) {
+            report_error(variants[i].label, r, &diag);
+            ++failures;
+            continue;
+        }
+        print_mesh_row(variants[i].label, segments_of(sk), j.vertices, j.triangles, &t);
+    }
+    xyl_skeleton_destroy(sk);
+    return failures;
+}
+
+static void bench_pipeline(const uint32_t *depths, size_t n, const size_result *by_depth)
+{
+    printf("\n== pipeline: derive + turtle + mesh (k = 4), grammar parsed once ==\n");
+    printf("%-14s %10s %10s %9s %9s %7s %8s %4s\n", "case", "segments", "triangles", "median ms",
+           "mesh ms", "ns/tri", "Mvert/s", "N");
+    for (size_t i = 0; i < n; ++i) {
+        const size_result *res = &by_depth[depths[i]];
+        if (!res->ok) continue;
+        double s = res->pipeline.median_s;
+        printf("depth %-8u %10zu %10zu %9.3f %9.3f %7.1f %8.2f %4d\n", depths[i], res->segments,
+               res->triangles, s * 1e3, res->mesh.median_s * 1e3,
+               s * 1e9 / (double)res->triangles, rate((double)res->vertices, s) / 1e6,
+               res->pipeline.samples);
+    }
+}
+
+/* ---- 2. the peer: ez-tree under node ------------------------------------------------------- */
+
+#define MAX_PATH_LEN 4096
+
+typedef struct peer_case {
+    char name[48];
+    char version[32];
+    unsigned long long triangles, vertices;
+    double median_s;
+    bool wrapped; /* its Uint16 indices wrap: the mesh three would draw is not the one built */
+} peer_case;
+
+static bool file_exists(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (f) fclose(f);
+    return f != NULL;
+}
+
+/* The peer script: --peer-script, else relative to the working directory (the repository root),
+ * else relative to the executable (build-dir/samples/bench_stems). */
+static bool find_script(const options *o, char *path, size_t cap)
+{
+    if (o->peer_script) {
+        snprintf(path, cap, "%s", o->peer_script);
+        return file_exists(path);
+    }
+    static const char *const ups[] = {"", "../../", "../", "../../../"};
+    const char *slash = strrchr(o->argv0, '/');
+    int dir_len = slash ? (int)(slash - o->argv0) : 1;
+    const char *dir = slash ? o->argv0 : ".";
+    for (size_t i = 0; i < sizeof ups / sizeof ups[0]; ++i) {
+        if (i == 0) snprintf(path, cap, "%s", PEER_SCRIPT);
+        else snprintf(path, cap, "%.*s/%s%s", dir_len, dir, ups[i], PEER_SCRIPT);
+        if (file_exists(path)) return true;
+    }
+    return false;
+}
+
+/* Appends s single-quoted for /bin/sh. */
+static bool append_quoted(char *cmd, size_t cap, const char *s)
+{
+    size_t n = strlen(cmd);
+    if (n + 3 >= cap) return false;
+    cmd[n++] = ' ';
+    cmd[n++] = '\'';
+    for (; *s; ++s) {
+        const char *piece = *s == '\'' ? "'\\''" : NULL;
+        size_t len = piece ? 4 : 1;
+        if (n + len + 2 >= cap) return false;
+        if (piece) memcpy(cmd + n, piece, len);
+        else cmd[n] = *s;
+        n += len;
+    }
+    cmd[n++] = '\'';
+    cmd[n] = '\0';
+    return true;
+}
+
+static void copy_text(char *dst, size_t cap, const char *src)
+{
+    size_t n = strlen(src);
+    if (n >= cap) n = cap - 1;
+    memcpy(dst, src, n);
+    dst[n] = '\0';
+}
+
+/* The value of " key=" in a key=value line, up to the next space; false if absent. */
+static bool peer_value(const char *line, const char *key, char *out, size_t cap)
+{
+    char pat[40];
+    snprintf(pat, sizeof pat, " %s=", key);
+    const char *p = strstr(line, pat);
+    if (!p) return false;
+    p += strlen(pat);
+    size_t n = strcspn(p, " ");
+    if (n >= cap) n = cap - 1;
+    memcpy(out, p, n);
+    out[n] = '\0';
+    return n > 0;
+}
+
+static bool parse_peer_line(const char *line, peer_case *out)
+{
+    char tri[32], vert[32], ns[32], wrapped[32];
+    if (strncmp(line, "eztree version=", 15) != 0) return false;
+    if (!peer_value(line, "version", out->version, sizeof out->version) ||
+        !peer_value(line, "case", out->name, sizeof out->name) ||
+        !peer_value(line, "branch_triangles", tri, sizeof tri) ||
+        !peer_value(line, "branch_vertices", vert, sizeof vert) ||
+        !peer_value(line, "median_ns", ns, sizeof ns) ||
+        !peer_value(line, "index_wrapped", wrapped, sizeof wrapped))
+        return false;
+    out->triangles = strtoull(tri, NULL, 10);
+    out->vertices = strtoull(vert, NULL, 10);
+    out->median_s = strtod(ns, NULL) * 1e-9;
+    out->wrapped = strtoull(wrapped, NULL, 10) > 0;
+    return out->triangles > 0 && out->median_s > 0.0;
+}
+
+static bool build_peer_command(const options *o, const char *script, char *cmd, size_t cap)
+{
+    char arg[32];
+    cmd[0] = '\0';
+    snprintf(arg, sizeof arg, "%d", o->repeats);
+    bool ok = append_quoted(cmd, cap, o->node) && append_quoted(cmd, cap, script) &&
+              append_quoted(cmd, cap, "--repeats") && append_quoted(cmd, cap, arg);
+    /* --quick: the two smallest cases of the script's ladder; otherwise the whole ladder */
+    if (o->quick)
+        ok = ok && append_quoted(cmd, cap, "--levels") && append_quoted(cmd, cap, "1") &&
+             append_quoted(cmd, cap, "--levels") && append_quoted(cmd, cap, "2");
+    ok = ok && strlen(cmd) + 8 < cap;
+    if (ok) strcat(cmd, " 2>&1");
+    return ok;
+}
+
+/* Runs the script once; returns the cases it printed, and on none its first line in why. */
+static size_t run_peer(const options *o, const char *script, peer_case *cases, char *why,
+                       size_t why_cap)
+{
+    char cmd[2 * MAX_PATH_LEN];
+    bool ok = build_peer_command(o, script, cmd, sizeof cmd);
+    copy_text(why, why_cap, ok ? "no output" : "command too long");
+    if (!ok) return 0;
+    fflush(stdout);
+    FILE *p = popen(cmd, "r");
+    if (!p) return 0;
+    char line[2048];
+    size_t n = 0;
+    bool first = true;
+    while (fgets(line, sizeof line, p)) {
+        line[strcspn(line, "\r\n")] = '\0';
+        if (n < PEER_MAX && parse_peer_line(line, &cases[n])) {
+            ++n;
+            continue;
+        }
+        if (first) copy_text(why, why_cap, line);
+        first = false;
+    }
+    pclose(p);
+    return n;
+}
+
+/* Triangle counts of the k = 4 mesh by depth, built untimed when first asked. */
+typedef struct tri_counts {
+    size_t by_depth[MAX_DEPTH + 1];
+} tri_counts;
+
+static xyl_result triangles_at(const xyl_grammar *g, uint32_t depth, tri_counts *tc,
+                               xyl_diag *diag)
+{
+    if (tc->by_depth[depth]) return XYL_OK;
+    xyl_skeleton *sk = NULL;
+    xyl_mesh *m = NULL;
+    xyl_result r = grow(g, depth, &sk, diag);
+    if (!r) r = xyl_stems_build(sk, NULL, &m, diag);
+    if (!r) tc->by_depth[depth] = m->tri_view_count;
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+    return r;
+}
+
+/* The depth whose triangle count is nearest (in ratio) to `want`. */
+static xyl_result match_depth(const xyl_grammar *g, unsigned long long want, tri_counts *tc,
+                              uint32_t *depth, xyl_diag *diag)
+{
+    double best = INFINITY;
+    for (uint32_t d = 1; d <= MAX_DEPTH; ++d) {
+        xyl_result r = triangles_at(g, d, tc, diag);
+        if (r) return r;
+        double off = fabs(log((double)tc->by_depth[d] / (double)want));
+        if (off < best) {
+            best = off;
+            *depth = d;
+        }
+        if (tc->by_depth[d] >= want) break;
+    }
+    return XYL_OK;
+}
+
+typedef struct peer_summary {
+    int compared;
+    double min_mesh_ratio, min_pipeline_ratio;
+    bool any_wrapped;
+    int failures;
+} peer_summary;
+
+static void print_peer_header(void)
+{
+    printf("%-16s %9s %9s %8s | %5s %9s %8s %8s %7s | %7s %7s\n", "ez-tree case", "tris",
+           "ms/tree", "ns/tri", "depth", "tris", "mesh", "pipeline", "ns/tri", "mesh", "pipe");
+    printf("%-16s %9s %9s %8s | %5s %9s %8s %8s %7s | %7s %7s\n", "", "(branch)", "", "", "",
+           "", "ms", "ms", "(mesh)", "ratio", "ratio");
+}
+
+static void peer_row(const options *o, const xyl_grammar *g, const peer_case *pc, tri_counts *tc,
+                     size_result *by_depth, peer_summary *sum)
+{
+    xyl_diag diag = {0};
+    uint32_t depth = 0;
+    xyl_result r = match_depth(g, pc->triangles, tc, &depth, &diag);
+    if (!r) r = measure_size(o, g, depth, &by_depth[depth], &diag);
+    if (r) {
+        report_error(pc->name, r, &diag);
+        ++sum->failures;
+        return;
+    }
+    const size_result *x = &by_depth[depth];
+    double peer_ns = pc->median_s * 1e9 / (double)pc->triangles;
+    double mesh_ns = x->mesh.median_s * 1e9 / (double)x->triangles;
+    double pipe_ns = x->pipeline.median_s * 1e9 / (double)x->triangles;
+    printf("%-16s %9llu %9.2f %8.1f | %5u %9zu %8.3f %8.3f %7.1f | %6.1fx %6.1fx%s\n", pc->name,
+           pc->triangles, pc->median_s * 1e3, peer_ns, depth, x->triangles,
+           x->mesh.median_s * 1e3, x->pipeline.median_s * 1e3, mesh_ns, peer_ns / mesh_ns,
+           peer_ns / pipe_ns, pc->wrapped ? " *" : "");
+    if (!sum->compared || peer_ns / mesh_ns < sum->min_mesh_ratio)
+        sum->min_mesh_ratio = peer_ns / mesh_ns;
+    if (!sum->compared || peer_ns / pipe_ns < sum->min_pipeline_ratio)
+        sum->min_pipeline_ratio = peer_ns / pipe_ns;
+    sum->any_wrapped |= pc->wrapped;
+    ++sum->compared;
+}
+
+static peer_summary bench_peer(const options *o, const xyl_grammar *g, size_result *by_depth)
+{
+    peer_summary sum = {0, 0.0, 0.0, false, 0};
+    printf("\n== peer: ez-tree (node), same run; xylem tree of the nearest triangle count ==\n");
+    char script[MAX_PATH_LEN], why[256];
+    if (!find_script(o, script, sizeof script)) {
+        printf("%s (no %s)\n", PEER_HINT, PEER_SCRIPT);
+        return sum;
+    }
+    peer_case cases[PEER_MAX];
+    size_t n = run_peer(o, script, cases, why, sizeof why);
+    if (!n) {
+        printf("%s (%s)\n", PEER_HINT, why);
+        return sum;
+    }
+    printf("ez-tree %s: time per tree includes growing its skeleton and leaves; its branch mesh "
+           "is open tubes\n", cases[0].version);
+    print_peer_header();
+    tri_counts tc;
+    memset(&tc, 0, sizeof tc);
+    for (size_t i = 0; i < n; ++i) peer_row(o, g, &cases[i], &tc, by_depth, &sum);
+    printf("ratio = ez-tree ns per branch triangle / xylem ns per output triangle "
+           "(mesh: xyl_stems_build alone; pipe: derive + turtle + mesh)\n");
+    if (sum.any_wrapped)
+        printf("* ez-tree's Uint16 indices wrap at this size: the mesh three.js would draw is "
+               "not the one it built (docs/peer-eztree.md)\n");
+    return sum;
+}
+
+/* ---- main ---------------------------------------------------------------------------------- */
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: bench_stems [--quick] [--no-peer] [--repeats N] [--peer-script PATH] "
+               "[--node PATH]\n");
+}
+
+static int parse_options(int argc, char **argv, options *o)
+{
+    o->argv0 = argc > 0 ? argv[0] : "bench_stems";
+    o->peer = true;
+    o->node = "node";
+    const char *repeats = NULL;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        bool has_value = i + 1 < argc;
+        if (strcmp(a, "--quick") == 0) o->quick = true;
+        else if (strcmp(a, "--no-peer") == 0) o->peer = false;
+        else if (strcmp(a, "--repeats") == 0 && has_value) repeats = argv[++i];
+        else if (strcmp(a, "--peer-script") == 0 && has_value) o->peer_script = argv[++i];
+        else if (strcmp(a, "--node") == 0 && has_value) o->node = argv[++i];
+        else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            usage(stdout);
+            return 1;
+        } else {
+            usage(stderr);
+            return 2;
+        }
+    }
+    char *end = NULL;
+    long n = repeats ? strtol(repeats, &end, 10) : (o->quick ? 3 : 9);
+    if ((repeats && *end) || n < 1 || n > MAX_SAMPLES) {
+        fprintf(stderr, "bench_stems: --repeats must be 1..%d\n", MAX_SAMPLES);
+        return 2;
+    }
+    o->repeats = (int)n;
+    o->min_sample_s = o->quick ? 1e-3 : 5e-3;
+    return 0;
+}
+
+static void print_vertex_target(const options *o, const uint32_t *depths, size_t n,
+                                const size_result *by_depth)
+{
+    double lo = 0.0, hi = 0.0;
+    size_t lo_seg = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const size_result *res = &by_depth[depths[i]];
+        if (!res->ok) continue;
+        double v = rate((double)res->vertices, res->mesh.median_s);
+        if (lo == 0.0 || v < lo) {
+            lo = v;
+            lo_seg = res->segments;
+        }
+        if (v > hi) hi = v;
+    }
+    if (lo == 0.0) {
+        printf(">= %.0e output vertices/s per core: not measured\n", TARGET_VERTEX_RATE);
+        return;
+    }
+    printf(">= %.0e output vertices/s per core (xyl_stems_build, k = 4): %s (%.2f .. %.2f M/s "
+           "over the ladder, lowest at %zu segments)%s\n", TARGET_VERTEX_RATE,
+           lo >= TARGET_VERTEX_RATE   ? "MET"
+           : hi >= TARGET_VERTEX_RATE ? "NOT MET (met at some sizes only)"
+                                      : "NOT MET",
+           lo / 1e6, hi / 1e6, lo_seg, o->quick ? " [--quick sizes]" : "");
+}
+
+static void print_targets(const options *o, const uint32_t *depths, size_t n,
+                          const size_result *by_depth, const peer_summary *peer)
+{
+    printf("\n== targets ==\n");
+    for (int pipe = 0; pipe < 2; ++pipe) {
+        const char *stage = pipe ? "full pipeline" : "mesh only";
+        double ratio = pipe ? peer->min_pipeline_ratio : peer->min_mesh_ratio;
+        printf(">= %.0fx ez-tree per output triangle (%s): ", TARGET_PEER_RATIO, stage);
+        if (!o->peer) printf("not measured (--no-peer)\n");
+        else if (!peer->compared) printf("not measured\n");
+        else printf("%s (lowest ratio %.1fx over %d cases)%s\n",
+                    ratio >= TARGET_PEER_RATIO ? "MET" : "NOT MET", ratio, peer->compared,
+                    o->quick ? " [--quick sizes]" : "");
+    }
+    print_vertex_target(o, depths, n, by_depth);
+}
+
+int main(int argc, char **argv)
+{
+    options o = {0};
+    int rc = parse_options(argc, argv, &o);
+    if (rc) return rc == 1 ? 0 : rc;
+
+    printf("bench_stems: xylem %d.%d.%d, %s build, median of %d samples (at most %d above %u "
+           "segments)%s\n", XYL_VERSION_MAJOR, XYL_VERSION_MINOR, XYL_VERSION_PATCH,
+#ifdef NDEBUG
+           "optimised (NDEBUG)",
+#else
+           "assertions-on",
+#endif
+           o.repeats, LARGE_REPEATS, LARGE_SEGMENTS, o.quick ? ", --quick sizes" : "");
+
+    const uint32_t *depths = o.quick ? ladder_quick : ladder_full;
+    size_t n = o.quick ? sizeof ladder_quick / sizeof *ladder_quick
+                       : sizeof ladder_full / sizeof *ladder_full;
+    xyl_diag diag = {0};
+    xyl_grammar *g = NULL;
+    xyl_grammar_desc gd = {0};
+    gd.source = tree_source;
+    xyl_result r = xyl_grammar_parse(&gd, &g, &diag);
+    if (r) {
+        report_error("grammar", r, &diag);
+        return 1;
+    }
+    size_result by_depth[MAX_DEPTH + 1];
+    memset(by_depth, 0, sizeof by_depth);
+    int failures = bench_skeletons(g, depths, n);
+    failures += bench_ladder(&o, g, depths, n, by_depth);
+    print_linearity(depths, n, by_depth);
+    failures += bench_variants(&o, g, o.quick ? MIDDLE_QUICK : MIDDLE_FULL);
+    bench_pipeline(depths, n, by_depth);
+
+    peer_summary peer = {0, 0.0, 0.0, false, 0};
+    if (o.peer) peer = bench_peer(&o, g, by_depth);
+    else printf("\n== peer: skipped (--no-peer) ==\n");
+    failures += peer.failures;
+
+    print_targets(&o, depths, n, by_depth, &peer);
+    xyl_grammar_destroy(g);
+    if (failures) printf("\n%d failure(s)\n", failures);
+    return failures ? 1 : 0;
+}
