@@ -89,8 +89,9 @@ expect 0 "mesh .obj from a .skel" -- "$XYLEM" mesh --skeleton "$data/stems/spoke
 grep -q '^f ' "$tmp/s.obj" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: obj has no faces"; }
 expect 0 "mesh subdivided" -- "$XYLEM" mesh --preset faycal-leaves --subdivide catmark --normals smooth --out "$tmp/f.glb"
 expect 64 "sides above 32" -- "$XYLEM" mesh --sides 40 --out "$tmp/x.glb"
-expect 65 "odd sides unsupported" -- "$XYLEM" mesh --sides 5 --out "$tmp/x.glb"
-contains "odd ring sides" "odd sides message"
+expect 0 "odd sides" -- "$XYLEM" mesh --sides 5 --out "$tmp/odd.glb"
+contains "triangles" "odd sides summary"
+expect 64 "sides below 3" -- "$XYLEM" mesh --sides 2 --out "$tmp/x.glb"
 expect 64 "bad subdivision" -- "$XYLEM" mesh --subdivide cubic --out "$tmp/x.glb"
 expect 64 "mesh needs --out" -- "$XYLEM" mesh
 expect 64 "skeleton and preset" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --preset abop-1.24a --out "$tmp/x.glb"

@@ -89,8 +89,12 @@ static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
     char what[256];
     snprintf(what, sizeof what, "%s k=%u subdivision=%d", name, t->k, (int)t->sub);
     assert_closed(m, sk, what);
-    if (t->sub == XYL_SUBDIVIDE_NONE) {
-        assert_int_equal(m->triangle_count, 0); /* all quads */
+    if (t->sub == XYL_SUBDIVIDE_NONE && t->k % 2 == 0) {
+        assert_int_equal(m->triangle_count, 0); /* even k: all quads */
+    }
+    if (t->sub == XYL_SUBDIVIDE_NONE && t->k % 2 == 1) {
+        /* odd k: one triangle per cap and per bridge, i.e. two per branch */
+        assert_int_equal(m->triangle_count, 2 * (size_t)sk->branch_count);
     }
     xyl_mesh_destroy(m);
 }
@@ -98,7 +102,7 @@ static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
 static void every_hard_case_is_a_closed_manifold(void **state)
 {
     (void)state;
-    static const uint32_t sides[] = {4, 6, 8};
+    static const uint32_t sides[] = {3, 4, 5, 6, 7, 8};
     for (size_t i = 0; i < sizeof sides / sizeof sides[0]; ++i) {
         topo_ctx t = {sides[i], XYL_SUBDIVIDE_NONE};
         assert_true(for_each_hard_case(check_topology, &t) >= 40);
@@ -293,8 +297,6 @@ static void bad_options_and_limits_return_their_codes(void **state)
     assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
     d.sides = 33;
     assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
-    d.sides = 5;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_UNSUPPORTED);
     d.sides = 4;
     d.limits.max_vertices = 1000;
     assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_LIMIT_EXCEEDED);

@@ -51,6 +51,22 @@ static void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d, u
     s->fbranch[s->nq++] = branch;
 }
 
+/* Appends a triangle (odd k: caps and bridges have one). */
+static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t branch)
+{
+    size_t c0 = s->tcap3, c1 = s->tcap3;
+    if (!xyl__grow(&s->alloc, (void **)&s->tris, &c0, s->nt, s->nt + 1, 3 * sizeof *s->tris) ||
+        !xyl__grow(&s->alloc, (void **)&s->tbranch, &c1, s->nt, s->nt + 1, sizeof *s->tbranch))
+        return oom(s);
+    s->tcap3 = c0;
+    uint32_t *t = s->tris + 3 * s->nt;
+    t[0] = a;
+    t[1] = b;
+    t[2] = c;
+    s->tbranch[s->nt++] = branch;
+    return XYL_OK;
+}
+
 /* ---- rings --------------------------------------------------------------------------------- */
 
 /* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
@@ -83,13 +99,19 @@ static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
 
 /* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
  * the tube leaves behind it (a tip), false for one it starts from (a root). */
-static void put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
+static xyl_result put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
 {
-    for (uint32_t j = 1; j + 2 < s->k; j += 2) {
+    uint32_t j = 1;
+    for (; j + 2 < s->k; j += 2) {
         uint32_t a = ring, b = ring + j, c = ring + j + 1, d = ring + j + 2;
         if (forward) put_quad(s, a, b, c, d, branch);
         else put_quad(s, a, d, c, b, branch);
     }
+    if (j + 1 < s->k) { /* odd k: vertices 0, j, j + 1 are left for one triangle */
+        uint32_t a = ring, b = ring + j, c = ring + j + 1;
+        return forward ? put_tri(s, a, b, c, branch) : put_tri(s, a, c, b, branch);
+    }
+    return XYL_OK;
 }
 
 /* Rotation-minimising frame transport (double reflection, Wang et al. 2008): the reference
@@ -258,13 +280,19 @@ static void station_frame(const stems *s, size_t i, xyl__dvec3 start_dir, xyl__d
     *t_out = i + 1 < s->nstations ? dir_between(st[i].p, st[i + 1].p, *t_in) : *t_in;
 }
 
+/* Quads in a child's patch: its outline has 2 strip + 2 vertices, k for even k, k + 1 for odd. */
+static uint32_t strip_size(const stems *s)
+{
+    return s->k % 2 ? (s->k - 1) / 2 : s->k / 2 - 1;
+}
+
 /* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
  * delta, so the bands between them offer patches to the lateral children. */
 static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
                              uint32_t branch, size_t laterals)
 {
     const stems_station *st = &s->stations[i];
-    uint32_t strip = s->k / 2 - 1, per_band = s->k / strip;
+    uint32_t strip = strip_size(s), per_band = s->k / strip;
     /* twice the patches the children need, so each still has a choice; never a fixed cap, so a
      * fork can always hold all its children */
     size_t want = (2 * laterals + per_band - 1) / per_band;
@@ -350,7 +378,7 @@ static xyl__dvec3 strip_centre(const stems *s, uint32_t band, uint32_t c, uint32
  * ahead of the node, one leaning back a band behind). */
 static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d)
 {
-    uint32_t strip = s->k / 2 - 1;
+    uint32_t strip = strip_size(s);
     patch best = {UINT32_MAX, 0, -4.0};
     for (size_t r = lo; r < hi; ++r) {
         uint32_t band = s->rings[r].band;
@@ -367,10 +395,44 @@ static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node,
     return best;
 }
 
+/* Faces from the patch outline loop (n vertices, counter-clockwise from outside) to the child's
+ * ring: k quads when n = k; for odd k the outline has k + 1 vertices and its last edge closes
+ * with one triangle. Loop edges are used forwards, ring edges backwards, as in a tube band. */
+static xyl_result bridge_faces(stems *s, const uint32_t *loop, uint32_t n, uint32_t ring,
+                               uint32_t branch)
+{
+    uint32_t k = s->k;
+    for (uint32_t j = 0; j + 1 < k; ++j) put_quad(s, loop[j], loop[j + 1], ring + j + 1, ring + j, branch);
+    if (n == k) {
+        put_quad(s, loop[k - 1], loop[0], ring, ring + k - 1, branch);
+        return XYL_OK;
+    }
+    put_quad(s, loop[k], loop[0], ring, ring + k - 1, branch);
+    return put_tri(s, loop[k - 1], loop[k], ring + k - 1, branch);
+}
+
+/* Odd k: the outline has k + 1 vertices, so evenly spaced ring vertices would drift against it
+ * and twist the bridge; ring vertex j goes instead where outline vertex j is, seen around the
+ * ring's axis. */
+static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *loop,
+                             xyl__dvec3 centroid, double r)
+{
+    xyl__dvec3 n = ring->tangent;
+    double rr = r * s->inflate;
+    for (uint32_t j = 0; j < s->k; ++j) {
+        xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(s->pos[loop[j]]), centroid);
+        d = xyl__d3_sub(d, xyl__d3_scale(n, xyl__d3_dot(d, n)));
+        double l2 = xyl__d3_dot(d, d);
+        if (!(l2 > XYL__EPS_NORMALIZE)) continue; /* keep the even spacing */
+        xyl__dvec3 p = xyl__d3_add(ring->centre, xyl__d3_scale(d, rr / sqrt(l2)));
+        s->pos[ring->first + j] = xyl__to_f3(p);
+    }
+}
+
 /* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
 static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
 {
-    uint32_t strip = s->k / 2 - 1, loop[64];
+    uint32_t strip = strip_size(s), loop[66];
     const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
     uint32_t band = a->band, branch = s->sk->nodes[child].branch;
     strip_loop(s, a->first, b->first, p.column, strip, loop);
@@ -395,10 +457,9 @@ static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
     ring.band = UINT32_MAX;
     if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
     ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
-    for (uint32_t j = 0; j < s->k; ++j) {
-        uint32_t j1 = (j + 1) % s->k;
-        put_quad(s, loop[j], loop[j1], ring.first + j1, ring.first + j, branch);
-    }
+    if (s->k % 2) align_to_outline(s, &ring, loop, centroid, r);
+    xyl_result res = bridge_faces(s, loop, 2 * strip + 2, ring.first, branch);
+    if (res) return res;
     if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
                    sizeof *s->pending))
         return oom(s);
@@ -442,10 +503,9 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
             if (child == main) continue;
             xyl__dvec3 across = xyl__d3_any_orthogonal(s->rings[lo].tangent);
             patch p = choose_patch(s, lo, hi, node_pos(s, node), child_direction(s, node, child, across));
-            if (p.ring == UINT32_MAX)
+            if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
                 return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
-                                 "node %u has more children than its %zu fork bands can hold",
-                                 node, hi - lo);
+                                 "internal: no free patch left at node %u", node);
             r = bridge(s, p, child, st->r);
             if (r) return r;
         }
@@ -521,10 +581,8 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     size_t nspans = 0;
     r = branch_rings(s, dir, branch, spans, &nspans);
     if (!r && !out_reserve(s, s->nv, s->nq + s->k)) r = oom(s);
-    if (!r) {
-        if (!from) put_cap(s, s->rings[0].first, false, branch);
-        put_cap(s, s->rings[s->nrings - 1].first, true, branch);
-    }
+    if (!r && !from) r = put_cap(s, s->rings[0].first, false, branch);
+    if (!r) r = put_cap(s, s->rings[s->nrings - 1].first, true, branch);
     for (size_t f = 0; f < nspans && !r; ++f)
         r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
     xyl__free(&s->alloc, spans);
@@ -600,10 +658,6 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
     uint32_t k = d->sides ? d->sides : 4;
     if (k < 3 || k > 32)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "sides must be 3..32, not %u", k);
-    if (k % 2)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
-                         "odd ring sides (%u) are not supported yet: a quad patch never has an "
-                         "odd boundary (docs/stems.md)", k);
     if ((unsigned)d->normals > XYL_NORMALS_SMOOTH || (unsigned)d->subdivision > XYL_SUBDIVIDE_LOOP)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "unknown normal mode or scheme");
     return XYL_OK;
@@ -626,6 +680,12 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a)
     a->quads = s->quads;
     a->quad_count = w;
     a->face_branches = s->fbranch;
+    if (s->nt) { /* face branches: quads first, then triangles */
+        memcpy(s->fbranch + w, s->tbranch, s->nt * sizeof *s->tbranch);
+        a->triangles = s->tris;
+        a->triangle_count = s->nt;
+        s->tris = NULL;
+    }
     s->pos = NULL;
     s->uv = NULL;
     s->vbranch = NULL;
@@ -636,7 +696,7 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a)
 static void free_state(stems *s)
 {
     void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->quads,
-                      s->fbranch, s->taken, s->chain, s->stations, s->rings, s->ring_station,
+                      s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations, s->rings, s->ring_station,
                       s->pending};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
@@ -652,6 +712,9 @@ static xyl_result normals_with_patches(stems *s, const xyl_stems_desc *d, xyl_ve
     view.vertex_count = s->nv;
     view.quads = s->quads;
     view.quad_count = s->nq;
+    view.triangles = s->tris;
+    view.triangle_count = s->nt;
+    if (s->nt) memcpy(s->fbranch + s->nq, s->tbranch, s->nt * sizeof *s->tbranch);
     view.face_branches = s->fbranch;
     *out = NULL;
     if (d->normals == XYL_NORMALS_SMOOTH) return XYL_OK; /* smooth ones see the final surface */
@@ -708,6 +771,11 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     xyl__mesh_arrays a;
     memset(&a, 0, sizeof a);
     xyl_vec3 *normals = NULL;
+    /* face branches run over quads, then triangles: room for both */
+    size_t fcap = s.qcap;
+    if (!r && s.nt && !xyl__grow(&s.alloc, (void **)&s.fbranch, &fcap, s.nq, s.nq + s.nt,
+                                 sizeof *s.fbranch))
+        r = oom(&s);
     if (!r && desc->subdivision == XYL_SUBDIVIDE_NONE) r = normals_with_patches(&s, desc, &normals);
     if (!r) {
         take_arrays(&s, &a);

@@ -46,6 +46,8 @@ typedef struct stems {
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     size_t nq, qcap;
+    uint32_t *tris, *tbranch; /* odd k only: one triangle per cap and per bridge */
+    size_t nt, tcap3;
     uint8_t *taken; /* per quad: replaced by a child's bridge */
     size_t tcap;
 

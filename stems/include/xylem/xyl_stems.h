@@ -239,8 +239,8 @@ typedef enum xyl_normal_mode {
 } xyl_normal_mode;
 
 typedef struct xyl_stems_desc {
-    uint32_t sides;               /* ring sides k: even, 4..32 (odd k: XYL_ERR_UNSUPPORTED for
-                                     now); default (0): 4 */
+    uint32_t sides;               /* ring sides k, 3..32; default (0): 4. Even k gives quads
+                                     only; odd k one triangle per cap and per bridge */
     xyl_normal_mode normals;
     xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
     bool keep_control_radius;     /* default false: with Catmull-Clark, rings are inflated so
@@ -252,8 +252,7 @@ typedef struct xyl_stems_desc {
 
 /* One closed quad mesh around the whole skeleton: a tube per branch, children grown out of their
  * parent (docs/stems.md). desc may be NULL. Errors: XYL_ERR_INVALID_ARGUMENT,
- * XYL_ERR_UNSUPPORTED (odd sides; more children at one node than its fork bands hold),
- * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
+ * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY, and those of xyl_mesh_subdivide. */
 XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                                    xyl_mesh **out, xyl_diag *diag);
 
