@@ -25,7 +25,9 @@ static xyl__dvec3 face_normal(const xyl_vec3 *p, const uint32_t *f, int n)
     return xyl__d3_cross(xyl__d3_sub(c, a), xyl__d3_sub(d, b));
 }
 
-static void accumulate(const xyl__mesh_arrays *a, const uint32_t *face_branch, xyl__dvec3 *acc,
+/* Adds every face's area-weighted normal to its vertices (own_branch_only: only to vertices of
+ * the face's branch). Sums are float: a vertex collects a handful of faces. */
+static void accumulate(const xyl__mesh_arrays *a, const uint32_t *face_branch, xyl_vec3 *acc,
                        bool own_branch_only)
 {
     size_t faces = a->quad_count + a->triangle_count;
@@ -33,41 +35,42 @@ static void accumulate(const xyl__mesh_arrays *a, const uint32_t *face_branch, x
         bool quad = f < a->quad_count;
         const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
         int n = quad ? 4 : 3;
-        xyl__dvec3 fn = face_normal(a->positions, idx, n);
+        xyl_vec3 fn = xyl__to_f3(face_normal(a->positions, idx, n));
         for (int k = 0; k < n; ++k) {
             uint32_t v = idx[k];
             if (own_branch_only && face_branch && a->branch_ids &&
                 face_branch[f] != a->branch_ids[v])
                 continue;
-            acc[v] = xyl__d3_add(acc[v], fn);
+            acc[v].x += fn.x;
+            acc[v].y += fn.y;
+            acc[v].z += fn.z;
         }
     }
+}
+
+static bool has_direction(xyl_vec3 v)
+{
+    return (double)v.x * v.x + (double)v.y * v.y + (double)v.z * v.z > XYL__EPS_NORMALIZE;
 }
 
 xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_branch,
                              const xyl_allocator *alloc, xyl_vec3 *out)
 {
-    /* Sums run in double: a vertex of a fine mesh collects many small face normals. */
-    size_t n = a->vertex_count ? a->vertex_count : 1;
-    xyl__dvec3 *own = xyl__calloc(alloc, n, sizeof *own);
-    if (!own) return XYL_ERR_OUT_OF_MEMORY;
-    accumulate(a, face_branch, own, true);
+    memset(out, 0, a->vertex_count * sizeof *out);
+    accumulate(a, face_branch, out, true);
     /* only a vertex without faces of its own branch needs the all-faces sum */
     bool lonely = false;
-    for (size_t v = 0; face_branch && v < a->vertex_count && !lonely; ++v)
-        lonely = !(xyl__d3_dot(own[v], own[v]) > XYL__EPS_NORMALIZE);
-    xyl__dvec3 *all = lonely ? xyl__calloc(alloc, n, sizeof *all) : NULL;
-    if (lonely && !all) {
-        xyl__free(alloc, own);
-        return XYL_ERR_OUT_OF_MEMORY;
+    for (size_t v = 0; face_branch && v < a->vertex_count && !lonely; ++v) lonely = !has_direction(out[v]);
+    xyl_vec3 *all = NULL;
+    if (lonely) {
+        all = xyl__calloc(alloc, a->vertex_count, sizeof *all);
+        if (!all) return XYL_ERR_OUT_OF_MEMORY;
+        accumulate(a, NULL, all, false);
     }
-    if (all) accumulate(a, NULL, all, false);
     for (size_t v = 0; v < a->vertex_count; ++v) {
-        xyl__dvec3 sum = own[v];
-        if (all && !(xyl__d3_dot(sum, sum) > XYL__EPS_NORMALIZE)) sum = all[v];
-        out[v] = xyl__to_f3(xyl__d3_normalize_or(sum, xyl__d3(0, 1, 0)));
+        xyl_vec3 sum = (all && !has_direction(out[v])) ? all[v] : out[v];
+        out[v] = xyl__to_f3(xyl__d3_normalize_or(xyl__from_f3(sum), xyl__d3(0, 1, 0)));
     }
-    xyl__free(alloc, own);
     xyl__free(alloc, all);
     return XYL_OK;
 }

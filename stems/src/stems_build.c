@@ -91,10 +91,9 @@ static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, dou
 /* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead. */
 static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
 {
-    for (uint32_t j = 0; j < s->k; ++j) {
-        uint32_t j1 = (j + 1) % s->k;
-        put_quad(s, a + j, a + j1, b + j1, b + j, branch);
-    }
+    uint32_t last = s->k - 1;
+    for (uint32_t j = 0; j < last; ++j) put_quad(s, a + j, a + j + 1, b + j + 1, b + j, branch);
+    put_quad(s, a + last, a, b, b + last, branch);
 }
 
 /* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
