@@ -24,6 +24,8 @@
 #include <time.h>
 
 #include <xylem/xyl_lsystem.h>
+
+#include "bench_common.h"
 #include <xylem/xyl_stems.h>
 
 #define MAX_SAMPLES 101
@@ -64,58 +66,9 @@ static const uint32_t ladder_quick[] = {5, 8};
 #define MIDDLE_FULL 15  /* depth of the k = 8 and Catmull-Clark rows */
 #define MIDDLE_QUICK 8
 
-typedef struct options {
-    bool quick;
-    bool peer;
-    int repeats;
-    double min_sample_s;     /* a sample of a fast case repeats it until it lasts this long */
-    const char *peer_script; /* NULL: look next to the working directory and the executable */
-    const char *node;
-    const char *argv0;
-} options;
 
 /* ---- timing -------------------------------------------------------------------------------- */
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
-/* One timed call: does the work, returns in *seconds how long the measured part took. */
-typedef xyl_result (*job_fn)(void *ctx, double *seconds, xyl_diag *diag);
-
-typedef struct timing {
-    double median_s, min_s;
-    int samples;
-    unsigned batch; /* calls per sample */
-} timing;
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median_of(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-static xyl_result run_batch(job_fn job, void *ctx, unsigned batch, double *seconds, xyl_diag *diag)
-{
-    double sum = 0.0;
-    for (unsigned b = 0; b < batch; ++b) {
-        double t = 0.0;
-        xyl_result r = job(ctx, &t, diag);
-        if (r) return r;
-        sum += t;
-    }
-    *seconds = sum / batch;
-    return XYL_OK;
-}
 
 /* A warm-up call picks the batch size; then the median of `repeats` samples. */
 static xyl_result measure(const options *o, int repeats, job_fn job, void *ctx, timing *out,
@@ -135,28 +88,7 @@ static xyl_result measure(const options *o, int repeats, job_fn job, void *ctx, 
     return XYL_OK;
 }
 
-static double rate(double count, double seconds)
-{
-    return seconds > 0.0 ? count / seconds : 0.0;
-}
-
-static void report_error(const char *what, xyl_result r, const xyl_diag *diag)
-{
-    printf("%s: error: %s", what, xyl_result_string(r));
-    if (diag->message[0]) printf(" (%s)", diag->message);
-    printf("\n");
-}
-
 /* ---- growing the trees --------------------------------------------------------------------- */
-
-static xyl_result derive_at(const xyl_grammar *g, uint32_t depth, xyl_lstring **out,
-                            xyl_diag *diag)
-{
-    xyl_derive_desc dd = {0};
-    dd.has_depth = true;
-    dd.depth = depth;
-    return xyl_lsystem_derive(g, &dd, out, diag);
-}
 
 static xyl_result interpret(const xyl_grammar *g, const xyl_lstring *s, xyl_skeleton **out,
                             xyl_diag *diag)
@@ -417,61 +349,6 @@ typedef struct peer_case {
     bool wrapped; /* its Uint16 indices wrap: the mesh three would draw is not the one built */
 } peer_case;
 
-static bool file_exists(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (f) fclose(f);
-    return f != NULL;
-}
-
-/* The peer script: --peer-script, else relative to the working directory (the repository root),
- * else relative to the executable (build-dir/samples/bench_stems). */
-static bool find_script(const options *o, char *path, size_t cap)
-{
-    if (o->peer_script) {
-        snprintf(path, cap, "%s", o->peer_script);
-        return file_exists(path);
-    }
-    static const char *const ups[] = {"", "../../", "../", "../../../"};
-    const char *slash = strrchr(o->argv0, '/');
-    int dir_len = slash ? (int)(slash - o->argv0) : 1;
-    const char *dir = slash ? o->argv0 : ".";
-    for (size_t i = 0; i < sizeof ups / sizeof ups[0]; ++i) {
-        if (i == 0) snprintf(path, cap, "%s", PEER_SCRIPT);
-        else snprintf(path, cap, "%.*s/%s%s", dir_len, dir, ups[i], PEER_SCRIPT);
-        if (file_exists(path)) return true;
-    }
-    return false;
-}
-
-/* Appends s single-quoted for /bin/sh. */
-static bool append_quoted(char *cmd, size_t cap, const char *s)
-{
-    size_t n = strlen(cmd);
-    if (n + 3 >= cap) return false;
-    cmd[n++] = ' ';
-    cmd[n++] = '\'';
-    for (; *s; ++s) {
-        const char *piece = *s == '\'' ? "'\\''" : NULL;
-        size_t len = piece ? 4 : 1;
-        if (n + len + 2 >= cap) return false;
-        if (piece) memcpy(cmd + n, piece, len);
-        else cmd[n] = *s;
-        n += len;
-    }
-    cmd[n++] = '\'';
-    cmd[n] = '\0';
-    return true;
-}
-
-static void copy_text(char *dst, size_t cap, const char *src)
-{
-    size_t n = strlen(src);
-    if (n >= cap) n = cap - 1;
-    memcpy(dst, src, n);
-    dst[n] = '\0';
-}
-
 /* The value of " key=" in a key=value line, up to the next space; false if absent. */
 static bool peer_value(const char *line, const char *key, char *out, size_t cap)
 {
@@ -633,7 +510,7 @@ static peer_summary bench_peer(const options *o, const xyl_grammar *g, size_resu
     peer_summary sum = {0, 0.0, 0.0, false, 0};
     printf("\n== peer: ez-tree (node), same run; xylem tree of the nearest triangle count ==\n");
     char script[MAX_PATH_LEN], why[256];
-    if (!find_script(o, script, sizeof script)) {
+    if (!find_script(o, PEER_SCRIPT, script, sizeof script)) {
         printf("%s (no %s)\n", PEER_HINT, PEER_SCRIPT);
         return sum;
     }
