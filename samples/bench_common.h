@@ -12,6 +12,8 @@
 
 #include <xylem/xyl_lsystem.h>
 
+#define MAX_SAMPLES 101 /* most samples a figure is the median of */
+
 typedef struct options {
     bool quick;
     bool peer;
@@ -137,6 +139,46 @@ static inline void copy_text(char *dst, size_t cap, const char *src)
     if (n >= cap) n = cap - 1;
     memcpy(dst, src, n);
     dst[n] = '\0';
+}
+
+static inline void bench_usage(FILE *f, const char *program)
+{
+    fprintf(f, "usage: %s [--quick] [--no-peer] [--repeats N] [--peer-script PATH] [--node PATH]\n",
+            program);
+}
+
+/* Fills o from the command line; returns 0, 1 after --help, 2 on bad usage. */
+static inline int bench_parse_options(int argc, char **argv, options *o, const char *program)
+{
+    o->argv0 = argc > 0 ? argv[0] : program;
+    o->peer = true;
+    o->node = "node";
+    const char *repeats = NULL;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        bool has_value = i + 1 < argc;
+        if (strcmp(a, "--quick") == 0) o->quick = true;
+        else if (strcmp(a, "--no-peer") == 0) o->peer = false;
+        else if (strcmp(a, "--repeats") == 0 && has_value) repeats = argv[++i];
+        else if (strcmp(a, "--peer-script") == 0 && has_value) o->peer_script = argv[++i];
+        else if (strcmp(a, "--node") == 0 && has_value) o->node = argv[++i];
+        else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            bench_usage(stdout, program);
+            return 1;
+        } else {
+            bench_usage(stderr, program);
+            return 2;
+        }
+    }
+    char *end = NULL;
+    long n = repeats ? strtol(repeats, &end, 10) : (o->quick ? 3 : 9);
+    if ((repeats && *end) || n < 1 || n > MAX_SAMPLES) {
+        fprintf(stderr, "%s: --repeats must be 1..%d\n", program, MAX_SAMPLES);
+        return 2;
+    }
+    o->repeats = (int)n;
+    o->min_sample_s = o->quick ? 1e-3 : 5e-3;
+    return 0;
 }
 
 #endif

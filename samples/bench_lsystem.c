@@ -24,7 +24,6 @@
 
 #include "bench_common.h"
 
-#define MAX_SAMPLES 101
 #define MAX_BATCH 100000u
 #define PEER_SCRIPT "samples/bench/lindenmayer_bench.mjs"
 #define PEER_HINT "lindenmayer: not available (run scripts/bench.sh to install)"
@@ -420,45 +419,6 @@ static peer_summary bench_peer(const options *o)
 
 /* ---- main ---------------------------------------------------------------------------------- */
 
-static void usage(FILE *f)
-{
-    fprintf(f, "usage: bench_lsystem [--quick] [--no-peer] [--repeats N] [--peer-script PATH] "
-               "[--node PATH]\n");
-}
-
-static int parse_options(int argc, char **argv, options *o)
-{
-    o->argv0 = argc > 0 ? argv[0] : "bench_lsystem";
-    o->peer = true;
-    o->node = "node";
-    const char *repeats = NULL;
-    for (int i = 1; i < argc; ++i) {
-        const char *a = argv[i];
-        bool has_value = i + 1 < argc;
-        if (strcmp(a, "--quick") == 0) o->quick = true;
-        else if (strcmp(a, "--no-peer") == 0) o->peer = false;
-        else if (strcmp(a, "--repeats") == 0 && has_value) repeats = argv[++i];
-        else if (strcmp(a, "--peer-script") == 0 && has_value) o->peer_script = argv[++i];
-        else if (strcmp(a, "--node") == 0 && has_value) o->node = argv[++i];
-        else if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
-            usage(stdout);
-            return 1;
-        } else {
-            usage(stderr);
-            return 2;
-        }
-    }
-    char *end = NULL;
-    long n = repeats ? strtol(repeats, &end, 10) : (o->quick ? 3 : 9);
-    if ((repeats && *end) || n < 1 || n > MAX_SAMPLES) {
-        fprintf(stderr, "bench_lsystem: --repeats must be 1..%d\n", MAX_SAMPLES);
-        return 2;
-    }
-    o->repeats = (int)n;
-    o->min_sample_s = o->quick ? 1e-3 : 5e-3;
-    return 0;
-}
-
 static void print_targets(const options *o, const big_result *big, const peer_summary *peer)
 {
     printf("\n== targets ==\n");
@@ -481,7 +441,7 @@ static void print_targets(const options *o, const big_result *big, const peer_su
 int main(int argc, char **argv)
 {
     options o = {0};
-    int rc = parse_options(argc, argv, &o);
+    int rc = bench_parse_options(argc, argv, &o, "bench_lsystem");
     if (rc) return rc == 1 ? 0 : rc;
 
     printf("bench_lsystem: xylem %d.%d.%d, %s build, median of %d samples%s\n", XYL_VERSION_MAJOR,
