@@ -141,6 +141,10 @@ static void every_preset_is_a_closed_manifold(void **state)
         m = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
         assert_closed(m, sk, name);
         xyl_mesh_destroy(m);
+        m = build(sk, 5, XYL_SUBDIVIDE_LOOP, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, name);
+        assert_int_equal(m->quad_count, 0); /* Loop: triangles only */
+        xyl_mesh_destroy(m);
         xyl_skeleton_destroy(sk);
     }
 }
