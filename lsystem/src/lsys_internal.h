@@ -184,8 +184,7 @@ static inline double lsys_rng_unit(lsys_rng *r)
 double lsys_eval(const xyl_grammar *g, const lsys_expr *e, const double *vars, double *stack,
                  lsys_rng *rng);
 
-/* Compiles one expression from text[*pos]; stops at a top-level ',' ')' or end. Used by the
- * grammar parser; see expr.c. */
+/* The grammar parser's state (lsys_parse.h). */
 typedef struct lsys_parser lsys_parser;
 
 #endif /* XYL_LSYS_INTERNAL_H */

@@ -220,14 +220,11 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
 /* ---- rings along one branch ---------------------------------------------------------------- */
 
 /* Adds a ring and the band of quads from the previous ring of this branch to it. */
-static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r, uint32_t station,
-                           uint32_t branch)
+static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r, uint32_t branch)
 {
     if (!out_reserve(s, s->nv + s->k, s->nq + s->k) ||
         !xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + 1,
-                   sizeof *s->rings) ||
-        !xyl__grow(&s->alloc, (void **)&s->ring_station, &s->rscap, s->nrings, s->nrings + 1,
-                   sizeof *s->ring_station))
+                   sizeof *s->rings))
         return oom(s);
     stems_ring ring;
     memset(&ring, 0, sizeof ring);
@@ -249,7 +246,6 @@ static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r, uint3
         prev->band = (uint32_t)s->nq;
         put_band(s, prev->first, ring.first, branch);
     }
-    s->ring_station[s->nrings] = station;
     s->rings[s->nrings++] = ring;
     return XYL_OK;
 }
@@ -310,12 +306,10 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
     double d_out = ahead ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : 0.0;
     xyl_result r = XYL_OK;
     for (size_t m = behind; m >= 1 && !r; --m)
-        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r,
-                     (uint32_t)i, branch);
-    if (!r) r = add_ring(s, st->p, t, st->r, (uint32_t)i, branch);
+        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r, branch);
+    if (!r) r = add_ring(s, st->p, t, st->r, branch);
     for (size_t m = 1; m <= ahead && !r; ++m)
-        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r,
-                     (uint32_t)i, branch);
+        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r, branch);
     return r;
 }
 
@@ -544,8 +538,7 @@ static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, uint32_t branch, 
         size_t laterals = s->stations[i].first == UINT32_MAX ? 0 : lateral_count(s, &s->stations[i]);
         size_t lo = s->nrings;
         xyl_result r = laterals ? fork_rings(s, i, t_in, t, t_out, branch, laterals)
-                                : add_ring(s, s->stations[i].p, t, s->stations[i].r, (uint32_t)i,
-                                           branch);
+                                : add_ring(s, s->stations[i].p, t, s->stations[i].r, branch);
         if (r) return r;
         if (laterals) {
             fork_span sp = {i, lo, s->nrings - 1};
@@ -568,11 +561,9 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     if (r) return r;
     s->nrings = 0;
     if (from) { /* the bridge ring is this branch's first ring */
-        if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings) ||
-            !xyl__grow(&s->alloc, (void **)&s->ring_station, &s->rscap, 0, 1, sizeof *s->ring_station))
+        if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings))
             return oom(s);
         s->rings[0] = *from;
-        s->ring_station[0] = UINT32_MAX;
         s->nrings = 1;
     }
     fork_span *spans = xyl__calloc(&s->alloc, s->nstations, sizeof *spans);
@@ -695,7 +686,7 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a)
 static void free_state(stems *s)
 {
     void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->quads,
-                      s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations, s->rings, s->ring_station,
+                      s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations, s->rings,
                       s->pending};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }

@@ -58,12 +58,9 @@ typedef struct stems {
     size_t nstations, scap;
     stems_ring *rings;
     size_t nrings, rcap;
-    uint32_t *ring_station; /* per ring: its station, or UINT32_MAX for an inserted ring */
-    size_t rscap;
 
     stems_pending *pending;
     size_t npending, pcap;
-    uint32_t buds;          /* children reduced to a bud (never leave the parent) */
 } stems;
 
 #endif
