@@ -19,6 +19,7 @@
 #include <cmocka.h>
 
 #include "xylem/xyl_stems.h"
+#include "test_util.h"
 
 #define SKEL_DIR XYL_TEST_DATA "/skel/"
 
@@ -1371,29 +1372,20 @@ static void write_file_rejects_bad_arguments(void **state)
 
 /* The stem mesher's hard cases (tests/data/stems, made by scripts/make_hard_cases.py) are valid
  * skeletons: at least 40 of them, each one read without error. */
+static void count_nodes(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    (void)name;
+    assert_true(sk->node_count >= 1);
+    ++*(int *)ctx;
+}
+
 static void every_stem_hard_case_reads(void **state)
 {
     (void)state;
-    char dir[512];
-    snprintf(dir, sizeof dir, "%s/stems", XYL_TEST_DATA);
-    DIR *d = opendir(dir);
-    assert_non_null(d);
-    int count = 0;
-    for (struct dirent *e; (e = readdir(d)) != NULL;) {
-        size_t n = strlen(e->d_name);
-        if (n < 6 || strcmp(e->d_name + n - 5, ".skel") != 0) continue;
-        char path[1024];
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        xyl_skeleton *s = NULL;
-        xyl_diag diag = {0};
-        xyl_result r = xyl_skeleton_read_file(path, NULL, &s, &diag);
-        if (r != XYL_OK) fail_msg("%s: %s", e->d_name, diag.message);
-        assert_true(s->node_count >= 1);
-        xyl_skeleton_destroy(s);
-        ++count;
-    }
-    closedir(d);
+    int seen = 0;
+    int count = tu_for_each_hard_case(count_nodes, &seen);
     assert_true(count >= 40);
+    assert_int_equal(seen, count);
 }
 
 int main(void)

@@ -1,6 +1,5 @@
 /* The stem mesher on every hard case and preset: closed oriented manifold with characteristic 2
  * per root, self-intersection counts, per-branch normals, determinism, errors. */
-#include <dirent.h>
 #include <math.h>
 
 #include "test_util.h"
@@ -51,30 +50,6 @@ static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char 
                     isfinite(m->positions[v].z));
 }
 
-typedef void (*case_fn)(const char *name, const xyl_skeleton *sk, void *ctx);
-
-static int for_each_hard_case(case_fn fn, void *ctx)
-{
-    char dir[512];
-    snprintf(dir, sizeof dir, "%s/stems", XYL_TEST_DATA);
-    DIR *d = opendir(dir);
-    assert_non_null(d);
-    int count = 0;
-    for (struct dirent *e; (e = readdir(d)) != NULL;) {
-        size_t n = strlen(e->d_name);
-        if (n < 6 || strcmp(e->d_name + n - 5, ".skel") != 0) continue;
-        char path[1024];
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        xyl_skeleton *sk = NULL;
-        assert_int_equal(xyl_skeleton_read_file(path, NULL, &sk, NULL), XYL_OK);
-        fn(e->d_name, sk, ctx);
-        xyl_skeleton_destroy(sk);
-        ++count;
-    }
-    closedir(d);
-    return count;
-}
-
 /* ---- topology ------------------------------------------------------------------------------ */
 
 typedef struct topo_ctx {
@@ -105,7 +80,7 @@ static void every_hard_case_is_a_closed_manifold(void **state)
     static const uint32_t sides[] = {3, 4, 5, 6, 7, 8};
     for (size_t i = 0; i < sizeof sides / sizeof sides[0]; ++i) {
         topo_ctx t = {sides[i], XYL_SUBDIVIDE_NONE};
-        assert_true(for_each_hard_case(check_topology, &t) >= 40);
+        assert_true(tu_for_each_hard_case(check_topology, &t) >= 40);
     }
 }
 
@@ -113,8 +88,8 @@ static void every_hard_case_stays_closed_after_subdivision(void **state)
 {
     (void)state;
     topo_ctx cc = {4, XYL_SUBDIVIDE_CATMARK}, loop = {4, XYL_SUBDIVIDE_LOOP};
-    for_each_hard_case(check_topology, &cc);
-    for_each_hard_case(check_topology, &loop);
+    tu_for_each_hard_case(check_topology, &cc);
+    tu_for_each_hard_case(check_topology, &loop);
 }
 
 static xyl_skeleton *grow_preset(const char *name)
@@ -170,7 +145,7 @@ static void hard_cases_do_not_intersect_themselves(void **state)
 {
     (void)state;
     int clean = 0;
-    int total = for_each_hard_case(check_intersections, &clean);
+    int total = tu_for_each_hard_case(check_intersections, &clean);
     assert_int_equal(clean, total - (int)(sizeof known_intersecting / sizeof known_intersecting[0]));
 }
 

@@ -2,6 +2,7 @@
 #ifndef XYL_TEST_UTIL_H
 #define XYL_TEST_UTIL_H
 
+#include <dirent.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -81,6 +82,34 @@ static inline void tu_assert_derives(const char *text, uint32_t depth, const cha
     char *got = tu_derive_text(text, depth, 1);
     if (strcmp(got, expected) != 0) fail_msg("depth %u: expected\n  %s\ngot\n  %s", depth, expected, got);
     free(got);
+}
+
+/* Calls fn on every hard-case skeleton in tests/data/stems (scripts/make_hard_cases.py);
+ * returns how many there were. A file that does not read fails the test. */
+typedef void (*tu_skeleton_fn)(const char *name, const xyl_skeleton *sk, void *ctx);
+
+static inline int tu_for_each_hard_case(tu_skeleton_fn fn, void *ctx)
+{
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/stems", XYL_TEST_DATA);
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int count = 0;
+    for (struct dirent *e; (e = readdir(d)) != NULL;) {
+        size_t n = strlen(e->d_name);
+        if (n < 6 || strcmp(e->d_name + n - 5, ".skel") != 0) continue;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        xyl_skeleton *sk = NULL;
+        xyl_diag diag = {0};
+        if (xyl_skeleton_read_file(path, NULL, &sk, &diag) != XYL_OK)
+            fail_msg("%s: %s", e->d_name, diag.message);
+        fn(e->d_name, sk, ctx);
+        xyl_skeleton_destroy(sk);
+        ++count;
+    }
+    closedir(d);
+    return count;
 }
 
 #endif
