@@ -1,0 +1,72 @@
+/* xyl_tess_shared.h: the one header read by both C and GLSL (layouts, limits, enums).
+ *
+ * In GLSL the build puts "#define XYL_GLSL 1" before this file; in C it is included from
+ * xylem/xyl_tessellate.h, which pins every layout with _Static_assert. Keep both halves in step:
+ * a field added on one side without the other fails those asserts or the GPU = CPU tests.
+ *
+ * Copyright (c) xylem authors. MIT licence, see LICENSE.
+ */
+#ifndef XYL_TESS_SHARED_H
+#define XYL_TESS_SHARED_H
+
+/* Levels are 1..64: a level-L pattern has L segments per edge (quads: (L+1)^2 vertices, 2 L^2
+ * triangles; triangles: (L+1)(L+2)/2 vertices, L^2 triangles). */
+#define XYL_TESS_MAX_LEVEL 64
+
+/* Patch kinds (the number of corners). */
+#define XYL_TESS_KIND_TRIANGLE 3
+#define XYL_TESS_KIND_QUAD 4
+
+/* Edge handle rules, all local to one edge. */
+#define XYL_TESS_VARIANT_PN 0       /* 1/3 of the tangent-projected edge (Vlachos 2001) */
+#define XYL_TESS_VARIANT_ROUNDED 1  /* 1/2 of it (Skjermo 2008) */
+#define XYL_TESS_VARIANT_CIRCLE 2   /* (4/3) tan(phi/4) r: exact on a circular arc */
+#define XYL_TESS_VARIANT_COUNT 3
+
+/* A pattern vertex is one uint: lattice index i in bits 0..7, j in bits 8..15. Quads: (u, v) =
+ * (i, j) / L. Triangles: weights (L - i - j, i, j) / L of corners 0, 1, 2. */
+#define XYL_TESS_PATTERN_SHIFT_J 8u
+
+/* Instance record bits: edge level e (1..64) in bits 8e .. 8e+7 of edge_levels. */
+#define XYL_TESS_EDGE_LEVEL_BITS 8u
+
+#ifdef XYL_GLSL
+
+/* One patch: corner positions (w = kind, 3.0 or 4.0, on corner 0 only) and unit corner normals
+ * (w = 0). Triangles leave corner 3 zero. std430: 128 bytes. */
+struct xyl_tess_patch {
+    vec4 p[4];
+    vec4 n[4];
+};
+
+/* One drawn instance (a vertex attribute with divisor 1, so base-instance offsets apply):
+ * x = patch index, y = packed edge levels, z = patch level, w = kind. */
+
+#else /* C */
+
+#include <stdint.h>
+
+typedef struct xyl_tess_patch {
+    float p[4][4];
+    float n[4][4];
+} xyl_tess_patch;
+
+typedef struct xyl_tess_instance {
+    uint32_t patch;       /* index into the patch array */
+    uint32_t edge_levels; /* edge e's level in bits 8e..8e+7; never above level */
+    uint32_t level;       /* interior level 1..64 (the pattern drawn) */
+    uint32_t kind;        /* XYL_TESS_KIND_TRIANGLE or XYL_TESS_KIND_QUAD */
+} xyl_tess_instance;
+
+/* The layout of both glDrawElementsIndirect's and vkCmdDrawIndexedIndirect's command. */
+typedef struct xyl_tess_draw_cmd {
+    uint32_t index_count;
+    uint32_t instance_count;
+    uint32_t first_index;
+    int32_t base_vertex;
+    uint32_t base_instance;
+} xyl_tess_draw_cmd;
+
+#endif
+
+#endif /* XYL_TESS_SHARED_H */

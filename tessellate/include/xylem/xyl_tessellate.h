@@ -1,0 +1,176 @@
+/* xyl_tessellate.h: PN-quad / PN-triangle refinement as instanced tessellation (CPU side).
+ *
+ * How to use
+ *   1. xyl_tess_patches_create(mesh, &desc, &patches): one record per face (quads -> PN-quads,
+ *      triangles -> PN-triangles) in the GPU layout of shaders/xyl_tess_shared.h, plus the
+ *      mesh's unique edges and per-patch / per-edge error coefficients for the chosen variant.
+ *   2. xyl_tess_patterns_create(max_level, ...): the (i, j) lattice and indices of every level,
+ *      built once and shared by all meshes.
+ *   3. Each frame: xyl_tess_select(patches, patterns, &view, batches): per-edge and per-patch
+ *      levels from a camera and a pixel budget (or one fixed level), patches bucketed by
+ *      (kind, level) into instance records and indirect draw commands, ready to upload.
+ *   4. Draw: per command, the level's pattern instanced over its instance records; the vertex
+ *      shader evaluates shaders/xyl_tess_eval.glsl. xyl_tess_eval_lattice() is the CPU
+ *      reference of exactly that evaluation.
+ *
+ * Crack-freedom: a shared edge gets one level (computed once per unique edge); each side snaps
+ * its lattice points on that edge to it and evaluates the edge in a canonical direction, so both
+ * sides produce bit-identical points. This needs the mesh's faces to share vertex indices (one
+ * position and normal per vertex) across the edge, as every xyl_mesh from stems/ does.
+ *
+ * Copyright (c) xylem authors. MIT licence, see LICENSE.
+ */
+#ifndef XYL_TESSELLATE_H
+#define XYL_TESSELLATE_H
+
+#include "xylem/xyl_common.h"
+#include "xylem/xyl_stems.h"
+#include "xyl_tess_shared.h" /* shaders/ in the source tree, next to this file once installed */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The C view of the shared layouts; std430 in GLSL. */
+#if !defined(__cplusplus)
+_Static_assert(sizeof(xyl_tess_patch) == 128, "xyl_tess_patch is 8 vec4 in std430");
+_Static_assert(offsetof(xyl_tess_patch, n) == 64, "normals follow the 4 positions");
+_Static_assert(sizeof(xyl_tess_instance) == 16, "instance record is one uvec4");
+_Static_assert(sizeof(xyl_tess_draw_cmd) == 20, "indirect indexed draw command is 5 words");
+_Static_assert(offsetof(xyl_tess_draw_cmd, base_instance) == 16, "GL / Vulkan command layout");
+#endif
+
+typedef enum xyl_tess_variant {
+    XYL_TESS_PN = XYL_TESS_VARIANT_PN,           /* handles 1/3: Vlachos' PN rule (default) */
+    XYL_TESS_ROUNDED = XYL_TESS_VARIANT_ROUNDED, /* handles 1/2: Skjermo's rounded rule */
+    XYL_TESS_CIRCLE = XYL_TESS_VARIANT_CIRCLE    /* (4/3) tan(phi/4) r: exact on circular arcs */
+} xyl_tess_variant;
+
+/* ---- CPU reference evaluator (the shader's formulas, in float, same operation order) ------- */
+
+/* PN-quad at (u, v) in [0,1]^2, corners at (0,0), (1,0), (1,1), (0,1); PN-triangle
+ * (patch kind 3) at corner weights (1 - u - v, u, v). Interior formula only: points on an edge
+ * of a tessellation are produced by xyl_tess_eval_edge (see xyl_tess_eval_lattice). */
+XYL_API void xyl_tess_eval(const xyl_tess_patch *patch, xyl_tess_variant variant, float u,
+                           float v, float pos[3], float normal[3]);
+
+/* Point k of le (0 <= k <= le, 1 <= le <= 64) along the patch's edge e (from corner e to corner
+ * e + 1), evaluated in the edge's canonical direction: bit-identical from both patches. */
+XYL_API void xyl_tess_eval_edge(const xyl_tess_patch *patch, xyl_tess_variant variant,
+                                uint32_t e, uint32_t k, uint32_t le, float pos[3],
+                                float normal[3]);
+
+/* Lattice point (i, j) of a level-`level` pattern, with the instance's packed edge levels:
+ * exactly what the instanced vertex shader computes. */
+XYL_API void xyl_tess_eval_lattice(const xyl_tess_patch *patch, xyl_tess_variant variant,
+                                   uint32_t level, uint32_t edge_levels, uint32_t i, uint32_t j,
+                                   float pos[3], float normal[3]);
+
+/* Kind (3 or 4) of a patch record. */
+XYL_API uint32_t xyl_tess_patch_kind(const xyl_tess_patch *patch);
+
+/* ---- patches ------------------------------------------------------------------------------- */
+
+typedef struct xyl_tess_patches_desc {
+    xyl_tess_variant variant; /* default (0): XYL_TESS_PN */
+    xyl_allocator alloc;
+} xyl_tess_patches_desc;
+
+typedef struct xyl_tess_patches {
+    const xyl_tess_patch *records; /* one per face: the mesh's quads, then its triangles */
+    size_t count;
+    size_t quad_count;             /* records [0, quad_count) are quads */
+    const uint32_t *patch_edges;   /* 4 unique-edge ids per patch (triangles: the 4th is ~0u) */
+    size_t edge_count;             /* unique edges */
+    xyl_tess_variant variant;
+    float size;                    /* largest extent of the mesh's bounding box */
+} xyl_tess_patches;
+
+/* Errors: XYL_ERR_INVALID_ARGUMENT (NULL, bad variant, a face whose vertices or normals are
+ * unusable: diag.index is the face), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY. On failure *out
+ * is untouched. */
+XYL_API xyl_result xyl_tess_patches_create(const xyl_mesh *mesh, const xyl_tess_patches_desc *desc,
+                                           xyl_tess_patches **out, xyl_diag *diag);
+XYL_API void xyl_tess_patches_destroy(xyl_tess_patches *patches);
+
+/* World-space bound of the distance between a patch (or edge) tessellated at level L and its
+ * PN surface: coefficient / L^2 (see docs/tessellation.md). */
+XYL_API float xyl_tess_patch_error_coefficient(const xyl_tess_patches *patches, size_t patch);
+XYL_API float xyl_tess_edge_error_coefficient(const xyl_tess_patches *patches, size_t edge);
+
+/* ---- patterns ------------------------------------------------------------------------------ */
+
+typedef struct xyl_tess_pattern_range {
+    uint32_t first_vertex, vertex_count; /* in vertices[] */
+    uint32_t first_index, index_count;   /* in indices[]; indices are local to the pattern */
+} xyl_tess_pattern_range;
+
+typedef struct xyl_tess_patterns {
+    const uint32_t *vertices; /* packed lattice points: i | j << XYL_TESS_PATTERN_SHIFT_J */
+    size_t vertex_count;
+    const uint32_t *indices;  /* counter-clockwise triangles, like the faces they refine */
+    size_t index_count;
+    uint32_t max_level;
+    /* ranges[0][L] quads, ranges[1][L] triangles, L = 1..max_level (index 0 unused) */
+    xyl_tess_pattern_range ranges[2][XYL_TESS_MAX_LEVEL + 1];
+} xyl_tess_patterns;
+
+/* All patterns of levels 1..max_level (1..64; 0 means 64) for both kinds. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (max_level > 64), XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_tess_patterns_create(uint32_t max_level, const xyl_allocator *alloc,
+                                            xyl_tess_patterns **out, xyl_diag *diag);
+XYL_API void xyl_tess_patterns_destroy(xyl_tess_patterns *patterns);
+
+/* ---- level selection and batches ------------------------------------------------------------ */
+
+typedef struct xyl_tess_view {
+    float eye[3];             /* camera position, world space */
+    float fovy;               /* vertical field of view, radians; default (0): 0.8 (45.8 deg) */
+    uint32_t viewport_height; /* pixels; default (0): 1080 */
+    float error_px;           /* screen-space budget; default (0): 0.5 px */
+    float near_distance;      /* distances are clamped up to this; default (0): 1e-3 * size */
+    uint32_t fixed_level;     /* 1..64 draws every patch at this level; default (0): adaptive */
+    uint32_t max_level;       /* adaptive levels are clamped to this; default (0): patterns' max */
+} xyl_tess_view;
+
+typedef struct xyl_tess_batch {
+    uint32_t kind, level; /* pattern drawn */
+} xyl_tess_batch;
+
+/* Per-frame output, reused from frame to frame (grows, never shrinks). */
+typedef struct xyl_tess_batches {
+    xyl_tess_instance *instances; /* sorted by (kind, level); upload as a per-instance buffer */
+    size_t instance_count;
+    xyl_tess_draw_cmd *cmds;      /* one per non-empty (kind, level) */
+    xyl_tess_batch *batches;      /* what each command draws */
+    size_t cmd_count;
+    uint8_t *edge_levels;         /* level of each unique edge */
+    uint64_t triangles;           /* triangles the commands draw */
+    uint64_t vertices;            /* pattern vertices they evaluate */
+    /* internal storage */
+    size_t instance_cap, edge_cap;
+    uint8_t *patch_levels;
+    size_t patch_cap;
+    xyl_allocator alloc;
+} xyl_tess_batches;
+
+/* Zero-fill a xyl_tess_batches (optionally setting .alloc) before the first call; free with
+ * xyl_tess_batches_free. Errors: XYL_ERR_INVALID_ARGUMENT (NULL, non-finite eye, levels out of
+ * range, patterns with a smaller max level than asked), XYL_ERR_OUT_OF_MEMORY (batches keep their
+ * previous content). */
+XYL_API xyl_result xyl_tess_select(const xyl_tess_patches *patches,
+                                   const xyl_tess_patterns *patterns, const xyl_tess_view *view,
+                                   xyl_tess_batches *batches, xyl_diag *diag);
+XYL_API void xyl_tess_batches_free(xyl_tess_batches *batches);
+
+/* Level that keeps a world error coefficient (world units * L^2) under error_px when seen from
+ * distance d with the view's projection: ceil(sqrt(coef * scale / (d * error_px))), clamped to
+ * [1, max_level]. Exposed for tests and tools. */
+XYL_API uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
+                                    uint32_t max_level);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* XYL_TESSELLATE_H */
