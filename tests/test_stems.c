@@ -287,6 +287,59 @@ static void bad_options_and_limits_return_their_codes(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* Counts allocations and fails the fail_at-th one (0: none). */
+typedef struct counter {
+    size_t attempts, allocs, frees, fail_at;
+} counter;
+
+static void *count_alloc(size_t size, void *user)
+{
+    counter *c = user;
+    if (++c->attempts == c->fail_at) return NULL;
+    void *p = malloc(size);
+    if (p) c->allocs++;
+    return p;
+}
+
+static void count_free(void *p, void *user)
+{
+    counter *c = user;
+    c->frees++;
+    free(p);
+}
+
+/* Every allocation of the mesher (output reserved up front, normals summed while meshing, the
+ * triangulated view written with the compaction) may fail: the result is then
+ * XYL_ERR_OUT_OF_MEMORY, out is untouched and nothing leaks. */
+static void build_survives_every_allocation_failure(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset("abop-1.24a");
+    const struct { uint32_t k; xyl_normal_mode normals; } modes[] = {
+        {4, XYL_NORMALS_BRANCH}, {5, XYL_NORMALS_BRANCH}, {4, XYL_NORMALS_SMOOTH}};
+    for (size_t i = 0; i < sizeof modes / sizeof modes[0]; ++i) {
+        for (size_t at = 1;; ++at) {
+            counter c = {0, 0, 0, at};
+            xyl_stems_desc d = {0};
+            d.sides = modes[i].k;
+            d.normals = modes[i].normals;
+            d.alloc = (xyl_allocator){count_alloc, count_free, &c};
+            xyl_mesh *m = (xyl_mesh *)(uintptr_t)1;
+            xyl_result r = xyl_stems_build(sk, &d, &m, NULL);
+            if (r == XYL_OK) {
+                xyl_mesh_destroy(m);
+                assert_int_equal(c.allocs, c.frees);
+                break;
+            }
+            assert_int_equal(r, XYL_ERR_OUT_OF_MEMORY);
+            assert_ptr_equal(m, (xyl_mesh *)(uintptr_t)1);
+            assert_int_equal(c.allocs, c.frees);
+            assert_true(at < 1000);
+        }
+    }
+    xyl_skeleton_destroy(sk);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -298,6 +351,7 @@ int main(void)
         cmocka_unit_test(catmull_clark_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(identical_input_gives_identical_meshes),
         cmocka_unit_test(bad_options_and_limits_return_their_codes),
+        cmocka_unit_test(build_survives_every_allocation_failure),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -15,42 +15,57 @@ void xyl__mesh_arrays_free(xyl__mesh_arrays *a, const xyl_allocator *alloc)
     memset(a, 0, sizeof *a);
 }
 
-static xyl__dvec3 face_normal(const xyl_vec3 *p, const uint32_t *f, int n)
+/* Adds every face's normal to its n vertices, faces in order (so each vertex sums its faces in
+ * the same order whatever the loop looks like). With own (one branch per face and per vertex)
+ * only to the vertices of the face's branch. */
+static void accumulate_faces(const xyl_vec3 *pos, const uint32_t *idx, size_t count, int n,
+                             const uint32_t *own, const uint32_t *vbranch, xyl_vec3 *acc)
 {
-    /* Twice the area-weighted normal: cross of the diagonals for a quad, of two edges for a
-     * triangle. */
-    xyl__dvec3 a = xyl__from_f3(p[f[0]]), b = xyl__from_f3(p[f[1]]), c = xyl__from_f3(p[f[2]]);
-    if (n == 3) return xyl__d3_cross(xyl__d3_sub(b, a), xyl__d3_sub(c, a));
-    xyl__dvec3 d = xyl__from_f3(p[f[3]]);
-    return xyl__d3_cross(xyl__d3_sub(c, a), xyl__d3_sub(d, b));
-}
-
-/* Adds every face's area-weighted normal to its vertices (own_branch_only: only to vertices of
- * the face's branch). Sums are float: a vertex collects a handful of faces. */
-static void accumulate(const xyl__mesh_arrays *a, const uint32_t *face_branch, xyl_vec3 *acc,
-                       bool own_branch_only)
-{
-    size_t faces = a->quad_count + a->triangle_count;
-    for (size_t f = 0; f < faces; ++f) {
-        bool quad = f < a->quad_count;
-        const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
-        int n = quad ? 4 : 3;
-        xyl_vec3 fn = xyl__to_f3(face_normal(a->positions, idx, n));
-        for (int k = 0; k < n; ++k) {
-            uint32_t v = idx[k];
-            if (own_branch_only && face_branch && a->branch_ids &&
-                face_branch[f] != a->branch_ids[v])
-                continue;
-            acc[v].x += fn.x;
-            acc[v].y += fn.y;
-            acc[v].z += fn.z;
-        }
+    for (size_t f = 0; f < count; ++f, idx += n) {
+        xyl_vec3 fn = n == 4 ? xyl__quad_normal(pos, idx) : xyl__tri_normal(pos, idx);
+        for (int k = 0; k < n; ++k)
+            if (!own || own[f] == vbranch[idx[k]]) xyl__add_f3(&acc[idx[k]], fn);
     }
 }
 
-static bool has_direction(xyl_vec3 v)
+/* Adds every face's area-weighted normal to its vertices (own_branch_only: only to vertices of
+ * the face's branch). Sums are float: a vertex collects a handful of faces. The quad and
+ * triangle loops are separate, and the branch test is decided once, so the hot loop is plain. */
+static void accumulate(const xyl__mesh_arrays *a, const uint32_t *face_branch, xyl_vec3 *acc,
+                       bool own_branch_only)
 {
-    return (double)v.x * v.x + (double)v.y * v.y + (double)v.z * v.z > XYL__EPS_NORMALIZE;
+    bool own = own_branch_only && face_branch && a->branch_ids;
+    const uint32_t *fq = own ? face_branch : NULL, *ft = own ? face_branch + a->quad_count : NULL;
+    if (fq) accumulate_faces(a->positions, a->quads, a->quad_count, 4, fq, a->branch_ids, acc);
+    else accumulate_faces(a->positions, a->quads, a->quad_count, 4, NULL, NULL, acc);
+    if (a->triangle_count)
+        accumulate_faces(a->positions, a->triangles, a->triangle_count, 3, ft, a->branch_ids, acc);
+}
+
+/* A vertex without faces of its own branch ("lonely") takes the normal of all its faces. One
+ * pass normalises the others and leaves the lonely sums as they are: a normalised vector always
+ * has a direction, so the second pass finds exactly the lonely ones again. */
+xyl_result xyl__mesh_normals_finish(const xyl__mesh_arrays *a, bool by_branch,
+                                    const xyl_allocator *alloc, xyl_vec3 *out)
+{
+    bool lonely = false;
+    for (size_t v = 0; v < a->vertex_count; ++v) {
+        if (by_branch && !xyl__has_direction(out[v])) lonely = true;
+        else out[v] = xyl__unit_or_up(out[v]);
+    }
+    return lonely ? xyl__mesh_normals_lonely(a, alloc, out) : XYL_OK;
+}
+
+xyl_result xyl__mesh_normals_lonely(const xyl__mesh_arrays *a, const xyl_allocator *alloc,
+                                    xyl_vec3 *out)
+{
+    xyl_vec3 *all = xyl__calloc(alloc, a->vertex_count, sizeof *all);
+    if (!all) return XYL_ERR_OUT_OF_MEMORY;
+    accumulate(a, NULL, all, false);
+    for (size_t v = 0; v < a->vertex_count; ++v)
+        if (!xyl__has_direction(out[v])) out[v] = xyl__unit_or_up(all[v]);
+    xyl__free(alloc, all);
+    return XYL_OK;
 }
 
 xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_branch,
@@ -58,21 +73,7 @@ xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_bra
 {
     memset(out, 0, a->vertex_count * sizeof *out);
     accumulate(a, face_branch, out, true);
-    /* only a vertex without faces of its own branch needs the all-faces sum */
-    bool lonely = false;
-    for (size_t v = 0; face_branch && v < a->vertex_count && !lonely; ++v) lonely = !has_direction(out[v]);
-    xyl_vec3 *all = NULL;
-    if (lonely) {
-        all = xyl__calloc(alloc, a->vertex_count, sizeof *all);
-        if (!all) return XYL_ERR_OUT_OF_MEMORY;
-        accumulate(a, NULL, all, false);
-    }
-    for (size_t v = 0; v < a->vertex_count; ++v) {
-        xyl_vec3 sum = (all && !has_direction(out[v])) ? all[v] : out[v];
-        out[v] = xyl__to_f3(xyl__d3_normalize_or(xyl__from_f3(sum), xyl__d3(0, 1, 0)));
-    }
-    xyl__free(alloc, all);
-    return XYL_OK;
+    return xyl__mesh_normals_finish(a, face_branch != NULL, alloc, out);
 }
 
 /* ---- the public mesh ---------------------------------------------------------------------- */
@@ -172,7 +173,7 @@ xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *
 static uint32_t *triangulate(const xyl__mesh_arrays *a, const xyl_allocator *alloc)
 {
     size_t tris = 2 * a->quad_count + a->triangle_count;
-    uint32_t *t = xyl__calloc(alloc, tris ? tris : 1, 3 * sizeof *t);
+    uint32_t *t = xyl__alloc_array(alloc, tris, 3 * sizeof *t); /* filled below */
     if (!t) return NULL;
     uint32_t *w = t;
     for (size_t f = 0; f < a->quad_count; ++f) {
@@ -188,8 +189,15 @@ static uint32_t *triangulate(const xyl__mesh_arrays *a, const xyl_allocator *all
 xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_mesh **out,
                            xyl_diag *diag)
 {
+    return xyl__mesh_adopt_view(a, NULL, alloc, out, diag);
+}
+
+xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
+                                const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag)
+{
     xyl__mesh *m = xyl__calloc(alloc, 1, sizeof *m);
-    uint32_t *tv = m ? triangulate(a, alloc) : NULL;
+    uint32_t *tv = tri_view;
+    if (m && !tv) tv = triangulate(a, alloc);
     bool ok = m && tv;
     if (ok && !a->face_branches) {
         size_t faces = a->quad_count + a->triangle_count;
@@ -197,7 +205,8 @@ xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_
         ok = a->face_branches != NULL;
     }
     if (ok && !a->normals) {
-        a->normals = xyl__calloc(alloc, a->vertex_count ? a->vertex_count : 1, sizeof *a->normals);
+        /* xyl__mesh_normals zeroes it first */
+        a->normals = xyl__alloc_array(alloc, a->vertex_count, sizeof *a->normals);
         ok = a->normals && xyl__mesh_normals(a, NULL, alloc, a->normals) == XYL_OK;
     }
     if (!ok) {

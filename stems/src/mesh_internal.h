@@ -37,6 +37,41 @@ void xyl__mesh_arrays_free(xyl__mesh_arrays *a, const xyl_allocator *alloc);
  * is NULL, builds the triangulated view and wraps them. The arrays must be valid. */
 xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_mesh **out,
                            xyl_diag *diag);
+/* xyl__mesh_adopt with the triangulated view already built by the caller (quads split as
+ * {0, 1, 2, 0, 2, 3}, then the triangles), from alloc; taken over (freed on failure too). */
+xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
+                                const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag);
+
+/* Twice the area-weighted normal of a quad (the cross of its diagonals) and of a triangle (of
+ * two edges), in double and rounded once to float: every normal sum in stems/ adds these, so a
+ * sum built while meshing has the same bits as one built afterwards. */
+static inline xyl_vec3 xyl__quad_normal(const xyl_vec3 *p, const uint32_t *f)
+{
+    xyl__dvec3 a = xyl__from_f3(p[f[0]]), b = xyl__from_f3(p[f[1]]), c = xyl__from_f3(p[f[2]]);
+    xyl__dvec3 d = xyl__from_f3(p[f[3]]);
+    return xyl__to_f3(xyl__d3_cross(xyl__d3_sub(c, a), xyl__d3_sub(d, b)));
+}
+static inline xyl_vec3 xyl__tri_normal(const xyl_vec3 *p, const uint32_t *f)
+{
+    xyl__dvec3 a = xyl__from_f3(p[f[0]]), b = xyl__from_f3(p[f[1]]), c = xyl__from_f3(p[f[2]]);
+    return xyl__to_f3(xyl__d3_cross(xyl__d3_sub(b, a), xyl__d3_sub(c, a)));
+}
+static inline void xyl__add_f3(xyl_vec3 *acc, xyl_vec3 v)
+{
+    acc->x += v.x;
+    acc->y += v.y;
+    acc->z += v.z;
+}
+
+/* A normal sum with a direction (else the vertex falls back: to all its faces, or to +y). */
+static inline bool xyl__has_direction(xyl_vec3 v)
+{
+    return (double)v.x * v.x + (double)v.y * v.y + (double)v.z * v.z > XYL__EPS_NORMALIZE;
+}
+static inline xyl_vec3 xyl__unit_or_up(xyl_vec3 sum)
+{
+    return xyl__to_f3(xyl__d3_normalize_or(xyl__from_f3(sum), xyl__d3(0, 1, 0)));
+}
 
 /* Area-weighted vertex normals into out (vertex_count entries). With face_branch (one entry per
  * face, quads first, then triangles) a vertex averages only the faces of its own branch
@@ -44,5 +79,15 @@ xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_
  * without usable faces gets (0, 1, 0). Fails only with XYL_ERR_OUT_OF_MEMORY. */
 xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_branch,
                              const xyl_allocator *alloc, xyl_vec3 *out);
+
+/* The second half of xyl__mesh_normals, for a caller that summed the face normals itself (in the
+ * same face order): out holds the sums and becomes unit normals. by_branch: the sums were of
+ * own-branch faces only, so a vertex without any takes the sum of all its faces. */
+xyl_result xyl__mesh_normals_finish(const xyl__mesh_arrays *a, bool by_branch,
+                                    const xyl_allocator *alloc, xyl_vec3 *out);
+/* The last step of both: every vertex of out without a direction (those, and only those, still
+ * hold a sum without direction; the rest are unit) takes the normal of all its faces. */
+xyl_result xyl__mesh_normals_lonely(const xyl__mesh_arrays *a, const xyl_allocator *alloc,
+                                    xyl_vec3 *out);
 
 #endif

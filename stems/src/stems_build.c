@@ -17,12 +17,14 @@
 
 static bool out_reserve(stems *s, size_t verts, size_t quads)
 {
+    if (verts <= s->vcap && quads <= s->qcap) return true; /* the usual case: reserved up front */
     const xyl_allocator *a = &s->alloc;
-    size_t c0 = s->vcap, c1 = s->vcap, c2 = s->vcap, q0 = s->qcap, q1 = s->qcap;
+    size_t c0 = s->vcap, c1 = s->vcap, c2 = s->vcap, c3 = s->vcap, q0 = s->qcap, q1 = s->qcap;
     if (verts > s->vcap) {
         if (!xyl__grow(a, (void **)&s->pos, &c0, s->nv, verts, sizeof *s->pos) ||
             !xyl__grow(a, (void **)&s->uv, &c1, s->nv, verts, 2 * sizeof *s->uv) ||
-            !xyl__grow(a, (void **)&s->vbranch, &c2, s->nv, verts, sizeof *s->vbranch))
+            !xyl__grow(a, (void **)&s->vbranch, &c2, s->nv, verts, sizeof *s->vbranch) ||
+            (s->sum_normals && !xyl__grow(a, (void **)&s->nrm, &c3, s->nv, verts, sizeof *s->nrm)))
             return false;
         s->vcap = c0;
     }
@@ -35,20 +37,40 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
     return true;
 }
 
+/* Room for one more element: the common case (capacity left) without a call into common.c. */
+static inline bool room_for_one(stems *s, void **ptr, size_t *cap, size_t used, size_t elem)
+{
+    return (used < *cap && *ptr) || xyl__grow(&s->alloc, ptr, cap, used, used + 1, elem);
+}
+
 static xyl_result oom(stems *s)
 {
     return xyl__fail(s->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the stem mesh");
 }
 
-/* Appends a quad; its branch is the branch being built. */
-static void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d, uint32_t branch)
+/* Adds quad q's normal to the sums of its vertices of its branch. Quads are made in index order
+ * and their vertices are final by then, so each vertex sums the same faces in the same order as
+ * xyl__mesh_normals would, while they are still in cache. */
+static inline void sum_quad_normal(stems *s, const uint32_t *q, uint32_t branch)
 {
-    uint32_t *q = s->quads + 4 * s->nq;
+    xyl_vec3 fn = xyl__quad_normal(s->pos, q);
+    for (int k = 0; k < 4; ++k)
+        if (s->vbranch[q[k]] == branch) xyl__add_f3(&s->nrm[q[k]], fn);
+}
+
+/* Appends a quad; its branch is the branch being built. */
+static inline void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
+                            uint32_t branch)
+{
+    size_t n = s->nq;
+    uint32_t *q = s->quads + 4 * n;
     q[0] = a;
     q[1] = b;
     q[2] = c;
     q[3] = d;
-    s->fbranch[s->nq++] = branch;
+    s->fbranch[n] = branch;
+    s->nq = n + 1;
+    if (s->nrm) sum_quad_normal(s, q, branch);
 }
 
 /* Appends a triangle (odd k: caps and bridges have one). */
@@ -74,26 +96,80 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
 static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, double r, double v,
                          uint32_t branch)
 {
-    uint32_t first = (uint32_t)s->nv;
+    /* locals: stores through the output pointers could otherwise alias s->k and force reloads */
+    size_t first = s->nv;
+    uint32_t k = s->k;
+    xyl_vec3 *pos = s->pos + first;
+    float *uv = s->uv + 2 * first, fv = (float)v;
+    uint32_t *vb = s->vbranch + first;
     xyl__dvec3 w = xyl__d3_cross(t, u);
     double rr = r * s->inflate;
-    for (uint32_t j = 0; j < s->k; ++j) {
+    for (uint32_t j = 0; j < k; ++j) {
         xyl__dvec3 p = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(u, rr * s->cos_a[j]),
                                                   xyl__d3_scale(w, rr * s->sin_a[j])));
-        s->pos[s->nv] = xyl__to_f3(p);
-        s->uv[2 * s->nv] = (float)((double)j / (double)s->k);
-        s->uv[2 * s->nv + 1] = (float)v;
-        s->vbranch[s->nv++] = branch;
+        pos[j] = xyl__to_f3(p);
+        uv[2 * j] = s->u_of[j];
+        uv[2 * j + 1] = fv;
+        vb[j] = branch;
     }
-    return first;
+    if (s->nrm) memset(s->nrm + first, 0, k * sizeof *s->nrm);
+    s->nv = first + k;
+    return (uint32_t)first;
+}
+
+/* Adds the normals of the band quads q0 .. q0 + k - 1 (from ring a to ring b) to their vertices.
+ * Vertex j of either ring is in quads j - 1 and j (vertex 0: quads 0 and k - 1) and gets their
+ * normals in that, the quads', order, as two adds in registers. A ring's vertices share one
+ * branch (put_ring), so one test per ring replaces the per-vertex ones. */
+static void sum_band_normals(stems *s, uint32_t a, uint32_t b, uint32_t branch, size_t q0)
+{
+    uint32_t k = s->k;
+    if (s->vbranch[a] != branch || s->vbranch[b] != branch) {
+        for (uint32_t j = 0; j < k; ++j) sum_quad_normal(s, s->quads + 4 * (q0 + j), branch);
+        return;
+    }
+    /* quad j is (a + j, a + j1, b + j1, b + j), j1 = j + 1 mod k: xyl__quad_normal's diagonals
+     * are b + j1 - (a + j) and b + j - (a + j1) */
+    const xyl_vec3 *pa = s->pos + a, *pb = s->pos + b;
+    xyl_vec3 fn[32];
+    for (uint32_t j = 0; j < k; ++j) {
+        uint32_t j1 = j + 1 < k ? j + 1 : 0;
+        xyl__dvec3 d1 = xyl__d3_sub(xyl__from_f3(pb[j1]), xyl__from_f3(pa[j]));
+        xyl__dvec3 d2 = xyl__d3_sub(xyl__from_f3(pb[j]), xyl__from_f3(pa[j1]));
+        fn[j] = xyl__to_f3(xyl__d3_cross(d1, d2));
+    }
+    xyl_vec3 *acc[2] = {s->nrm + a, s->nrm + b};
+    for (int r = 0; r < 2; ++r) {
+        xyl_vec3 *n = acc[r];
+        for (uint32_t j = 0; j < k; ++j) {
+            xyl_vec3 first = fn[j ? j - 1 : 0], second = fn[j ? j : k - 1];
+            n[j].x = (n[j].x + first.x) + second.x;
+            n[j].y = (n[j].y + first.y) + second.y;
+            n[j].z = (n[j].z + first.z) + second.z;
+        }
+    }
 }
 
 /* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead. */
 static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
 {
     uint32_t last = s->k - 1;
-    for (uint32_t j = 0; j < last; ++j) put_quad(s, a + j, a + j + 1, b + j + 1, b + j, branch);
-    put_quad(s, a + last, a, b, b + last, branch);
+    size_t n = s->nq;
+    uint32_t *q = s->quads + 4 * n, *fb = s->fbranch + n;
+    for (uint32_t j = 0; j < last; ++j, q += 4) {
+        q[0] = a + j;
+        q[1] = a + j + 1;
+        q[2] = b + j + 1;
+        q[3] = b + j;
+        fb[j] = branch;
+    }
+    q[0] = a + last;
+    q[1] = a;
+    q[2] = b;
+    q[3] = b + last;
+    fb[last] = branch;
+    s->nq = n + last + 1;
+    if (s->nrm) sum_band_normals(s, a, b, branch, n);
 }
 
 /* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
@@ -137,29 +213,33 @@ static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dve
 
 /* ---- skeleton structure -------------------------------------------------------------------- */
 
+/* Children of every node in one array (counting sort by parent) and each node's main child, in
+ * two passes over the nodes. A child of the parent's branch is its main child; the last one in
+ * node order wins, as child_list holds children in node order. */
 static xyl_result index_children(stems *s)
 {
     size_t n = s->sk->node_count;
-    s->child_start = xyl__calloc(&s->alloc, n + 1, sizeof *s->child_start);
-    s->child_list = xyl__calloc(&s->alloc, n ? n : 1, sizeof *s->child_list);
-    if (!s->child_start || !s->child_list) return oom(s);
+    const xyl_skel_node *nodes = s->sk->nodes;
+    /* counts go to child_start[p + 2], so that after the prefix sum child_start[p + 1] is p's
+     * first slot and filling moves it on to p's end, which is p + 1's start */
+    uint32_t *start = xyl__calloc(&s->alloc, n + 2, sizeof *start);
+    s->child_start = start;
+    s->child_list = xyl__alloc_array(&s->alloc, n, sizeof *s->child_list);
+    s->main = xyl__alloc_array(&s->alloc, n, sizeof *s->main);
+    if (!start || !s->child_list || !s->main) return oom(s);
     for (size_t i = 0; i < n; ++i)
-        if (s->sk->nodes[i].parent >= 0) ++s->child_start[s->sk->nodes[i].parent + 1];
-    for (size_t i = 0; i < n; ++i) s->child_start[i + 1] += s->child_start[i];
-    uint32_t *fill = xyl__calloc(&s->alloc, n ? n : 1, sizeof *fill);
-    if (!fill) return oom(s);
+        if (nodes[i].parent >= 0) ++start[nodes[i].parent + 2];
+    for (size_t i = 2; i < n + 2; ++i) start[i] += start[i - 1];
+    for (size_t i = 0; i < n; ++i) s->main[i] = UINT32_MAX;
     for (size_t i = 0; i < n; ++i) {
-        int32_t p = s->sk->nodes[i].parent;
-        if (p >= 0) s->child_list[s->child_start[p] + fill[p]++] = (uint32_t)i;
-    }
-    xyl__free(&s->alloc, fill);
-    s->main = xyl__alloc(&s->alloc, (n ? n : 1) * sizeof *s->main);
-    if (!s->main) return oom(s);
-    for (size_t i = 0; i < n; ++i) {
-        s->main[i] = UINT32_MAX;
-        for (uint32_t c = s->child_start[i]; c < s->child_start[i + 1]; ++c)
-            if (s->sk->nodes[s->child_list[c]].branch == s->sk->nodes[i].branch)
-                s->main[i] = s->child_list[c];
+        int32_t p = nodes[i].parent;
+        if (p < 0) continue;
+        s->child_list[start[p + 1]++] = (uint32_t)i;
+        if (nodes[i].branch != nodes[p].branch) continue;
+        /* a lateral child of its parent's branch would add bridge faces to the parent's
+         * vertex sums after the parent is built (xyl_skeleton_create never makes one) */
+        if (s->main[p] != UINT32_MAX) s->unit_per_branch = false;
+        s->main[p] = (uint32_t)i;
     }
     return XYL_OK;
 }
@@ -179,8 +259,7 @@ static xyl_result collect_chain(stems *s, uint32_t start)
 {
     s->nchain = 0;
     for (uint32_t n = start; n != UINT32_MAX; n = main_child(s, n)) {
-        if (!xyl__grow(&s->alloc, (void **)&s->chain, &s->ccap, s->nchain, s->nchain + 1,
-                       sizeof *s->chain))
+        if (!room_for_one(s, (void **)&s->chain, &s->ccap, s->nchain, sizeof *s->chain))
             return oom(s);
         s->chain[s->nchain++] = n;
     }
@@ -207,8 +286,7 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
             continue;
         }
         if (behind) p = xyl__d3_add(bridge->centre, xyl__d3_scale(bridge->tangent, 2 * bridge->radius));
-        if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, s->nstations + 1,
-                       sizeof *s->stations))
+        if (!room_for_one(s, (void **)&s->stations, &s->scap, s->nstations, sizeof *s->stations))
             return oom(s);
         stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
         s->stations[s->nstations++] = st;
@@ -219,34 +297,46 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
 
 /* ---- rings along one branch ---------------------------------------------------------------- */
 
-/* Adds a ring and the band of quads from the previous ring of this branch to it. */
-static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r, uint32_t branch)
+/* Plans a ring: its frame (the reference direction carried from the previous ring of this
+ * branch) and texture v. Its vertices and the band to it come later, from emit_rings: the
+ * frames form one long chain of dependent sqrt and divisions along the branch, which runs
+ * faster on its own than interleaved with the vertex and quad stores. */
+static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
 {
-    if (!out_reserve(s, s->nv + s->k, s->nq + s->k) ||
-        !xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + 1,
-                   sizeof *s->rings))
-        return oom(s);
-    stems_ring ring;
-    memset(&ring, 0, sizeof ring);
-    ring.centre = c;
-    ring.tangent = t;
-    ring.radius = r;
-    ring.band = UINT32_MAX;
-    if (s->nrings) {
-        stems_ring *prev = &s->rings[s->nrings - 1];
-        ring.u = transport(prev->u, prev->centre, prev->tangent, c, t);
+    if (!room_for_one(s, (void **)&s->rings, &s->rcap, s->nrings, sizeof *s->rings)) return oom(s);
+    /* filled in place: a ring built on the stack and copied in as a whole stalled on store
+     * forwarding (its fields written in pieces, read back in 16-byte blocks) */
+    stems_ring *ring = &s->rings[s->nrings], *prev = s->nrings ? ring - 1 : NULL;
+    ring->first = UINT32_MAX;
+    ring->centre = c;
+    ring->tangent = t;
+    ring->radius = r;
+    ring->band = UINT32_MAX;
+    if (prev) {
+        ring->u = transport(prev->u, prev->centre, prev->tangent, c, t);
         double mean_r = 0.5 * (prev->radius + r);
-        ring.v = prev->v + xyl__d3_len(xyl__d3_sub(c, prev->centre)) / (2.0 * XYL__PI * mean_r);
+        ring->v = prev->v + xyl__d3_len(xyl__d3_sub(c, prev->centre)) / (2.0 * XYL__PI * mean_r);
     } else {
-        ring.u = xyl__d3_any_orthogonal(t);
+        ring->u = xyl__d3_any_orthogonal(t);
+        ring->v = 0.0;
     }
-    ring.first = put_ring(s, c, t, ring.u, r, ring.v, branch);
-    if (s->nrings) {
-        stems_ring *prev = &s->rings[s->nrings - 1];
-        prev->band = (uint32_t)s->nq;
-        put_band(s, prev->first, ring.first, branch);
+    s->nrings++;
+    return XYL_OK;
+}
+
+/* Vertices of the planned rings from .. nrings - 1 and the band from each ring to the next. */
+static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
+{
+    for (size_t i = from; i < s->nrings; ++i) {
+        if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
+        stems_ring *ring = &s->rings[i];
+        ring->first = put_ring(s, ring->centre, ring->tangent, ring->u, ring->radius, ring->v, branch);
+        if (i) {
+            stems_ring *prev = ring - 1;
+            prev->band = (uint32_t)s->nq;
+            put_band(s, prev->first, ring->first, branch);
+        }
     }
-    s->rings[s->nrings++] = ring;
     return XYL_OK;
 }
 
@@ -266,13 +356,17 @@ static xyl__dvec3 dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
     return xyl__d3_normalize_or(xyl__d3_sub(b, a), fallback);
 }
 
-/* Tangent of station i: the bisector of its segments (the first and last take their one). */
-static void station_frame(const stems *s, size_t i, xyl__dvec3 start_dir, xyl__dvec3 *t_in,
-                          xyl__dvec3 *t_out)
+/* Directions of the segments into and out of station i; the first and last take their one, a
+ * segment without direction takes start_dir (in) or the incoming one (out). *seg carries the
+ * direction of segment i -> i + 1 (and *seg_ok whether it has one) to station i + 1, whose
+ * incoming direction it is: each segment is normalised once. */
+static void station_frame(const stems *s, size_t i, xyl__dvec3 start_dir, xyl__dvec3 *seg,
+                          bool *seg_ok, xyl__dvec3 *t_in, xyl__dvec3 *t_out)
 {
     const stems_station *st = s->stations;
-    *t_in = i ? dir_between(st[i - 1].p, st[i].p, start_dir) : start_dir;
-    *t_out = i + 1 < s->nstations ? dir_between(st[i].p, st[i + 1].p, *t_in) : *t_in;
+    *t_in = i && *seg_ok ? *seg : start_dir;
+    *seg_ok = i + 1 < s->nstations && xyl__d3_normalize_ok(xyl__d3_sub(st[i + 1].p, st[i].p), seg);
+    *t_out = *seg_ok ? *seg : *t_in;
 }
 
 /* Quads in a child's patch: its outline has 2 strip + 2 vertices, k for even k, k + 1 for odd. */
@@ -281,17 +375,22 @@ static uint32_t strip_size(const stems *s)
     return s->k % 2 ? (s->k - 1) / 2 : s->k / 2 - 1;
 }
 
+/* Rings a fork adds around its own: twice the patches its lateral children need, so each still
+ * has a choice; never a fixed cap, so a fork can always hold all its children. */
+static size_t fork_extra_rings(const stems *s, size_t laterals)
+{
+    uint32_t per_band = s->k / strip_size(s);
+    size_t want = (2 * laterals + per_band - 1) / per_band;
+    return want < 2 ? 2 : want;
+}
+
 /* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
  * delta, so the bands between them offer patches to the lateral children. */
 static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
-                             uint32_t branch, size_t laterals)
+                             size_t laterals)
 {
     const stems_station *st = &s->stations[i];
-    uint32_t strip = strip_size(s), per_band = s->k / strip;
-    /* twice the patches the children need, so each still has a choice; never a fixed cap, so a
-     * fork can always hold all its children */
-    size_t want = (2 * laterals + per_band - 1) / per_band;
-    if (want < 2) want = 2;
+    size_t want = fork_extra_rings(s, laterals);
     double seg_in = i ? xyl__d3_len(xyl__d3_sub(st->p, s->stations[i - 1].p)) : 0.0;
     double seg_out = i + 1 < s->nstations ? xyl__d3_len(xyl__d3_sub(s->stations[i + 1].p, st->p)) : 0.0;
     size_t behind = seg_in > 0.0 ? (seg_out > 0.0 ? want / 2 : want) : 0;
@@ -306,10 +405,10 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
     double d_out = ahead ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : 0.0;
     xyl_result r = XYL_OK;
     for (size_t m = behind; m >= 1 && !r; --m)
-        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r, branch);
-    if (!r) r = add_ring(s, st->p, t, st->r, branch);
+        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r);
+    if (!r) r = add_ring(s, st->p, t, st->r);
     for (size_t m = 1; m <= ahead && !r; ++m)
-        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r, branch);
+        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r);
     return r;
 }
 
@@ -318,7 +417,8 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
 /* The quads of band b, columns c .. c + strip - 1 (mod k). */
 static uint32_t strip_quad(const stems *s, uint32_t band, uint32_t c, uint32_t j)
 {
-    return band + (c + j) % s->k;
+    uint32_t col = c + j; /* c, j < k: a subtraction instead of a division by a run-time k */
+    return band + (col < s->k ? col : col - s->k);
 }
 
 static bool strip_free(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
@@ -377,8 +477,12 @@ static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node,
         uint32_t band = s->rings[r].band;
         for (uint32_t c = 0; c < s->k; ++c) {
             if (!strip_free(s, band, c, strip)) continue;
+            double facing = xyl__d3_dot(strip_normal(s, band, c, strip), d);
+            /* the second term is a dot of unit vectors, at most 1 (+ rounding): a patch that
+             * cannot beat the best even so is skipped before its centre is normalised */
+            if (facing + (1.0 + 1e-9) < best.score) continue;
             xyl__dvec3 to = xyl__d3_normalize_or(xyl__d3_sub(strip_centre(s, band, c, strip), node), d);
-            double score = xyl__d3_dot(strip_normal(s, band, c, strip), d) + xyl__d3_dot(to, d);
+            double score = facing + xyl__d3_dot(to, d);
             if (score > best.score) {
                 patch p = {(uint32_t)r, c, score};
                 best = p;
@@ -445,7 +549,7 @@ static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
     ring.tangent = n;
     xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[loop[0]]), centroid);
     to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
-    ring.u = xyl__d3_normalize_or(to0, xyl__d3_any_orthogonal(n));
+    if (!xyl__d3_normalize_ok(to0, &ring.u)) ring.u = xyl__d3_any_orthogonal(n);
     ring.radius = r;
     ring.band = UINT32_MAX;
     if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
@@ -463,14 +567,18 @@ static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
 
 /* Direction in which a child leaves its fork node: towards its first node that is not at the
  * fork, else any direction across the parent. */
-static xyl__dvec3 child_direction(const stems *s, uint32_t fork, uint32_t child, xyl__dvec3 across)
+static xyl__dvec3 child_direction(const stems *s, uint32_t fork, uint32_t child,
+                                  xyl__dvec3 parent_t)
 {
-    xyl__dvec3 f = node_pos(s, fork);
+    xyl__dvec3 f = node_pos(s, fork), dir;
     for (uint32_t n = child; n != UINT32_MAX; n = main_child(s, n)) {
         xyl__dvec3 d = xyl__d3_sub(node_pos(s, n), f);
-        if (xyl__d3_len(d) > 1e-6 * s->sk->nodes[fork].radius) return xyl__d3_normalize_or(d, across);
+        if (xyl__d3_len(d) > 1e-6 * s->sk->nodes[fork].radius) {
+            if (xyl__d3_normalize_ok(d, &dir)) return dir;
+            break;
+        }
     }
-    return across;
+    return xyl__d3_any_orthogonal(parent_t); /* across the parent, only when needed */
 }
 
 /* taken[] covers every quad written so far; new entries start free. */
@@ -494,8 +602,8 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
         for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
             uint32_t child = s->child_list[j];
             if (child == main) continue;
-            xyl__dvec3 across = xyl__d3_any_orthogonal(s->rings[lo].tangent);
-            patch p = choose_patch(s, lo, hi, node_pos(s, node), child_direction(s, node, child, across));
+            xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
+            patch p = choose_patch(s, lo, hi, node_pos(s, node), d);
             if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
                 return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                                  "internal: no free patch left at node %u", node);
@@ -521,31 +629,44 @@ static xyl_result ensure_two_stations(stems *s, xyl__dvec3 dir)
     return XYL_OK;
 }
 
-typedef struct fork_span {
-    size_t station, lo, hi; /* rings lo .. hi surround the fork */
-} fork_span;
-
 /* Rings for every station of the current chain; forks get extra rings. Records the ring span
  * of each fork in spans (capacity nstations). */
-static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, uint32_t branch, fork_span *spans,
+static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, stems_fork_span *spans,
                                size_t *nspans)
 {
     *nspans = 0;
+    xyl__dvec3 seg = start_dir;
+    bool seg_ok = false;
     for (size_t i = 0; i < s->nstations; ++i) {
         xyl__dvec3 t_in, t_out;
-        station_frame(s, i, start_dir, &t_in, &t_out);
+        station_frame(s, i, start_dir, &seg, &seg_ok, &t_in, &t_out);
         xyl__dvec3 t = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
         size_t laterals = s->stations[i].first == UINT32_MAX ? 0 : lateral_count(s, &s->stations[i]);
         size_t lo = s->nrings;
-        xyl_result r = laterals ? fork_rings(s, i, t_in, t, t_out, branch, laterals)
-                                : add_ring(s, s->stations[i].p, t, s->stations[i].r, branch);
+        xyl_result r = laterals ? fork_rings(s, i, t_in, t, t_out, laterals)
+                                : add_ring(s, s->stations[i].p, t, s->stations[i].r);
         if (r) return r;
         if (laterals) {
-            fork_span sp = {i, lo, s->nrings - 1};
+            stems_fork_span sp = {i, lo, s->nrings - 1};
             spans[(*nspans)++] = sp;
         }
     }
     return XYL_OK;
+}
+
+/* With even k (no triangles) a vertex's own-branch faces are the bands, caps and bridge of its
+ * branch, all made once the branch is built: its normals are normalised then, while they are
+ * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
+ * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings. */
+static void unit_branch_normals(stems *s)
+{
+    for (size_t i = 0; i < s->nrings; ++i) {
+        xyl_vec3 *n = s->nrm + s->rings[i].first;
+        for (uint32_t j = 0; j < s->k; ++j) {
+            if (xyl__has_direction(n[j])) n[j] = xyl__unit_or_up(n[j]);
+            else s->lonely = true;
+        }
+    }
 }
 
 static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
@@ -566,17 +687,37 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
         s->rings[0] = *from;
         s->nrings = 1;
     }
-    fork_span *spans = xyl__calloc(&s->alloc, s->nstations, sizeof *spans);
-    if (!spans) return oom(s);
+    /* one buffer for all branches: children are built after their parent's build_branch */
+    if (!xyl__grow(&s->alloc, (void **)&s->spans, &s->spcap, 0, s->nstations, sizeof *s->spans))
+        return oom(s);
+    stems_fork_span *spans = s->spans;
     size_t nspans = 0;
-    r = branch_rings(s, dir, branch, spans, &nspans);
+    r = branch_rings(s, dir, spans, &nspans);
+    if (!r) r = emit_rings(s, from ? 1 : 0, branch);
     if (!r && !out_reserve(s, s->nv, s->nq + s->k)) r = oom(s);
     if (!r && !from) r = put_cap(s, s->rings[0].first, false, branch);
     if (!r) r = put_cap(s, s->rings[s->nrings - 1].first, true, branch);
+    if (!r && s->unit_per_branch) unit_branch_normals(s);
     for (size_t f = 0; f < nspans && !r; ++f)
         r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
-    xyl__free(&s->alloc, spans);
     return r;
+}
+
+/* Upper bounds on the rings (each k vertices) and on the branch chains of the mesh: a chain's
+ * stations are at most its nodes plus one (ensure_two_stations), a fork station adds
+ * fork_extra_rings for the laterals merged into it (no more than the sum over its nodes), and
+ * each lateral child adds its bridge ring. Faces: k per band and per bridge, fewer than k per
+ * chain for the caps, so k (rings + chains) covers quads and triangles together. */
+static void ring_bound(const stems *s, size_t *rings, size_t *chains)
+{
+    size_t n = s->sk->node_count, r = 16, c = 0;
+    for (size_t i = 0; i < n; ++i) {
+        size_t laterals = s->child_start[i + 1] - s->child_start[i] - (s->main[i] != UINT32_MAX);
+        r += 1 + (laterals ? fork_extra_rings(s, laterals) + laterals : 0);
+        c += laterals + (s->sk->nodes[i].parent < 0);
+    }
+    *rings = r + c;
+    *chains = c;
 }
 
 static xyl_result build_all(stems *s)
@@ -586,11 +727,13 @@ static xyl_result build_all(stems *s)
         double a = 2.0 * XYL__PI * (double)j / (double)s->k;
         s->cos_a[j] = cos(a);
         s->sin_a[j] = sin(a);
+        s->u_of[j] = (float)((double)j / (double)s->k);
     }
-    /* a ring per node plus the fork rings and bridges: reserving once avoids regrowth copies
-     * (untouched capacity costs no memory traffic) */
-    size_t guess = 3 * s->sk->node_count + 16;
-    if (!r && !out_reserve(s, guess * s->k, guess * s->k)) r = oom(s);
+    /* reserving once avoids regrowth copies; a tight bound keeps the footprint small, so the
+     * allocator can hand the same pages back on the next build instead of fresh ones */
+    size_t rings = 0, chains = 0;
+    if (!r) ring_bound(s, &rings, &chains);
+    if (!r && !out_reserve(s, rings * s->k, (rings + chains) * s->k)) r = oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
         r = build_branch(s, (uint32_t)i, NULL);
@@ -653,15 +796,26 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
     return XYL_OK;
 }
 
-/* Drops the quads that became bridges and hands the arrays over. */
-static void take_arrays(stems *s, xyl__mesh_arrays *a)
+/* Drops the quads that became bridges and hands the arrays over. With tv (room for 2 nq + nt
+ * triangles) the triangulated view is written in the same pass, while each quad is at hand. */
+static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
 {
     size_t w = 0;
     for (size_t q = 0; q < s->nq; ++q) {
         if (q < s->tcap && s->taken[q]) continue;
-        memmove(s->quads + 4 * w, s->quads + 4 * q, 4 * sizeof *s->quads);
-        s->fbranch[w++] = s->fbranch[q];
+        const uint32_t *src = s->quads + 4 * q;
+        if (tv) {
+            uint32_t *t = tv + 6 * w;
+            t[0] = src[0], t[1] = src[1], t[2] = src[2];
+            t[3] = src[0], t[4] = src[2], t[5] = src[3];
+        }
+        if (w != q) {
+            memcpy(s->quads + 4 * w, src, 4 * sizeof *s->quads); /* w < q: no overlap */
+            s->fbranch[w] = s->fbranch[q];
+        }
+        ++w;
     }
+    if (tv && s->nt) memcpy(tv + 6 * w, s->tris, 3 * s->nt * sizeof *s->tris);
     memset(a, 0, sizeof *a);
     a->positions = s->pos;
     a->uvs = s->uv;
@@ -685,38 +839,45 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a)
 
 static void free_state(stems *s)
 {
-    void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->quads,
-                      s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations, s->rings,
-                      s->pending};
+    void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->nrm,
+                      s->quads, s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations,
+                      s->rings, s->spans, s->pending};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 
 /* Normals of the mesh before the patches were dropped: a parent vertex on a joint still sees its
- * branch's full tube, so its normal is the parent's own (Skjermo 2008). */
-static xyl_result normals_with_patches(stems *s, const xyl_stems_desc *d, xyl_vec3 **out)
+ * branch's full tube, so its normal is the parent's own (Skjermo 2008). The quads' share is in
+ * s->nrm already; triangles come after all quads, as in xyl__mesh_normals. */
+static xyl_result normals_with_patches(stems *s, xyl_vec3 **out)
 {
-    xyl__mesh_arrays view;
+    for (size_t t = 0; t < s->nt; ++t) {
+        const uint32_t *f = s->tris + 3 * t;
+        xyl_vec3 fn = xyl__tri_normal(s->pos, f);
+        for (int k = 0; k < 3; ++k)
+            if (s->vbranch[f[k]] == s->tbranch[t]) xyl__add_f3(&s->nrm[f[k]], fn);
+    }
+    xyl__mesh_arrays view; /* all faces, taken ones too: for vertices without own-branch faces */
     memset(&view, 0, sizeof view);
     view.positions = s->pos;
-    view.branch_ids = s->vbranch;
     view.vertex_count = s->nv;
     view.quads = s->quads;
     view.quad_count = s->nq;
     view.triangles = s->tris;
     view.triangle_count = s->nt;
-    if (s->nt) memcpy(s->fbranch + s->nq, s->tbranch, s->nt * sizeof *s->tbranch);
-    view.face_branches = s->fbranch;
-    *out = NULL;
-    if (d->normals == XYL_NORMALS_SMOOTH) return XYL_OK; /* smooth ones see the final surface */
-    *out = xyl__calloc(&s->alloc, s->nv ? s->nv : 1, sizeof **out);
-    if (!*out) return oom(s);
-    return xyl__mesh_normals(&view, s->fbranch, &s->alloc, *out) == XYL_OK ? XYL_OK : oom(s);
+    xyl_result r = XYL_OK;
+    if (!s->unit_per_branch) r = xyl__mesh_normals_finish(&view, true, &s->alloc, s->nrm);
+    else if (s->lonely) r = xyl__mesh_normals_lonely(&view, &s->alloc, s->nrm);
+    if (r) return oom(s);
+    *out = s->nrm;
+    s->nrm = NULL;
+    return XYL_OK;
 }
 
-static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, xyl_mesh **out)
+static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, uint32_t *tv,
+                         xyl_mesh **out)
 {
     xyl_result r = XYL_OK;
-    if (a->normals) return xyl__mesh_adopt(a, &s->alloc, out, s->diag);
+    if (a->normals) return xyl__mesh_adopt_view(a, tv, &s->alloc, out, s->diag);
     if (d->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl__mesh_arrays fine;
         r = xyl__subdivide(a, d->subdivision, &d->limits, &s->alloc, &fine, s->diag);
@@ -724,7 +885,7 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
         if (r) return r;
         *a = fine;
     }
-    a->normals = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, sizeof *a->normals);
+    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
     if (!a->normals) r = oom(s);
     if (!r) {
         const uint32_t *fb = d->normals == XYL_NORMALS_BRANCH ? a->face_branches : NULL;
@@ -735,6 +896,30 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
         return r;
     }
     return xyl__mesh_adopt(a, &s->alloc, out, s->diag);
+}
+
+/* The built mesh's arrays into a (with its normals and, when they are final, *tv, the
+ * triangulated view), or an error with nothing handed over. */
+static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
+{
+    xyl_vec3 *normals = NULL;
+    /* face branches run over quads, then triangles: room for both */
+    size_t fcap = s->qcap;
+    if (s->nt && !xyl__grow(&s->alloc, (void **)&s->fbranch, &fcap, s->nq, s->nq + s->nt,
+                            sizeof *s->fbranch))
+        return oom(s);
+    if (s->sum_normals) {
+        xyl_result r = normals_with_patches(s, &normals);
+        if (r) return r;
+        *tv = xyl__alloc_array(&s->alloc, 2 * s->nq + s->nt, 3 * sizeof **tv);
+        if (!*tv) {
+            xyl__free(&s->alloc, normals);
+            return oom(s);
+        }
+    }
+    take_arrays(s, a, *tv);
+    a->normals = normals;
+    return XYL_OK;
 }
 
 xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
@@ -753,25 +938,18 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     s.max_vertices = desc->limits.max_vertices ? desc->limits.max_vertices : XYL__MESH_DEFAULT_MAX_VERTICES;
     s.max_faces = desc->limits.max_faces ? desc->limits.max_faces : XYL__MESH_DEFAULT_MAX_FACES;
     bool inflate = desc->subdivision == XYL_SUBDIVIDE_CATMARK && !desc->keep_control_radius;
+    /* smooth normals and subdivided meshes see the final surface, so only these are summed on
+     * the way */
+    s.sum_normals = desc->normals == XYL_NORMALS_BRANCH && desc->subdivision == XYL_SUBDIVIDE_NONE;
+    s.unit_per_branch = s.sum_normals && s.k % 2 == 0; /* index_children may still veto */
     s.inflate = inflate ? 1.0 / limit_mean_radius(s.k) : 1.0;
     r = build_all(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)
         r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                       "the stem mesh needs more than %llu faces", (unsigned long long)s.max_faces);
     xyl__mesh_arrays a;
-    memset(&a, 0, sizeof a);
-    xyl_vec3 *normals = NULL;
-    /* face branches run over quads, then triangles: room for both */
-    size_t fcap = s.qcap;
-    if (!r && s.nt && !xyl__grow(&s.alloc, (void **)&s.fbranch, &fcap, s.nq, s.nq + s.nt,
-                                 sizeof *s.fbranch))
-        r = oom(&s);
-    if (!r && desc->subdivision == XYL_SUBDIVIDE_NONE) r = normals_with_patches(&s, desc, &normals);
-    if (!r) {
-        take_arrays(&s, &a);
-        a.normals = normals;
-    }
+    uint32_t *tv = NULL;
+    if (!r) r = hand_over(&s, &a, &tv);
     free_state(&s);
-    if (r) return r;
-    return finish(&s, desc, &a, out);
+    return r ? r : finish(&s, desc, &a, tv, out);
 }

@@ -26,6 +26,11 @@ typedef struct stems_pending {
     stems_ring bridge;  /* the ring its bridge ends in */
 } stems_pending;
 
+/* The rings lo .. hi around the fork at station `station` of the branch being built. */
+typedef struct stems_fork_span {
+    size_t station, lo, hi;
+} stems_fork_span;
+
 typedef struct stems {
     const xyl_skeleton *sk;
     uint32_t k;
@@ -38,11 +43,17 @@ typedef struct stems {
     uint32_t *child_start, *child_list;
     uint32_t *main;      /* per node: the child continuing its branch, or UINT32_MAX */
     double cos_a[32], sin_a[32]; /* ring vertex directions, j = 0 .. k - 1 */
+    float u_of[32];              /* texture u of ring vertex j: j / k */
 
     /* output */
     xyl_vec3 *pos;
     float *uv;
     uint32_t *vbranch;
+    xyl_vec3 *nrm;  /* branch normals without subdivision: each vertex's sum of own-branch quad
+                       normals, added as the quads are made (NULL otherwise) */
+    bool sum_normals;   /* branch normals, no subdivision: nrm is summed while meshing */
+    bool unit_per_branch; /* nrm of a branch's vertices is normalised once it is built */
+    bool lonely;        /* some vertex has no own-branch face normal (see xyl__mesh_normals) */
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     size_t nq, qcap;
@@ -58,6 +69,9 @@ typedef struct stems {
     size_t nstations, scap;
     stems_ring *rings;
     size_t nrings, rcap;
+
+    stems_fork_span *spans; /* the forks of the branch being built */
+    size_t spcap;
 
     stems_pending *pending;
     size_t npending, pcap;

@@ -34,6 +34,14 @@ static inline bool xyl__mul_ok(size_t a, size_t b, size_t *out)
     *out = a * b;
     return true;
 }
+/* count elements of size bytes (at least one), overflow-checked and NOT zeroed: for arrays the
+ * caller fills completely, where calloc's zeroing would be a wasted pass over fresh pages. */
+static inline void *xyl__alloc_array(const xyl_allocator *a, size_t count, size_t size)
+{
+    size_t bytes;
+    if (!xyl__mul_ok(count ? count : 1, size, &bytes)) return NULL;
+    return xyl__alloc(a, bytes);
+}
 
 /* ---- diagnostics --------------------------------------------------------------------------- */
 
@@ -99,6 +107,15 @@ static inline xyl__dvec3 xyl__d3_normalize_or(xyl__dvec3 a, xyl__dvec3 fallback)
     double l2 = xyl__d3_dot(a, a);
     if (!(l2 > XYL__EPS_NORMALIZE) || !isfinite(l2)) return fallback;
     return xyl__d3_scale(a, 1.0 / sqrt(l2));
+}
+/* The unit vector along a into *out, as xyl__d3_normalize_or computes it; false (and *out
+ * untouched) when a has no direction, so a costly fallback need only be computed then. */
+static inline bool xyl__d3_normalize_ok(xyl__dvec3 a, xyl__dvec3 *out)
+{
+    double l2 = xyl__d3_dot(a, a);
+    if (!(l2 > XYL__EPS_NORMALIZE) || !isfinite(l2)) return false;
+    *out = xyl__d3_scale(a, 1.0 / sqrt(l2));
+    return true;
 }
 /* Some unit vector orthogonal to unit n, chosen deterministically (Frisvad-style branchless
  * basis, robust near n = -z). */
