@@ -51,11 +51,13 @@ static xyl_mesh *make_mesh(const xyl_vec3 *p, size_t nv, const uint32_t *quads, 
     return m;
 }
 
+/* The refinement rules themselves: control points, not their limits. */
 static xyl_mesh *subdivide(const xyl_mesh *m, xyl_subdivision scheme)
 {
     xyl_subdivide_desc sd;
     memset(&sd, 0, sizeof sd);
     sd.scheme = scheme;
+    sd.keep_control_points = true;
     xyl_mesh *out = NULL;
     xyl_diag diag = fresh_diag();
     xyl_result r = xyl_mesh_subdivide(m, &sd, &out, &diag);
@@ -225,6 +227,30 @@ static void orient_outward(const xyl_vec3 *p, uint32_t *tris, size_t count)
             f[2] = s;
         }
     }
+}
+
+static xyl_mesh *subdivide_to_limit(const xyl_mesh *m, xyl_subdivision scheme)
+{
+    xyl_subdivide_desc sd;
+    memset(&sd, 0, sizeof sd);
+    sd.scheme = scheme; /* keep_control_points false: the default */
+    xyl_mesh *out = NULL;
+    xyl_diag diag = fresh_diag();
+    xyl_result r = xyl_mesh_subdivide(m, &sd, &out, &diag);
+    if (r != XYL_OK) fail_msg("subdivide: %s: %s", xyl_result_string(r), diag.message);
+    return out;
+}
+
+/* Distance from p to the nearest vertex of m. */
+static double nearest_vertex_distance(const xyl_mesh *m, xyl_vec3 p)
+{
+    double best = INFINITY;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        xyl_vec3 q = m->positions[v];
+        double dx = (double)q.x - p.x, dy = (double)q.y - p.y, dz = (double)q.z - p.z;
+        best = fmin(best, dx * dx + dy * dy + dz * dz);
+    }
+    return sqrt(best);
 }
 
 /* ---- Catmull-Clark on a cube ------------------------------------------------------------- */
@@ -702,6 +728,99 @@ static void limit_radius_factor_matches_opensubdiv(void **state)
     assert_int_equal(xyl__subdivide_limit_radius_factor(4, NULL), XYL_ERR_INVALID_ARGUMENT);
 }
 
+/* The default (limit) mode against plain refinement, which does not use PrimvarRefiner::Limit:
+ * every vertex of the one-level limit mesh is the limit of its vertex child, so after five more
+ * control levels a refined vertex lies within (gap) / 4^5 of it (in the regular middle part of
+ * the prism). The control points of level 1
+ * are far from every such vertex (the negative control). */
+static void limit_points_match_repeated_refinement(void **state)
+{
+    (void)state;
+    static const xyl_subdivision schemes[] = {XYL_SUBDIVIDE_CATMARK, XYL_SUBDIVIDE_LOOP};
+    for (size_t s = 0; s < 2; ++s) {
+        xyl_mesh *c = prism(6, 8, 0.75);
+        xyl_mesh *lim = subdivide_to_limit(c, schemes[s]);
+        xyl_mesh *ctl = subdivide(c, schemes[s]);
+        assert_int_equal(lim->vertex_count, ctl->vertex_count);
+        assert_int_equal(lim->quad_count, ctl->quad_count);
+        assert_int_equal(lim->triangle_count, ctl->triangle_count);
+        assert_memory_equal(lim->quads, ctl->quads, 4 * lim->quad_count * sizeof *lim->quads);
+        xyl_mesh *fine = subdivide(ctl, schemes[s]);
+        for (int level = 0; level < 4; ++level) {
+            xyl_mesh *finer = subdivide(fine, schemes[s]);
+            xyl_mesh_destroy(fine);
+            fine = finer;
+        }
+        double worst_limit = 0, worst_control = 0;
+        for (size_t v = 0; v < lim->vertex_count; ++v) {
+            /* Near the caps' extraordinary vertices refinement converges more slowly than 4^-L */
+            if (ctl->positions[v].z < 1.0f || ctl->positions[v].z > 2.5f) continue;
+            worst_limit = fmax(worst_limit, nearest_vertex_distance(fine, lim->positions[v]));
+            worst_control = fmax(worst_control, nearest_vertex_distance(fine, ctl->positions[v]));
+        }
+        printf("%s: one-level limit points %.2e from the 6-level mesh, control points %.2e\n",
+               s ? "Loop" : "Catmark", worst_limit, worst_control);
+        assert_true(worst_limit < 2e-4);
+        assert_true(worst_control > 1e-2);
+        assert_faces_point_outward(lim);
+        xyl_mesh_destroy(fine);
+        xyl_mesh_destroy(ctl);
+        xyl_mesh_destroy(lim);
+        xyl_mesh_destroy(c);
+    }
+}
+
+/* On a long Catmull-Clark prism every level-1 vertex of the middle part sits where the limit
+ * cross-section is mirror-symmetric (ring vertices and edge midpoints), so its limit normal is
+ * exactly radial: what the limit normals (limit tangents' cross product, oriented by the
+ * faces) must give. */
+static void limit_normals_are_radial_on_a_catmark_prism(void **state)
+{
+    (void)state;
+    for (int k = 3; k <= 8; ++k) {
+        xyl_mesh *c = prism(k, 12, 0.75);
+        xyl_mesh *lim = subdivide_to_limit(c, XYL_SUBDIVIDE_CATMARK);
+        double worst = 0;
+        size_t checked = 0;
+        for (size_t v = 0; v < lim->vertex_count; ++v) {
+            xyl_vec3 p = lim->positions[v], n = lim->normals[v];
+            if (p.z < 1.5 || p.z > 4.0) continue;
+            double r = hypot(p.x, p.y);
+            double dev = fabs(n.x - p.x / r) + fabs(n.y - p.y / r) + fabs(n.z);
+            worst = fmax(worst, dev);
+            ++checked;
+        }
+        assert_true(checked >= (size_t)(10 * k));
+        if (!(worst < 1e-5)) fail_msg("k = %d: limit normal off radial by %g", k, worst);
+        xyl_mesh_destroy(lim);
+        xyl_mesh_destroy(c);
+    }
+}
+
+/* The numeric mean limit radius (OpenSubdiv's limit over one band of a probe prism) against
+ * the cubic B-spline integral that the mesher inflates by (docs/stems.md's table), for
+ * Catmull-Clark and for Loop on the split rings: on a tube both limits are that B-spline. */
+static void mean_limit_radius_matches_the_b_spline_integral(void **state)
+{
+    (void)state;
+    static const uint32_t ks[] = {4, 6, 8};
+    static const double spline[] = {0.657042, 0.831545, 0.901818};
+    for (size_t i = 0; i < 3; ++i) {
+        double cc = 0, loop = 0;
+        assert_int_equal(xyl__subdivide_mean_limit_radius(XYL_SUBDIVIDE_CATMARK, ks[i], &cc), XYL_OK);
+        assert_int_equal(xyl__subdivide_mean_limit_radius(XYL_SUBDIVIDE_LOOP, ks[i], &loop), XYL_OK);
+        printf("mean limit radius k = %u: Catmark %.9f (B-spline integral %.6f), Loop %.9f\n",
+               ks[i], cc, spline[i], loop);
+        assert_near(cc, spline[i], 2e-6);
+        assert_near(loop, cc, 1e-9);
+    }
+    double m = 0;
+    assert_int_equal(xyl__subdivide_mean_limit_radius(XYL_SUBDIVIDE_NONE, 4, &m), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl__subdivide_mean_limit_radius(XYL_SUBDIVIDE_LOOP, 2, &m), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl__subdivide_mean_limit_radius(XYL_SUBDIVIDE_LOOP, 33, &m), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl__subdivide_mean_limit_radius(XYL_SUBDIVIDE_LOOP, 4, NULL), XYL_ERR_INVALID_ARGUMENT);
+}
+
 /* The same factor without trusting PrimvarRefiner::Limit: plain refinement, level after level.
  * The probe's radius after L levels is limit + (1 - limit) / 4^L (the error shrinks by the
  * subdominant eigenvalue 1/4 of the regular vertex rule), so one Richardson step,
@@ -880,15 +999,15 @@ static void rejects_null_arguments_and_unknown_schemes(void **state)
     /* the internal entry point zeroes out on failure */
     xyl__mesh_arrays a;
     memset(&a, 0xab, sizeof a);
-    assert_int_equal(xyl__subdivide(NULL, XYL_SUBDIVIDE_CATMARK, NULL, NULL, &a, &diag),
+    assert_int_equal(xyl__subdivide(NULL, XYL_SUBDIVIDE_CATMARK, false, NULL, NULL, &a, &diag),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_null(a.positions);
     assert_int_equal(a.vertex_count, 0);
-    assert_int_equal(xyl__subdivide(NULL, XYL_SUBDIVIDE_CATMARK, NULL, NULL, NULL, &diag),
+    assert_int_equal(xyl__subdivide(NULL, XYL_SUBDIVIDE_CATMARK, false, NULL, NULL, NULL, &diag),
                      XYL_ERR_INVALID_ARGUMENT);
     const xyl__mesh *im = (const xyl__mesh *)c;
     memset(&a, 0xab, sizeof a);
-    assert_int_equal(xyl__subdivide(&im->a, (xyl_subdivision)7, NULL, NULL, &a, &diag),
+    assert_int_equal(xyl__subdivide(&im->a, (xyl_subdivision)7, false, NULL, NULL, &a, &diag),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_null(a.quads);
     xyl_mesh_destroy(c);
@@ -1061,18 +1180,18 @@ static void internal_entry_leaves_normals_to_the_caller(void **state)
     const xyl__mesh *im = (const xyl__mesh *)c;
     xyl__mesh_arrays out;
     xyl_diag diag = fresh_diag();
-    assert_int_equal(xyl__subdivide(&im->a, XYL_SUBDIVIDE_CATMARK, NULL, NULL, &out, &diag),
+    assert_int_equal(xyl__subdivide(&im->a, XYL_SUBDIVIDE_CATMARK, false, NULL, NULL, &out, &diag),
                      XYL_OK);
     assert_null(out.normals);
     assert_non_null(out.triangles); /* empty but allocated */
     assert_int_equal(out.vertex_count, 26);
     xyl__mesh_arrays_free(&out, NULL);
-    assert_int_equal(xyl__subdivide(&im->a, XYL_SUBDIVIDE_NONE, NULL, NULL, &out, &diag), XYL_OK);
+    assert_int_equal(xyl__subdivide(&im->a, XYL_SUBDIVIDE_NONE, false, NULL, NULL, &out, &diag), XYL_OK);
     assert_non_null(out.normals); /* NONE copies them */
     xyl__mesh_arrays_free(&out, NULL);
     xyl_mesh_limits lim = {10, 0};
     memset(&out, 0xab, sizeof out);
-    assert_int_equal(xyl__subdivide(&im->a, XYL_SUBDIVIDE_LOOP, &lim, NULL, &out, &diag),
+    assert_int_equal(xyl__subdivide(&im->a, XYL_SUBDIVIDE_LOOP, false, &lim, NULL, &out, &diag),
                      XYL_ERR_LIMIT_EXCEEDED);
     xyl__mesh_arrays zero;
     memset(&zero, 0, sizeof zero);
@@ -1097,6 +1216,9 @@ int main(void)
         cmocka_unit_test(catmark_ring_radius_follows_the_vertex_rule),
         cmocka_unit_test(limit_radius_factor_matches_opensubdiv),
         cmocka_unit_test(repeated_refinement_converges_to_the_limit_factor),
+        cmocka_unit_test(limit_points_match_repeated_refinement),
+        cmocka_unit_test(limit_normals_are_radial_on_a_catmark_prism),
+        cmocka_unit_test(mean_limit_radius_matches_the_b_spline_integral),
         cmocka_unit_test(none_copies_exactly_and_null_desc_means_none),
         cmocka_unit_test(mesh_without_faces_keeps_its_vertices),
         cmocka_unit_test(unused_vertices_stay_where_they_are),

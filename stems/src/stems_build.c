@@ -749,13 +749,16 @@ static xyl_result build_all(stems *s)
     return r;
 }
 
-/* ---- Catmull-Clark inflation --------------------------------------------------------------- */
+/* ---- inflation for the limit surface ------------------------------------------------------- */
 
 /* Mean radius of the Catmull-Clark limit of an infinitely long prism whose k-gon rings have
  * radius 1. Its cross-section is the uniform cubic B-spline of the k-gon; by symmetry one span
  * (between ring vertices 0 and 1) gives the mean, integrated with Simpson's rule. At the ring
  * vertices the limit radius is (4 + 2 cos(2pi/k)) / 6; between them it is smaller, so inflating
- * by the inverse of the vertex value would leave the mean too small (by 1.4 % for k = 4). */
+ * by the inverse of the vertex value would leave the mean too small (by 1.4 % for k = 4).
+ * Loop's limit of the split rings is the same curve: on data constant along the tube its
+ * valence-6 vertex rule, 10/16 p + (2 p[i-1] + 2 p[i] + 2 p[i+1]) / 16, is the B-spline's
+ * (p[i-1] + 6 p[i] + p[i+1]) / 8 (tests/test_subdivide.c measures both on OpenSubdiv's limit). */
 static double limit_mean_radius(uint32_t k)
 {
     double p[4][2];
@@ -873,6 +876,31 @@ static xyl_result normals_with_patches(stems *s, xyl_vec3 **out)
     return XYL_OK;
 }
 
+/* Per-branch normals on a mesh whose vertices sit on the limit surface: the limit normal
+ * (exact) wherever all of a vertex's faces are of its own branch, the own-branch face average
+ * at the seams between branches, where the limit normal would lean towards the other branch. */
+static xyl_result branch_normals_on_limit(stems *s, xyl__mesh_arrays *a)
+{
+    xyl_vec3 *limit = a->normals;
+    uint8_t *seam = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, 1);
+    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
+    xyl_result r = seam && a->normals ? xyl__mesh_normals(a, a->face_branches, &s->alloc, a->normals)
+                                      : XYL_ERR_OUT_OF_MEMORY;
+    if (!r) {
+        for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
+            bool quad = f < a->quad_count;
+            const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
+            for (int c = 0; c < (quad ? 4 : 3); ++c)
+                if (a->branch_ids[idx[c]] != a->face_branches[f]) seam[idx[c]] = 1;
+        }
+        for (size_t v = 0; v < a->vertex_count; ++v)
+            if (!seam[v]) a->normals[v] = limit[v];
+    }
+    xyl__free(&s->alloc, seam);
+    xyl__free(&s->alloc, limit);
+    return r ? oom(s) : XYL_OK;
+}
+
 static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, uint32_t *tv,
                          xyl_mesh **out)
 {
@@ -880,16 +908,21 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
     if (a->normals) return xyl__mesh_adopt_view(a, tv, &s->alloc, out, s->diag);
     if (d->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl__mesh_arrays fine;
-        r = xyl__subdivide(a, d->subdivision, &d->limits, &s->alloc, &fine, s->diag);
+        r = xyl__subdivide(a, d->subdivision, !d->keep_control_points, &d->limits, &s->alloc,
+                           &fine, s->diag);
         xyl__mesh_arrays_free(a, &s->alloc);
         if (r) return r;
         *a = fine;
     }
-    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
-    if (!a->normals) r = oom(s);
-    if (!r) {
-        const uint32_t *fb = d->normals == XYL_NORMALS_BRANCH ? a->face_branches : NULL;
-        if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = oom(s);
+    if (a->normals && d->normals == XYL_NORMALS_BRANCH) {
+        r = branch_normals_on_limit(s, a);
+    } else if (!a->normals) { /* limit normals are the smooth normals */
+        a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
+        if (!a->normals) r = oom(s);
+        if (!r) {
+            const uint32_t *fb = d->normals == XYL_NORMALS_BRANCH ? a->face_branches : NULL;
+            if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = oom(s);
+        }
     }
     if (r) {
         xyl__mesh_arrays_free(a, &s->alloc);
@@ -937,7 +970,7 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     s.diag = diag;
     s.max_vertices = desc->limits.max_vertices ? desc->limits.max_vertices : XYL__MESH_DEFAULT_MAX_VERTICES;
     s.max_faces = desc->limits.max_faces ? desc->limits.max_faces : XYL__MESH_DEFAULT_MAX_FACES;
-    bool inflate = desc->subdivision == XYL_SUBDIVIDE_CATMARK && !desc->keep_control_radius;
+    bool inflate = desc->subdivision != XYL_SUBDIVIDE_NONE && !desc->keep_control_radius;
     /* smooth normals and subdivided meshes see the final surface, so only these are summed on
      * the way */
     s.sum_normals = desc->normals == XYL_NORMALS_BRANCH && desc->subdivision == XYL_SUBDIVIDE_NONE;

@@ -29,6 +29,14 @@ public:
         : alloc_(alloc), p_(static_cast<T *>(xyl__calloc(alloc, count ? count : 1, sizeof(T))))
     {
     }
+    /* Without an array: get() is NULL until allocate(). */
+    explicit Buffer(const xyl_allocator *alloc) : alloc_(alloc), p_(nullptr) {}
+    bool allocate(size_t count)
+    {
+        xyl__free(alloc_, p_);
+        p_ = static_cast<T *>(xyl__calloc(alloc_, count ? count : 1, sizeof(T)));
+        return p_ != nullptr;
+    }
     ~Buffer() { xyl__free(alloc_, p_); }
     Buffer(const Buffer &) = delete;
     Buffer &operator=(const Buffer &) = delete;
@@ -278,24 +286,95 @@ void assign_vertex_branches(const Refiner &r, const xyl__mesh_arrays *in,
 /* The refined arrays, allocated from the caller's allocator before any is filled. */
 struct Refined {
     Buffer<xyl_vec3> positions;
+    Buffer<xyl_vec3> normals; /* limit normals; empty (NULL) for control points */
     Buffer<float> uvs;
     Buffer<uint32_t> branch_ids;
     Buffer<uint32_t> faces;
     Buffer<uint32_t> face_branches;
 
-    Refined(const xyl_allocator *alloc, size_t vertices, size_t faces_, int corners)
-        : positions(alloc, vertices), uvs(alloc, 2 * vertices), branch_ids(alloc, vertices),
-          faces(alloc, faces_ * static_cast<size_t>(corners)), face_branches(alloc, faces_)
+    Refined(const xyl_allocator *alloc, size_t vertices, size_t faces_, int corners, bool limit)
+        : positions(alloc, vertices), normals(alloc), uvs(alloc, 2 * vertices),
+          branch_ids(alloc, vertices), faces(alloc, faces_ * static_cast<size_t>(corners)),
+          face_branches(alloc, faces_)
     {
+        if (limit) normals.allocate(vertices);
     }
-    bool ok() const
+    bool ok(bool limit) const
     {
-        return positions.get() && uvs.get() && branch_ids.get() && faces.get() &&
-               face_branches.get();
+        return positions.get() && (!limit || normals.get()) && uvs.get() && branch_ids.get() &&
+               faces.get() && face_branches.get();
     }
 };
 
-/* Positions through the vertex rules, UVs through the varying (linear) rules, both in double. */
+Point3 sub(const Point3 &a, const Point3 &b)
+{
+    return Point3{a.x - b.x, a.y - b.y, a.z - b.z};
+}
+
+Point3 cross(const Point3 &a, const Point3 &b)
+{
+    return Point3{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+
+double dot(const Point3 &a, const Point3 &b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+/* Sum of the area-weighted normals of a level-1 vertex's faces (twice the area for triangles,
+ * the diagonals' cross product for quads): the orientation reference for its limit normal, and
+ * the normal where the limit tangents are degenerate. */
+Point3 face_normal_sum(const Far::TopologyLevel &fine, Far::Index v, const Point3 *p)
+{
+    Point3 sum = {0.0, 0.0, 0.0};
+    Far::ConstIndexArray faces = fine.GetVertexFaces(v);
+    for (int i = 0; i < faces.size(); ++i) {
+        Far::ConstIndexArray fv = fine.GetFaceVertices(faces[i]);
+        Point3 n = fv.size() == 4 ? cross(sub(p[fv[2]], p[fv[0]]), sub(p[fv[3]], p[fv[1]]))
+                                  : cross(sub(p[fv[1]], p[fv[0]]), sub(p[fv[2]], p[fv[0]]));
+        sum.AddWithWeight(n, 1.0);
+    }
+    return sum;
+}
+
+xyl_vec3 unit_or(const Point3 &n, const Point3 &fallback)
+{
+    double l = std::sqrt(dot(n, n));
+    if (!(l > 0.0) || !std::isfinite(l)) {
+        double lf = std::sqrt(dot(fallback, fallback));
+        if (!(lf > 0.0) || !std::isfinite(lf)) return xyl_vec3{0.0f, 1.0f, 0.0f};
+        return xyl_vec3{float(fallback.x / lf), float(fallback.y / lf), float(fallback.z / lf)};
+    }
+    return xyl_vec3{float(n.x / l), float(n.y / l), float(n.z / l)};
+}
+
+/* Moves the level-1 points pd to their limit positions and writes the limit normals: the cross
+ * product of the limit tangents, turned to agree with the faces' winding. Where the tangents
+ * are (numerically) parallel, the faces' normal. */
+bool project_to_limit(const Refiner &r, const xyl_allocator *alloc, Point3 *pd, xyl_vec3 *normals)
+{
+    const Far::TopologyLevel &fine = r.GetLevel(1);
+    const size_t n1 = static_cast<size_t>(fine.GetNumVertices());
+    Buffer<Point3> lim(alloc, n1), du(alloc, n1), dv(alloc, n1);
+    if (!lim.get() || !du.get() || !dv.get()) return false;
+    const Point3 *src = pd;
+    Point3 *lp = lim.get(), *t1 = du.get(), *t2 = dv.get();
+    DoubleRefiner(r).Limit(src, lp, t1, t2);
+    for (size_t v = 0; v < n1; ++v) {
+        Point3 n = cross(t1[v], t2[v]);
+        Point3 ref = face_normal_sum(fine, static_cast<Far::Index>(v), lp);
+        double scale = std::sqrt(dot(t1[v], t1[v]) * dot(t2[v], t2[v]));
+        if (!(std::sqrt(dot(n, n)) > 1e-9 * scale)) n = Point3{0.0, 0.0, 0.0};
+        if (dot(n, ref) < 0.0) n = Point3{-n.x, -n.y, -n.z};
+        normals[v] = unit_or(n, ref);
+    }
+    std::memcpy(pd, lp, n1 * sizeof *pd);
+    return true;
+}
+
+/* Positions through the vertex rules, UVs through the varying (linear) rules, both in double;
+ * with out->normals, positions are then moved to the limit surface and the limit normals
+ * written. */
 bool interpolate_primvars(const Refiner &r, const xyl__mesh_arrays *in, const xyl_allocator *alloc,
                           Refined *out)
 {
@@ -316,6 +395,7 @@ bool interpolate_primvars(const Refiner &r, const xyl__mesh_arrays *in, const xy
     const Point2 *ts = t0.get();
     Point2 *td = t1.get();
     primvar.InterpolateVarying(1, ts, td);
+    if (out->normals.get() && !project_to_limit(r, alloc, pd, out->normals.get())) return false;
     for (size_t v = 0; v < n1; ++v) {
         out->positions.get()[v] = xyl_vec3{static_cast<float>(pd[v].x),
                                            static_cast<float>(pd[v].y),
@@ -335,8 +415,9 @@ void copy_faces(const Refiner &r, int corners, uint32_t *out)
     }
 }
 
-xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, const Limits &lim,
-                  const xyl_allocator *alloc, xyl__mesh_arrays *out, xyl_diag *diag)
+xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
+                  const Limits &lim, const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                  xyl_diag *diag)
 {
     const bool loop = scheme == XYL_SUBDIVIDE_LOOP;
     const uint64_t far_faces = loop ? 2u * uint64_t(in->quad_count) + in->triangle_count
@@ -368,14 +449,16 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, const Limi
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "%llu vertices or %llu faces exceed OpenSubdiv's int indices",
                          static_cast<unsigned long long>(v1), static_cast<unsigned long long>(f1));
-    r->RefineUniform(Refiner::UniformOptions(1));
+    Refiner::UniformOptions uniform(1);
+    uniform.fullTopologyInLastLevel = limit; /* Limit() and the normals walk level 1 */
+    r->RefineUniform(uniform);
     if (uint64_t(r->GetLevel(1).GetNumVertices()) != v1 ||
         uint64_t(r->GetLevel(1).GetNumFaces()) != f1)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "OpenSubdiv refined to unexpected counts (non-manifold input?)");
     const int corners1 = loop ? 3 : 4;
-    Refined fine(alloc, static_cast<size_t>(v1), static_cast<size_t>(f1), corners1);
-    if (!fine.ok() || !interpolate_primvars(*r, in, alloc, &fine))
+    Refined fine(alloc, static_cast<size_t>(v1), static_cast<size_t>(f1), corners1, limit);
+    if (!fine.ok(limit) || !interpolate_primvars(*r, in, alloc, &fine))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the refined mesh");
     const uint32_t *parent_branch = control.branches.get();
@@ -391,6 +474,7 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, const Limi
     std::memset(out, 0, sizeof *out);
     out->vertex_count = static_cast<size_t>(v1);
     out->positions = fine.positions.release();
+    out->normals = fine.normals.release();
     out->uvs = fine.uvs.release();
     out->branch_ids = fine.branch_ids.release();
     out->face_branches = fine.face_branches.release();
@@ -429,7 +513,7 @@ xyl_result unknown_scheme(const xyl_subdivision *stored, xyl_diag *diag)
                      static_cast<long long>(raw));
 }
 
-xyl_result subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme,
+xyl_result subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
                      const xyl_mesh_limits *limits, const xyl_allocator *alloc,
                      xyl__mesh_arrays *out, xyl_diag *diag)
 {
@@ -441,29 +525,54 @@ xyl_result subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme,
         if (r) return r;
         return copy_mesh(in, scheme == XYL_SUBDIVIDE_NONE, alloc, out, diag);
     }
-    return refine(in, scheme, lim, alloc, out, diag);
+    return refine(in, scheme, limit, lim, alloc, out, diag);
 }
 
 /* A closed prism of kRings k-gon rings of radius 1 along z, one unit apart, capped at both
- * ends, every face counter-clockwise seen from outside; refined by Catmull-Clark. Buffers, not
- * std::vector: std:: template code keeps default visibility and would be exported. */
+ * ends, every face counter-clockwise seen from outside; refined by Catmull-Clark, or for Loop
+ * with each band quad (a, b, c, d) split into (a, b, c), (a, c, d) as the mesher's meshes are,
+ * and fan caps. Buffers, not std::vector: std:: template code keeps default visibility and
+ * would be exported. */
 constexpr int kRings = 9;
 
 struct Prism {
+    int k;
+    bool loop;
     Buffer<Point3> points;
     Buffer<int> counts, indices;
     std::unique_ptr<Refiner> refiner;
     Far::Index probe; /* ring vertex in the middle of the prism */
 
-    explicit Prism(int k)
-        : points(nullptr, size_t(k) * kRings), counts(nullptr, size_t(k) * (kRings - 1) + 2),
-          indices(nullptr, 4 * size_t(k) * (kRings - 1) + 2 * size_t(k)), probe((kRings / 2) * k)
+    Prism(int k_, bool loop_)
+        : k(k_), loop(loop_), points(nullptr, size_t(k_) * kRings),
+          counts(nullptr, faces(k_, loop_)),
+          indices(nullptr, loop_ ? 3 * faces(k_, loop_) : 4 * size_t(k_) * (kRings - 1) + 2 * size_t(k_)),
+          probe((kRings / 2) * k_)
     {
+    }
+    static size_t faces(int k, bool loop)
+    {
+        return loop ? 2 * size_t(k) * (kRings - 1) + 2 * size_t(k - 2) : size_t(k) * (kRings - 1) + 2;
     }
 };
 
-bool make_prism(int k, Prism *p)
+/* A cap as one k-gon (Catmark) or as a fan of triangles (Loop), corners in the order given. */
+void put_cap(const int *corner, int k, bool loop, int **idx, int **count)
 {
+    if (!loop) {
+        for (int i = 0; i < k; ++i) *(*idx)++ = corner[i];
+        *(*count)++ = k;
+        return;
+    }
+    for (int i = 1; i + 1 < k; ++i) {
+        *(*idx)++ = corner[0], *(*idx)++ = corner[i], *(*idx)++ = corner[i + 1];
+        *(*count)++ = 3;
+    }
+}
+
+bool make_prism(Prism *p)
+{
+    const int k = p->k;
     if (!p->points.get() || !p->counts.get() || !p->indices.get()) throw std::bad_alloc();
     const double step = 2.0 * XYL__PI / k;
     for (int j = 0; j < kRings; ++j)
@@ -473,48 +582,72 @@ bool make_prism(int k, Prism *p)
     for (int j = 0; j + 1 < kRings; ++j)
         for (int i = 0; i < k; ++i) {
             int a = j * k + i, b = j * k + (i + 1) % k;
-            *idx++ = a, *idx++ = b, *idx++ = b + k, *idx++ = a + k;
-            *count++ = 4;
+            if (p->loop) {
+                *idx++ = a, *idx++ = b, *idx++ = b + k, *idx++ = a, *idx++ = b + k, *idx++ = a + k;
+                *count++ = 3, *count++ = 3;
+            } else {
+                *idx++ = a, *idx++ = b, *idx++ = b + k, *idx++ = a + k;
+                *count++ = 4;
+            }
         }
-    for (int i = k - 1; i >= 0; --i) *idx++ = i; /* bottom cap faces -z */
-    for (int i = 0; i < k; ++i) *idx++ = (kRings - 1) * k + i;
-    *count++ = k;
-    *count++ = k;
+    Buffer<int> corner(nullptr, size_t(k));
+    if (!corner.get()) throw std::bad_alloc();
+    for (int i = 0; i < k; ++i) corner.get()[i] = k - 1 - i; /* bottom cap faces -z */
+    put_cap(corner.get(), k, p->loop, &idx, &count);
+    for (int i = 0; i < k; ++i) corner.get()[i] = (kRings - 1) * k + i;
+    put_cap(corner.get(), k, p->loop, &idx, &count);
     Far::TopologyDescriptor desc;
     desc.numVertices = k * kRings;
-    desc.numFaces = k * (kRings - 1) + 2;
+    desc.numFaces = static_cast<int>(Prism::faces(k, p->loop));
     desc.numVertsPerFace = p->counts.get();
     desc.vertIndicesPerFace = p->indices.get();
     Sdc::Options sdc;
     sdc.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
-    p->refiner.reset(Factory::Create(desc, Factory::Options(Sdc::SCHEME_CATMARK, sdc)));
+    Sdc::SchemeType scheme = p->loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK;
+    p->refiner.reset(Factory::Create(desc, Factory::Options(scheme, sdc)));
     return p->refiner != nullptr;
 }
 
-/* The probe's position at the refiner's last level (interpolated level by level), or with limit
- * its limit point (PrimvarRefiner::Limit on the last level). */
-Point3 probe_position(const Prism &p, bool limit)
+/* Every point of the refiner's last level, interpolated level by level. */
+void last_level_points(const Prism &p, Buffer<Point3> *out)
 {
     DoubleRefiner primvar(*p.refiner);
-    const int levels = p.refiner->GetMaxLevel();
     Buffer<Point3> coarse(nullptr, 0);
     const Point3 *src = p.points.get();
-    Far::Index v = p.probe;
-    for (int level = 1; level <= levels; ++level) {
+    for (int level = 1; level <= p.refiner->GetMaxLevel(); ++level) {
         Buffer<Point3> fine(nullptr, size_t(p.refiner->GetLevel(level).GetNumVertices()));
         Point3 *dst = fine.get();
         if (!dst) throw std::bad_alloc();
         primvar.Interpolate(level, src, dst);
-        v = p.refiner->GetLevel(level - 1).GetVertexChildVertex(v);
         coarse.swap(fine);
         src = coarse.get();
     }
-    if (!limit) return src[v];
-    Buffer<Point3> limits(nullptr, size_t(p.refiner->GetLevel(levels).GetNumVertices()));
+    if (p.refiner->GetMaxLevel() == 0) {
+        Buffer<Point3> copy(nullptr, size_t(p.k) * kRings);
+        if (!copy.get()) throw std::bad_alloc();
+        std::memcpy(copy.get(), p.points.get(), size_t(p.k) * kRings * sizeof(Point3));
+        coarse.swap(copy);
+    }
+    out->swap(coarse);
+}
+
+/* The limit points of the last level's points (PrimvarRefiner::Limit). */
+void limit_points(const Prism &p, const Point3 *src, Buffer<Point3> *out)
+{
+    Buffer<Point3> limits(nullptr, size_t(p.refiner->GetLevel(p.refiner->GetMaxLevel()).GetNumVertices()));
     Point3 *dst = limits.get();
     if (!dst) throw std::bad_alloc();
-    primvar.Limit(src, dst);
-    return dst[v];
+    DoubleRefiner(*p.refiner).Limit(src, dst);
+    out->swap(limits);
+}
+
+/* The probe's index at the refiner's last level (a vertex's child keeps its parent's limit). */
+Far::Index probe_index(const Prism &p)
+{
+    Far::Index v = p.probe;
+    for (int level = 1; level <= p.refiner->GetMaxLevel(); ++level)
+        v = p.refiner->GetLevel(level - 1).GetVertexChildVertex(v);
+    return v;
 }
 
 double radius(const Point3 &p)
@@ -524,30 +657,65 @@ double radius(const Point3 &p)
 
 xyl_result limit_radius_factor(uint32_t k, double *factor)
 {
-    Prism p(static_cast<int>(k));
-    if (!make_prism(static_cast<int>(k), &p)) return XYL_ERR_UNSUPPORTED;
+    Prism p(static_cast<int>(k), false);
+    if (!make_prism(&p)) return XYL_ERR_UNSUPPORTED;
     Refiner::UniformOptions uniform(1);
     uniform.fullTopologyInLastLevel = true; /* Limit() needs the last level's full topology */
     p.refiner->RefineUniform(uniform);
-    /* A vertex's child has the same limit point as the vertex. */
-    *factor = radius(probe_position(p, true));
+    Buffer<Point3> points(nullptr), limits(nullptr);
+    last_level_points(p, &points);
+    limit_points(p, points.get(), &limits);
+    *factor = radius(limits.get()[probe_index(p)]);
     return XYL_OK;
 }
 
 xyl_result refined_radius_factor(uint32_t k, uint32_t levels, double *factor)
 {
-    Prism p(static_cast<int>(k));
-    if (!make_prism(static_cast<int>(k), &p)) return XYL_ERR_UNSUPPORTED;
+    Prism p(static_cast<int>(k), false);
+    if (!make_prism(&p)) return XYL_ERR_UNSUPPORTED;
     if (levels) p.refiner->RefineUniform(Refiner::UniformOptions(static_cast<int>(levels)));
-    *factor = radius(probe_position(p, false));
+    Buffer<Point3> points(nullptr);
+    last_level_points(p, &points);
+    *factor = radius(points.get()[probe_index(p)]);
+    return XYL_OK;
+}
+
+/* Mean radius of the limit surface over one band in the middle of the prism: the limit points
+ * of the points of a 3-level refinement whose refined z lies in [4, 5). Those points sample the
+ * band's parameter domain on a uniform lattice, and the surface is periodic in both directions
+ * there (around the ring, and from band to band), so their mean is the periodic trapezoid rule:
+ * exact to far below 1e-6 for these smooth periodic functions. */
+xyl_result mean_limit_radius(uint32_t k, bool loop, double *mean)
+{
+    Prism p(static_cast<int>(k), loop);
+    if (!make_prism(&p)) return XYL_ERR_UNSUPPORTED;
+    Refiner::UniformOptions uniform(3);
+    uniform.fullTopologyInLastLevel = true;
+    p.refiner->RefineUniform(uniform);
+    Buffer<Point3> points(nullptr), limits(nullptr);
+    last_level_points(p, &points);
+    limit_points(p, points.get(), &limits);
+    const int n = p.refiner->GetLevel(3).GetNumVertices();
+    const int mid = kRings / 2;
+    double sum = 0.0;
+    int count = 0;
+    for (int v = 0; v < n; ++v) {
+        const double z = points.get()[v].z;
+        if (z < mid - 1e-9 || z >= mid + 1 - 1e-9) continue;
+        sum += radius(limits.get()[v]);
+        ++count;
+    }
+    if (count == 0) return XYL_ERR_UNSUPPORTED;
+    *mean = sum / count;
     return XYL_OK;
 }
 
 } /* namespace */
 
 extern "C" xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme,
-                                     const xyl_mesh_limits *limits, const xyl_allocator *alloc,
-                                     xyl__mesh_arrays *out, xyl_diag *diag)
+                                     bool limit, const xyl_mesh_limits *limits,
+                                     const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                                     xyl_diag *diag)
 {
     if (!out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out must not be NULL");
@@ -558,7 +726,7 @@ extern "C" xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision
     /* Every array is owned by a Buffer or by out until the end, so an exception frees them. */
     xyl_result r;
     try {
-        r = subdivide(in, known, limits, alloc, out, diag);
+        r = subdivide(in, known, limit, limits, alloc, out, diag);
     } catch (const std::bad_alloc &) {
         r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory in OpenSubdiv");
     } catch (const std::length_error &) {
@@ -601,6 +769,21 @@ extern "C" xyl_result xyl__subdivide_refined_radius_factor(uint32_t k, uint32_t 
     }
 }
 
+extern "C" xyl_result xyl__subdivide_mean_limit_radius(xyl_subdivision scheme, uint32_t k,
+                                                       double *mean)
+{
+    if (!mean || k < 3 || k > 32 ||
+        (scheme != XYL_SUBDIVIDE_CATMARK && scheme != XYL_SUBDIVIDE_LOOP))
+        return XYL_ERR_INVALID_ARGUMENT;
+    try {
+        return mean_limit_radius(k, scheme == XYL_SUBDIVIDE_LOOP, mean);
+    } catch (const std::bad_alloc &) {
+        return XYL_ERR_OUT_OF_MEMORY;
+    } catch (...) {
+        return XYL_ERR_UNSUPPORTED;
+    }
+}
+
 extern "C" xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivide_desc *desc,
                                          xyl_mesh **out, xyl_diag *diag)
 {
@@ -626,7 +809,8 @@ extern "C" xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivi
     view.triangle_count = mesh->triangle_count;
     view.face_branches = const_cast<uint32_t *>(mesh->face_branches);
     xyl__mesh_arrays refined;
-    xyl_result r = xyl__subdivide(&view, scheme, &d->limits, &d->alloc, &refined, diag);
+    xyl_result r = xyl__subdivide(&view, scheme, !d->keep_control_points, &d->limits, &d->alloc,
+                                  &refined, diag);
     if (r) return r;
     return xyl__mesh_adopt(&refined, &d->alloc, out, diag); /* smooth normals unless copied */
 }

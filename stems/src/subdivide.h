@@ -16,8 +16,11 @@ extern "C" {
 
 #include "mesh_internal.h"
 
-/* Refines in once with scheme into out (arrays from alloc; out->normals stays NULL for CATMARK
- * and LOOP, so the caller computes the normals it wants). Catmark gives quads only, Loop
+/* Refines in once with scheme into out (arrays from alloc). With limit, the refined vertices are
+ * then moved to their limit positions (Far::PrimvarRefiner::Limit) and out->normals holds the
+ * limit normals (the cross product of the limit tangents, oriented like the faces); without,
+ * they stay control points and out->normals stays NULL, so the caller computes the normals it
+ * wants. Catmark gives quads only, Loop
  * triangles only (quads (a, b, c, d) are split into (a, b, c), (a, c, d) first); faces keep the
  * input's orientation. Positions are interpolated in double (vertex rule), UVs linearly
  * (varying), face branch ids are inherited from the parent face, vertex branch ids by the rules
@@ -30,7 +33,7 @@ extern "C" {
  * (XYL_ERR_LIMIT_EXCEEDED). Other errors: XYL_ERR_UNSUPPORTED (OpenSubdiv refuses the topology,
  * or counts beyond its int indices), XYL_ERR_OUT_OF_MEMORY. On failure *out is zeroed and
  * nothing is left allocated. No C++ exception leaves this function. */
-xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme,
+xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
                           const xyl_mesh_limits *limits, const xyl_allocator *alloc,
                           xyl__mesh_arrays *out, xyl_diag *diag);
 
@@ -45,6 +48,13 @@ xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor);
  * evaluation: (3 + cos(2π/k)) / 4 after one, converging to the limit factor. A check on the
  * above that does not trust PrimvarRefiner::Limit. */
 xyl_result xyl__subdivide_refined_radius_factor(uint32_t k, uint32_t levels, double *factor);
+
+/* Mean radius of the limit surface of a long prism of unit k-gon rings (k in 3..32) refined by
+ * scheme (CATMARK, or LOOP on the quads split as the mesher's are), measured with OpenSubdiv's
+ * limit evaluation over one band in its middle: the check on the closed form the mesher
+ * inflates rings by (stems_build.c, limit_mean_radius). Errors: XYL_ERR_INVALID_ARGUMENT, XYL_ERR_OUT_OF_MEMORY,
+ * XYL_ERR_UNSUPPORTED. */
+xyl_result xyl__subdivide_mean_limit_radius(xyl_subdivision scheme, uint32_t k, double *mean);
 
 #ifdef __cplusplus
 }

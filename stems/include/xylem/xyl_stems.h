@@ -174,14 +174,21 @@ typedef enum xyl_subdivision {
 } xyl_subdivision;
 
 typedef struct xyl_subdivide_desc {
-    xyl_subdivision scheme;  /* NONE copies the mesh */
-    xyl_mesh_limits limits;  /* of the refined mesh */
+    xyl_subdivision scheme;   /* NONE copies the mesh */
+    bool keep_control_points; /* default false: the refined vertices are moved to their limit
+                                 positions and get the limit normals, so the mesh interpolates
+                                 the smooth surface (what PN refinement wants); true keeps the
+                                 level-1 control points (to subdivide further) and smooth face
+                                 normals */
+    xyl_mesh_limits limits;   /* of the refined mesh */
     xyl_allocator alloc;
 } xyl_subdivide_desc;
 
 /* One uniform level of refinement through OpenSubdiv Far. Positions and UVs are interpolated
- * (vertex and varying), face branch ids are inherited from the parent face, vertex branch ids
- * follow the rules of docs/subdivision.md, normals are recomputed (smooth). Errors:
+ * (vertex and varying), then positions moved to the limit surface (unless keep_control_points),
+ * face branch ids are inherited from the parent face, vertex branch ids follow the rules of
+ * docs/subdivision.md; normals are the limit normals (or, with keep_control_points, recomputed
+ * smooth). Errors:
  * XYL_ERR_INVALID_ARGUMENT, XYL_ERR_NON_FINITE, XYL_ERR_UNSUPPORTED (topology OpenSubdiv refuses),
  * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivide_desc *desc,
@@ -243,9 +250,11 @@ typedef struct xyl_stems_desc {
                                      only; odd k one triangle per cap and per bridge */
     xyl_normal_mode normals;
     xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
-    bool keep_control_radius;     /* default false: with Catmull-Clark, rings are inflated so
+    bool keep_control_radius;     /* default false: before subdivision, rings are inflated so
                                      the limit surface's MEAN radius is the skeleton's (1.522
-                                     for k = 4; docs/stems.md) */
+                                     for k = 4 with Catmull-Clark; docs/stems.md) */
+    bool keep_control_points;     /* default false: subdivided vertices sit on the limit
+                                     surface (see xyl_subdivide_desc) */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_stems_desc;
