@@ -9,6 +9,12 @@ packages=(
   clang libclang-rt-14-dev   # ASan/UBSan and libFuzzer runtimes for clang 14
   libcmocka-dev              # test framework
   libosd-dev                 # OpenSubdiv 3.5 (Far), for stems/ subdivision
+  libepoxy-dev libegl-dev libegl1-mesa-dev libgl1-mesa-dri   # GL 4.5 backend, EGL headless (llvmpipe)
+  libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers   # Vulkan backend (lavapipe), validation
+  glslang-tools spirv-tools  # shaders: GLSL -> SPIR-V and validation at build time
+  libpng-dev                 # xylem render writes PNG (samples only)
+  libtinygltf-dev nlohmann-json3-dev   # xylem render --mesh reads .glb (samples only)
+  gnuplot-nox                # docs/ plots from bench_tess (scripts/bench.sh)
 )
 
 missing=()

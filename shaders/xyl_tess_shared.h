@@ -23,9 +23,25 @@
 #define XYL_TESS_VARIANT_CIRCLE 2   /* (4/3) tan(phi/4) r: exact on a circular arc */
 #define XYL_TESS_VARIANT_COUNT 3
 
-/* A pattern vertex is one uint: lattice index i in bits 0..7, j in bits 8..15. Quads: (u, v) =
- * (i, j) / L. Triangles: weights (L - i - j, i, j) / L of corners 0, 1, 2. */
+/* A pattern vertex is one uint: lattice index i in bits 0..7, j in bits 8..15, and the vertex's
+ * index within its pattern in bits 16..31 (capture buffers use it; no base-vertex builtin is
+ * needed, which GL and Vulkan define differently). Quads: (u, v) = (i, j) / L. Triangles:
+ * weights (L - i - j, i, j) / L of corners 0, 1, 2. */
 #define XYL_TESS_PATTERN_SHIFT_J 8u
+#define XYL_TESS_PATTERN_SHIFT_LOCAL 16u
+
+/* Bindings shared by both backends (Vulkan: descriptor set 0). */
+#define XYL_TESS_BINDING_PATCHES 0   /* storage: xyl_tess_patch[] */
+#define XYL_TESS_BINDING_FRAME 1     /* uniform: xyl_tess_frame */
+#define XYL_TESS_BINDING_CAPTURE 2   /* storage: vec4 pairs (position, normal) per vertex */
+#define XYL_TESS_BINDING_OFFSETS 3   /* storage: uint first capture slot per patch */
+#define XYL_TESS_BINDING_INSTANCES 4 /* storage: instance records (hardware path) */
+
+/* xyl_tess_frame.flags */
+#define XYL_TESS_FLAG_WIREFRAME 1u  /* the fragment shader outputs the line colour */
+#define XYL_TESS_FLAG_NORMALS 2u    /* the fragment shader outputs the normal as a colour */
+#define XYL_TESS_FLAG_BACKFACES 4u  /* back-facing fragments are pure red (crack tests: a closed
+                                       surface shows a back face only through a hole) */
 
 /* Instance record bits: edge level e (1..64) in bits 8e .. 8e+7 of edge_levels. */
 #define XYL_TESS_EDGE_LEVEL_BITS 8u
@@ -42,6 +58,18 @@ struct xyl_tess_patch {
 /* One drawn instance (a vertex attribute with divisor 1, so base-instance offsets apply):
  * x = patch index, y = packed edge levels, z = patch level, w = kind. */
 
+/* Per-frame uniforms, std140: 128 bytes. */
+struct xyl_tess_frame {
+    mat4 view_proj;  /* world to clip, in the API's clip convention */
+    vec4 light_dir;  /* xyz: unit direction towards the light */
+    vec4 color;      /* rgb: surface albedo; a: unused */
+    vec4 line_color; /* wireframe overlay colour */
+    uint variant;    /* XYL_TESS_VARIANT_* */
+    uint flags;      /* XYL_TESS_FLAG_* */
+    uint base_instance; /* hardware path: first instance record of the draw */
+    uint pad;
+};
+
 #else /* C */
 
 #include <stdint.h>
@@ -57,6 +85,17 @@ typedef struct xyl_tess_instance {
     uint32_t level;       /* interior level 1..64 (the pattern drawn) */
     uint32_t kind;        /* XYL_TESS_KIND_TRIANGLE or XYL_TESS_KIND_QUAD */
 } xyl_tess_instance;
+
+typedef struct xyl_tess_frame {
+    float view_proj[16]; /* column-major */
+    float light_dir[4];
+    float color[4];
+    float line_color[4];
+    uint32_t variant;
+    uint32_t flags;
+    uint32_t base_instance;
+    uint32_t pad;
+} xyl_tess_frame;
 
 /* The layout of both glDrawElementsIndirect's and vkCmdDrawIndexedIndirect's command. */
 typedef struct xyl_tess_draw_cmd {

@@ -10,29 +10,6 @@
 
 static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE};
 
-static xyl_skeleton *grow_preset(const char *name)
-{
-    xyl_grammar *g = tu_parse(xyl_lsystem_preset_source(name));
-    xyl_lstring *s = NULL;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
-    assert_int_equal(xyl_lsystem_interpret(g, s, NULL, &sk, NULL), XYL_OK);
-    xyl_lstring_destroy(s);
-    xyl_grammar_destroy(g);
-    return sk;
-}
-
-static xyl_mesh *tree_mesh(uint32_t sides)
-{
-    xyl_skeleton *sk = grow_preset(xyl_lsystem_default_preset());
-    xyl_stems_desc sd = {0};
-    sd.sides = sides;
-    xyl_mesh *m = NULL;
-    assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL), XYL_OK);
-    xyl_skeleton_destroy(sk);
-    return m;
-}
-
 static void set_corner(xyl_tess_patch *p, int c, float x, float y, float z, float nx, float ny,
                        float nz)
 {
@@ -99,7 +76,7 @@ static void planar_triangles_stay_planar_and_linear(void **state)
 
 /* A ring of k corners of radius 1 with radial normals, extruded to a quad of height 1: the
  * radius of the PN surface at mid-edge (and mid-patch: a cylinder's rulings stay straight). */
-static double cylinder_radius(uint32_t k, xyl_tess_variant variant, float v)
+static double cylinder_radius_at(uint32_t k, xyl_tess_variant variant, float u, float v)
 {
     xyl_tess_patch p = {0};
     double a1 = 2.0 * PI / k;
@@ -110,11 +87,25 @@ static double cylinder_radius(uint32_t k, xyl_tess_variant variant, float v)
     set_corner(&p, 3, 1.0f, 0.0f, 1.0f, 1.0f, 0.0f, 0.0f);
     p.p[0][3] = 4.0f;
     float pos[3], n[3];
-    xyl_tess_eval(&p, variant, 0.5f, v, pos, n);
+    xyl_tess_eval(&p, variant, u, v, pos, n);
     assert_float_equal(pos[2], v, 1e-6);
-    /* the mid-edge normal is radial */
-    assert_float_equal(n[0] * pos[1] - n[1] * pos[0], 0.0f, 1e-6);
+    /* the mid-edge normal is radial (elsewhere the quadratic normal only approximates it) */
+    if (u == 0.5f) assert_float_equal(n[0] * pos[1] - n[1] * pos[0], 0.0f, 1e-6);
     return sqrt((double)pos[0] * pos[0] + (double)pos[1] * pos[1]);
+}
+
+static double cylinder_radius(uint32_t k, xyl_tess_variant variant, float v)
+{
+    return cylinder_radius_at(k, variant, 0.5f, v);
+}
+
+/* Largest radial error along the edge (u = 0..1): the circle rule is exact at mid-edge only. */
+static double cylinder_worst(uint32_t k, xyl_tess_variant variant)
+{
+    double worst = 0.0;
+    for (int i = 0; i <= 200; ++i)
+        worst = fmax(worst, fabs(cylinder_radius_at(k, variant, (float)i / 200.0f, 0.25f) - 1.0));
+    return worst;
 }
 
 static void cylinder_mid_edge_error_matches_analytic_table(void **state)
@@ -132,7 +123,11 @@ static void cylinder_mid_edge_error_matches_analytic_table(void **state)
                 fail_msg("k=%u variant %d: error %.5f, expected %.4f", rows[i].k, rows[i].v, err,
                          rows[i].expect);
         }
-    /* circle-exact: <= 0.05 % at k = 4, <= 0.01 % at k = 6, and better with more sides */
+    /* circle-exact: <= 0.05 % at k = 4, <= 0.01 % at k = 6 anywhere along the edge, and better
+     * with more sides */
+    assert_true(cylinder_worst(4, XYL_TESS_CIRCLE) <= 0.0005);
+    assert_true(cylinder_worst(4, XYL_TESS_CIRCLE) >= 0.0002); /* the cubic's known 0.027 % */
+    assert_true(cylinder_worst(6, XYL_TESS_CIRCLE) <= 0.0001);
     assert_true(fabs(cylinder_radius(4, XYL_TESS_CIRCLE, 0.0f) - 1.0) <= 0.0005);
     assert_true(fabs(cylinder_radius(6, XYL_TESS_CIRCLE, 0.5f) - 1.0) <= 0.0001);
     assert_true(fabs(cylinder_radius(3, XYL_TESS_CIRCLE, 0.5f) - 1.0) <= 0.003);
@@ -198,7 +193,7 @@ static void check_watertight(const xyl_tess_patches *tp, const xyl_tess_patterns
         uint32_t l = in->level;
         for (uint32_t v = 0; v < r->vertex_count; ++v) {
             uint32_t pk = pat->vertices[r->first_vertex + v];
-            uint32_t pi = pk & 0xffu, pj = pk >> XYL_TESS_PATTERN_SHIFT_J;
+            uint32_t pi = pk & 0xffu, pj = (pk >> XYL_TESS_PATTERN_SHIFT_J) & 0xffu;
             bool quad = in->kind == 4;
             bool corner = (pi == 0 || pi == l) && (pj == 0 || pj == l);
             if (!quad) corner = (pi == 0 && pj == 0) || pi == l || pj == l;
@@ -253,7 +248,7 @@ static void adaptive_levels_keep_shared_edges_bit_identical(void **state)
 {
     (void)state;
     for (uint32_t sides = 3; sides <= 6; ++sides) {
-        xyl_mesh *m = tree_mesh(sides);
+        xyl_mesh *m = tu_tree_mesh(0, sides, XYL_SUBDIVIDE_NONE);
         xyl_tess_patterns *pat = NULL;
         assert_int_equal(xyl_tess_patterns_create(16, NULL, &pat, NULL), XYL_OK);
         for (size_t vi = 0; vi < 3; ++vi) {
@@ -337,7 +332,7 @@ static double tessellation_error(const xyl_tess_patch *p, xyl_tess_variant var, 
         for (int c = 0; c < 3; ++c) {
             uint32_t pk = pat->vertices[r->first_vertex + pat->indices[r->first_index + t + (uint32_t)c]];
             uv[c][0] = (float)(pk & 0xffu) / (float)l;
-            uv[c][1] = (float)(pk >> 8) / (float)l;
+            uv[c][1] = (float)((pk >> 8) & 0xffu) / (float)l;
             xyl_tess_eval(p, var, uv[c][0], uv[c][1], pos[c], n);
         }
         static const float w[10][3] = {{.5f, .5f, 0}, {0, .5f, .5f}, {.5f, 0, .5f},
@@ -363,7 +358,7 @@ static void level_error_bound_holds_on_tree_patches(void **state)
     xyl_tess_patterns *pat = NULL;
     assert_int_equal(xyl_tess_patterns_create(8, NULL, &pat, NULL), XYL_OK);
     for (uint32_t sides = 3; sides <= 8; sides += 5) {
-        xyl_mesh *m = tree_mesh(sides);
+        xyl_mesh *m = tu_tree_mesh(0, sides, XYL_SUBDIVIDE_NONE);
         for (size_t vi = 0; vi < 3; ++vi) {
             xyl_tess_patches_desc pd = {0};
             pd.variant = variants[vi];
@@ -410,7 +405,8 @@ static void patterns_tile_their_domain_counter_clockwise(void **state)
                     assert_true(li < r->vertex_count);
                     uint32_t pk = pat->vertices[r->first_vertex + li];
                     x[c] = (double)(pk & 0xffu) / l;
-                    y[c] = (double)(pk >> 8) / l;
+                    y[c] = (double)((pk >> 8) & 0xffu) / l;
+                    assert_int_equal(pk >> XYL_TESS_PATTERN_SHIFT_LOCAL, li);
                     assert_true(x[c] + (kind ? y[c] : 0.0) <= 1.0 + 1e-12 && y[c] <= 1.0);
                 }
                 double a = 0.5 * ((x[1] - x[0]) * (y[2] - y[0]) - (x[2] - x[0]) * (y[1] - y[0]));
@@ -448,7 +444,7 @@ static void levels_rise_as_the_camera_approaches(void **state)
 static void select_buckets_every_patch_once(void **state)
 {
     (void)state;
-    xyl_mesh *m = tree_mesh(5);
+    xyl_mesh *m = tu_tree_mesh(0, 5, XYL_SUBDIVIDE_NONE);
     xyl_tess_patterns *pat = NULL;
     assert_int_equal(xyl_tess_patterns_create(0, NULL, &pat, NULL), XYL_OK);
     xyl_tess_patches *tp = NULL;
@@ -500,6 +496,158 @@ static void select_buckets_every_patch_once(void **state)
     xyl_mesh_destroy(m);
 }
 
+
+/* ---- CPU refinement ------------------------------------------------------------------------- */
+
+typedef struct weld_key {
+    float pos[3];
+    uint32_t vertex;
+} weld_key;
+
+static int cmp_weld(const void *a, const void *b)
+{
+    const weld_key *x = a, *y = b;
+    int c = memcmp(x->pos, y->pos, sizeof x->pos);
+    return c ? c : (x->vertex < y->vertex ? -1 : x->vertex > y->vertex);
+}
+
+/* Welds the refined mesh's vertices by exact position and drops the triangles that snapping
+ * collapsed: what remains of a watertight refinement of a closed mesh is closed. */
+static void check_refined_is_closed(const xyl_mesh *r)
+{
+    weld_key *keys = malloc(r->vertex_count * sizeof *keys);
+    uint32_t *id = malloc(r->vertex_count * sizeof *id);
+    xyl_vec3 *pos = malloc(r->vertex_count * sizeof *pos);
+    uint32_t *tris = malloc(3 * r->triangle_count * sizeof *tris);
+    assert_true(keys && id && pos && tris);
+    for (size_t v = 0; v < r->vertex_count; ++v) {
+        memcpy(keys[v].pos, &r->positions[v], sizeof keys[v].pos);
+        keys[v].vertex = (uint32_t)v;
+    }
+    qsort(keys, r->vertex_count, sizeof *keys, cmp_weld);
+    size_t nv = 0;
+    for (size_t v = 0; v < r->vertex_count; ++v) {
+        if (v == 0 || memcmp(keys[v].pos, keys[v - 1].pos, sizeof keys[v].pos) != 0)
+            memcpy(&pos[nv++], keys[v].pos, sizeof pos[0]);
+        id[keys[v].vertex] = (uint32_t)(nv - 1);
+    }
+    size_t nt = 0;
+    for (size_t t = 0; t < r->triangle_count; ++t) {
+        uint32_t a = id[r->triangles[3 * t]], b = id[r->triangles[3 * t + 1]],
+                 c = id[r->triangles[3 * t + 2]];
+        if (a == b || b == c || a == c) continue;
+        tris[3 * nt] = a; tris[3 * nt + 1] = b; tris[3 * nt + 2] = c;
+        ++nt;
+    }
+    xyl_mesh_desc md = {0};
+    md.positions = pos; md.vertex_count = nv; md.triangles = tris; md.triangle_count = nt;
+    xyl_mesh *w = NULL;
+    assert_int_equal(xyl_mesh_create(&md, &w, NULL), XYL_OK);
+    xyl_mesh_report rep;
+    assert_int_equal(xyl_mesh_check(w, &rep, NULL), XYL_OK);
+    if (rep.boundary_edges || rep.nonmanifold_edges || rep.misoriented_edges)
+        fail_msg("welded refinement: %zu boundary, %zu non-manifold, %zu misoriented edges",
+                 rep.boundary_edges, rep.nonmanifold_edges, rep.misoriented_edges);
+    assert_int_equal(rep.euler, 2);
+    xyl_mesh_destroy(w);
+    free(keys); free(id); free(pos); free(tris);
+}
+
+static void refined_adaptive_mesh_welds_into_a_closed_surface(void **state)
+{
+    (void)state;
+    xyl_tess_patterns *pat = NULL;
+    assert_int_equal(xyl_tess_patterns_create(16, NULL, &pat, NULL), XYL_OK);
+    for (uint32_t sides = 3; sides <= 4; ++sides) {
+        xyl_mesh *m = tu_tree_mesh(0, sides, XYL_SUBDIVIDE_NONE);
+        xyl_tess_patches *tp = NULL;
+        assert_int_equal(xyl_tess_patches_create(m, NULL, &tp, NULL), XYL_OK);
+        xyl_tess_view view = {0};
+        view.eye[0] = 0.3f * tp->size; view.eye[1] = 0.2f * tp->size;
+        xyl_tess_batches b = {0};
+        assert_int_equal(xyl_tess_select(tp, pat, &view, &b, NULL), XYL_OK);
+        assert_true(b.cmd_count >= 3);
+        xyl_mesh *r = NULL;
+        assert_int_equal(xyl_tess_refine(tp, pat, &b, NULL, &r, NULL), XYL_OK);
+        assert_int_equal(r->vertex_count, b.vertices);
+        assert_int_equal(r->triangle_count, b.triangles);
+        check_refined_is_closed(r);
+        /* limits are honoured, not truncated */
+        xyl_mesh_limits lim = {0};
+        lim.max_vertices = b.vertices - 1;
+        xyl_mesh *none = (xyl_mesh *)(uintptr_t)1;
+        assert_int_equal(xyl_tess_refine(tp, pat, &b, &lim, &none, NULL), XYL_ERR_LIMIT_EXCEEDED);
+        assert_ptr_equal(none, (xyl_mesh *)(uintptr_t)1);
+        xyl_mesh_destroy(r);
+        xyl_tess_batches_free(&b);
+        xyl_tess_patches_destroy(tp);
+        xyl_mesh_destroy(m);
+    }
+    xyl_tess_patterns_destroy(pat);
+}
+
+/* ---- cameras -------------------------------------------------------------------------------- */
+
+static void clip(const float m[16], const float p[3], float out[4])
+{
+    for (int r = 0; r < 4; ++r)
+        out[r] = m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r];
+}
+
+static void camera_maps_target_to_the_centre_in_both_conventions(void **state)
+{
+    (void)state;
+    xyl_tess_camera cam = {0};
+    cam.eye[0] = 3.0f; cam.eye[1] = 2.0f; cam.eye[2] = 5.0f;
+    cam.target[1] = 1.0f;
+    cam.near_plane = 0.5f; cam.far_plane = 100.0f;
+    float gl[16], vk[16], c[4];
+    assert_int_equal(xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_GL, gl, NULL), XYL_OK);
+    assert_int_equal(xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_VULKAN, vk, NULL), XYL_OK);
+    clip(gl, cam.target, c);
+    assert_float_equal(c[0] / c[3], 0.0f, 1e-6);
+    assert_float_equal(c[1] / c[3], 0.0f, 1e-6);
+    assert_true(c[2] / c[3] > -1.0f && c[2] / c[3] < 1.0f);
+    /* a point above the target: up on screen in GL, y negative in Vulkan */
+    float above[3] = {0.0f, 1.5f, 0.0f};
+    clip(gl, above, c);
+    assert_true(c[1] / c[3] > 0.0f);
+    clip(vk, above, c);
+    assert_true(c[1] / c[3] < 0.0f);
+    /* near and far planes land on the conventions' depth ranges */
+    float dir[3] = {-3.0f, -1.0f, -5.0f}, len = sqrtf(35.0f);
+    float pn[3], pf[3];
+    for (int k = 0; k < 3; ++k) {
+        pn[k] = cam.eye[k] + dir[k] / len * 0.5f;
+        pf[k] = cam.eye[k] + dir[k] / len * 100.0f;
+    }
+    clip(gl, pn, c); assert_float_equal(c[2] / c[3], -1.0f, 1e-4);
+    clip(gl, pf, c); assert_float_equal(c[2] / c[3], 1.0f, 1e-4);
+    clip(vk, pn, c); assert_float_equal(c[2] / c[3], 0.0f, 1e-4);
+    clip(vk, pf, c); assert_float_equal(c[2] / c[3], 1.0f, 1e-4);
+    /* bad cameras */
+    xyl_tess_camera bad = cam;
+    memcpy(bad.target, bad.eye, sizeof bad.eye);
+    assert_int_equal(xyl_tess_camera_matrix(&bad, XYL_TESS_CLIP_GL, gl, NULL), XYL_ERR_INVALID_ARGUMENT);
+    bad = cam;
+    bad.up[0] = 3.0f; bad.up[1] = 1.0f; bad.up[2] = 5.0f; /* along the view direction */
+    bad.target[0] = 0.0f; bad.target[1] = 1.0f; bad.target[2] = 0.0f;
+    bad.eye[0] = 3.0f; bad.eye[1] = 2.0f; bad.eye[2] = 5.0f;
+    assert_int_equal(xyl_tess_camera_matrix(&bad, XYL_TESS_CLIP_GL, gl, NULL), XYL_ERR_INVALID_ARGUMENT);
+    bad = cam;
+    bad.eye[2] = INFINITY;
+    assert_int_equal(xyl_tess_camera_matrix(&bad, XYL_TESS_CLIP_GL, gl, NULL), XYL_ERR_NON_FINITE);
+    /* framing keeps a box's corners on screen */
+    float lo[3] = {-1, 0, -2}, hi[3] = {1, 7, 2};
+    xyl_tess_camera_frame(lo, hi, 0.7f, 0.3f, 0.8f, 1.5f, &cam);
+    assert_int_equal(xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_GL, gl, NULL), XYL_OK);
+    for (int i = 0; i < 8; ++i) {
+        float p[3] = {i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]};
+        clip(gl, p, c);
+        for (int k = 0; k < 3; ++k) assert_true(fabsf(c[k] / c[3]) <= 1.0f);
+    }
+}
+
 /* ---- bad input ------------------------------------------------------------------------------ */
 
 static void bad_input_gets_result_codes(void **state)
@@ -512,7 +660,7 @@ static void bad_input_gets_result_codes(void **state)
     assert_true(strlen(d.message) > 0);
     assert_int_equal(xyl_tess_patterns_create(4, NULL, NULL, &d), XYL_ERR_INVALID_ARGUMENT);
 
-    xyl_mesh *m = tree_mesh(4);
+    xyl_mesh *m = tu_tree_mesh(0, 4, XYL_SUBDIVIDE_NONE);
     xyl_tess_patches *tp = (xyl_tess_patches *)(uintptr_t)1;
     xyl_tess_patches_desc pd = {0};
     pd.variant = (xyl_tess_variant)7;
@@ -568,6 +716,8 @@ int main(void)
         cmocka_unit_test(patterns_tile_their_domain_counter_clockwise),
         cmocka_unit_test(levels_rise_as_the_camera_approaches),
         cmocka_unit_test(select_buckets_every_patch_once),
+        cmocka_unit_test(refined_adaptive_mesh_welds_into_a_closed_surface),
+        cmocka_unit_test(camera_maps_target_to_the_centre_in_both_conventions),
         cmocka_unit_test(bad_input_gets_result_codes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -3,6 +3,7 @@
 #define XYL_TEST_UTIL_H
 
 #include <dirent.h>
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -110,6 +111,44 @@ static inline int tu_for_each_hard_case(tu_skeleton_fn fn, void *ctx)
     }
     closedir(d);
     return count;
+}
+
+/* The default tree (depth 0: the grammar's own) meshed with k sides and a subdivision. */
+static inline xyl_mesh *tu_tree_mesh(uint32_t depth, uint32_t sides, xyl_subdivision subdivision)
+{
+    xyl_grammar *g = tu_parse(xyl_lsystem_preset_source(xyl_lsystem_default_preset()));
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    xyl_derive_desc dd = {0};
+    dd.has_depth = depth != 0;
+    dd.depth = depth;
+    assert_int_equal(xyl_lsystem_derive(g, &dd, &s, NULL), XYL_OK);
+    assert_int_equal(xyl_lsystem_interpret(g, s, NULL, &sk, NULL), XYL_OK);
+    xyl_stems_desc sd = {0};
+    sd.sides = sides;
+    sd.subdivision = subdivision;
+    xyl_mesh *m = NULL;
+    assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL), XYL_OK);
+    xyl_skeleton_destroy(sk);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return m;
+}
+
+/* Axis-aligned bounds of a mesh's positions. */
+static inline void tu_mesh_bounds(const xyl_mesh *m, float lo[3], float hi[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = INFINITY;
+        hi[k] = -INFINITY;
+    }
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fminf(lo[k], p[k]);
+            hi[k] = fmaxf(hi[k], p[k]);
+        }
+    }
 }
 
 #endif

@@ -6,12 +6,16 @@
 #include "tess_internal.h"
 #include "xyl_internal.h"
 
-static uint32_t pack(uint32_t i, uint32_t j) { return i | j << XYL_TESS_PATTERN_SHIFT_J; }
+static uint32_t pack(uint32_t i, uint32_t j, uint32_t local)
+{
+    return i | j << XYL_TESS_PATTERN_SHIFT_J | local << XYL_TESS_PATTERN_SHIFT_LOCAL;
+}
 
 static void quad_pattern(uint32_t l, uint32_t *v, uint32_t *idx)
 {
+    uint32_t local = 0;
     for (uint32_t j = 0; j <= l; ++j)
-        for (uint32_t i = 0; i <= l; ++i) *v++ = pack(i, j);
+        for (uint32_t i = 0; i <= l; ++i, ++local) *v++ = pack(i, j, local);
     for (uint32_t j = 0; j < l; ++j)
         for (uint32_t i = 0; i < l; ++i) {
             uint32_t a = j * (l + 1) + i, b = a + 1, c = a + l + 2, d = a + l + 1;
@@ -28,8 +32,9 @@ static uint32_t tri_at(uint32_t l, uint32_t i, uint32_t j)
 
 static void tri_pattern(uint32_t l, uint32_t *v, uint32_t *idx)
 {
+    uint32_t local = 0;
     for (uint32_t j = 0; j <= l; ++j)
-        for (uint32_t i = 0; i + j <= l; ++i) *v++ = pack(i, j);
+        for (uint32_t i = 0; i + j <= l; ++i, ++local) *v++ = pack(i, j, local);
     for (uint32_t j = 0; j < l; ++j)
         for (uint32_t i = 0; i + j < l; ++i) {
             *idx++ = tri_at(l, i, j); *idx++ = tri_at(l, i + 1, j); *idx++ = tri_at(l, i, j + 1);

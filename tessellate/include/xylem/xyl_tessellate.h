@@ -38,6 +38,8 @@ _Static_assert(offsetof(xyl_tess_patch, n) == 64, "normals follow the 4 position
 _Static_assert(sizeof(xyl_tess_instance) == 16, "instance record is one uvec4");
 _Static_assert(sizeof(xyl_tess_draw_cmd) == 20, "indirect indexed draw command is 5 words");
 _Static_assert(offsetof(xyl_tess_draw_cmd, base_instance) == 16, "GL / Vulkan command layout");
+_Static_assert(sizeof(xyl_tess_frame) == 128, "xyl_tess_frame is 128 bytes in std140");
+_Static_assert(offsetof(xyl_tess_frame, variant) == 112, "scalars follow mat4 + 3 vec4");
 #endif
 
 typedef enum xyl_tess_variant {
@@ -106,7 +108,8 @@ typedef struct xyl_tess_pattern_range {
 } xyl_tess_pattern_range;
 
 typedef struct xyl_tess_patterns {
-    const uint32_t *vertices; /* packed lattice points: i | j << XYL_TESS_PATTERN_SHIFT_J */
+    const uint32_t *vertices; /* packed: i | j << XYL_TESS_PATTERN_SHIFT_J
+                                 | local index << XYL_TESS_PATTERN_SHIFT_LOCAL */
     size_t vertex_count;
     const uint32_t *indices;  /* counter-clockwise triangles, like the faces they refine */
     size_t index_count;
@@ -168,6 +171,73 @@ XYL_API void xyl_tess_batches_free(xyl_tess_batches *batches);
  * [1, max_level]. Exposed for tests and tools. */
 XYL_API uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
                                     uint32_t max_level);
+
+/* ---- CPU tessellation ---------------------------------------------------------------------- */
+
+/* Evaluates every instance of the batches with the reference evaluator into a triangle mesh:
+ * each instance's pattern vertices in instance order (not welded across patches: the shared
+ * edges' points are bit-identical, so xyl_mesh_check-style welding by position is exact), the
+ * patterns' triangles. Drawing it as plain triangles is the "cpu" path of `xylem render`.
+ * Errors: XYL_ERR_INVALID_ARGUMENT (instances that do not match the patches or patterns),
+ * XYL_ERR_LIMIT_EXCEEDED (limits: default 2^26 vertices and faces), XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_tess_refine(const xyl_tess_patches *patches,
+                                   const xyl_tess_patterns *patterns,
+                                   const xyl_tess_batches *batches, const xyl_mesh_limits *limits,
+                                   xyl_mesh **out, xyl_diag *diag);
+
+/* ---- cameras and GPU readback (shared by the GL and Vulkan backends) ------------------------ */
+
+typedef enum xyl_tess_clip {
+    XYL_TESS_CLIP_GL = 0,    /* y up, depth -1..1 */
+    XYL_TESS_CLIP_VULKAN = 1 /* y down, depth 0..1 */
+} xyl_tess_clip;
+
+typedef struct xyl_tess_camera {
+    float eye[3], target[3], up[3]; /* up default (all 0): +Y */
+    float fovy;                     /* radians; default (0): 0.8 */
+    float aspect;                   /* width / height; default (0): 1 */
+    float near_plane, far_plane;    /* default (0): from the distance to target (1e-3 d, 1e3 d) */
+} xyl_tess_camera;
+
+/* Column-major world-to-clip matrix for the API's clip convention. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (eye == target, up parallel to the view direction, planes out of
+ * order), XYL_ERR_NON_FINITE. */
+XYL_API xyl_result xyl_tess_camera_matrix(const xyl_tess_camera *camera, xyl_tess_clip clip,
+                                          float view_proj[16], xyl_diag *diag);
+
+/* A camera that frames a bounding box from a direction (azimuth around +Y and elevation, radians)
+ * with the whole box in view. */
+XYL_API void xyl_tess_camera_frame(const float lo[3], const float hi[3], float azimuth,
+                                   float elevation, float fovy, float aspect,
+                                   xyl_tess_camera *camera);
+
+typedef enum xyl_tess_path {
+    XYL_TESS_PATH_INSTANCED = 0, /* one pattern per level, drawn once per patch */
+    XYL_TESS_PATH_HARDWARE = 1   /* TCS/TES: GL only */
+} xyl_tess_path;
+
+typedef struct xyl_tess_image_desc {
+    uint32_t width, height;  /* default (0): 512 x 512; at most 8192 each */
+    float background[4];     /* RGBA 0..1; default all 0 (transparent black) */
+    bool wireframe;          /* overlay the triangle edges in frame->line_color */
+    uint32_t samples;        /* MSAA samples; default (0): 1 */
+} xyl_tess_image_desc;
+
+/* One vertex as a GPU evaluated it, for comparison with the CPU reference. Instanced path:
+ * coord = (i, j, level) of the lattice point. Hardware path: coord = gl_TessCoord. */
+typedef struct xyl_tess_captured {
+    float position[3];
+    float normal[3];
+    float coord[3];
+    uint32_t patch;
+} xyl_tess_captured;
+
+/* The CPU reference of a captured vertex: xyl_tess_eval_lattice for the instanced path; for the
+ * hardware path the tessellation evaluation shader's rule (points on a side snapped to k / le of
+ * that side's level, the rest by xyl_tess_eval). edge_levels is the patch's instance record. */
+XYL_API void xyl_tess_reference(const xyl_tess_patch *patch, xyl_tess_variant variant,
+                                const xyl_tess_captured *captured, bool hardware,
+                                uint32_t edge_levels, float pos[3], float normal[3]);
 
 #ifdef __cplusplus
 }

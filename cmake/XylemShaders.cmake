@@ -1,0 +1,71 @@
+# GLSL in shaders/ -> complete stage sources (one prefix of #version and #defines, the shared
+# header, the evaluation code, the resources, the stage) -> embedded C arrays: GLSL text for the
+# GL backend, SPIR-V from glslangValidator for Vulkan. glslangValidator also validates every GL
+# stage at build time, so a shader that does not compile fails the build, not a test run.
+find_program(XYL_GLSLANG glslangValidator REQUIRED)
+set(XYL_SHADER_DIR ${PROJECT_SOURCE_DIR}/shaders)
+set(XYL_SHADER_OUT ${PROJECT_BINARY_DIR}/shaders)
+file(MAKE_DIRECTORY ${XYL_SHADER_OUT})
+set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_tess_eval.glsl
+    ${XYL_SHADER_DIR}/xyl_tess_io.glsl)
+
+# xyl_shader(<name> <stage file> <gl|vulkan> [DEFINE...]): appends the generated C file to
+# XYL_GL_SHADER_SOURCES or XYL_VK_SHADER_SOURCES; the symbol is xyl__shader_<name>.
+function(xyl_shader name stage api)
+  get_filename_component(ext ${stage} LAST_EXT)
+  string(SUBSTRING ${ext} 1 -1 ext)
+  set(prefix_text "#version 450\n#define XYL_GLSL 1\n")
+  if(api STREQUAL "vulkan")
+    string(APPEND prefix_text "#define XYL_VULKAN 1\n")
+  endif()
+  foreach(d IN LISTS ARGN)
+    string(APPEND prefix_text "#define ${d} 1\n")
+  endforeach()
+  set(prefix ${XYL_SHADER_OUT}/${name}.prefix)
+  file(CONFIGURE OUTPUT ${prefix} CONTENT "${prefix_text}" @ONLY)
+  set(src ${XYL_SHADER_OUT}/${name}.${ext})
+  set(inputs ${XYL_SHADER_COMMON} ${XYL_SHADER_DIR}/${stage})
+  string(REPLACE ";" "\\;" inputs_arg "${inputs}")
+  add_custom_command(OUTPUT ${src}
+    COMMAND ${CMAKE_COMMAND} -DOUT=${src} -DPREFIX_FILE=${prefix} -DIN=${inputs_arg}
+            -P ${PROJECT_SOURCE_DIR}/cmake/xyl_concat.cmake
+    DEPENDS ${inputs} ${prefix} ${PROJECT_SOURCE_DIR}/cmake/xyl_concat.cmake
+    COMMENT "Assembling shader ${name}.${ext}" VERBATIM)
+  set(c_out ${XYL_SHADER_OUT}/xyl_shader_${name}.c)
+  if(api STREQUAL "gl")
+    set(stamp ${XYL_SHADER_OUT}/${name}.checked)
+    add_custom_command(OUTPUT ${c_out}
+      COMMAND ${XYL_GLSLANG} --quiet ${src}
+      COMMAND ${CMAKE_COMMAND} -DOUT=${c_out} -DNAME=xyl__shader_${name} -DIN=${src}
+              -P ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
+      DEPENDS ${src} ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
+      COMMENT "Validating and embedding GLSL ${name}" VERBATIM)
+    set(XYL_GL_SHADER_SOURCES ${XYL_GL_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+  else()
+    set(spv ${XYL_SHADER_OUT}/${name}.spv)
+    add_custom_command(OUTPUT ${c_out}
+      COMMAND ${XYL_GLSLANG} --quiet -V --target-env vulkan1.2 -o ${spv} ${src}
+      COMMAND ${CMAKE_COMMAND} -DOUT=${c_out} -DNAME=xyl__shader_${name} -DIN=${spv}
+              -P ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
+      DEPENDS ${src} ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
+      BYPRODUCTS ${spv}
+      COMMENT "Compiling ${name} to SPIR-V" VERBATIM)
+    set(XYL_VK_SHADER_SOURCES ${XYL_VK_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    set(XYL_VK_SPIRV ${XYL_VK_SPIRV} ${spv} PARENT_SCOPE)
+  endif()
+endfunction()
+
+set(XYL_GL_SHADER_SOURCES)
+set(XYL_VK_SHADER_SOURCES)
+set(XYL_VK_SPIRV)
+xyl_shader(gl_instanced_vert tess_instanced.vert gl)
+xyl_shader(gl_instanced_capture_vert tess_instanced.vert gl XYL_CAPTURE)
+xyl_shader(gl_shade_frag tess_shade.frag gl)
+xyl_shader(gl_hw_vert tess_hw.vert gl)
+xyl_shader(gl_hw_quad_tesc tess_hw.tesc gl)
+xyl_shader(gl_hw_quad_tese tess_hw.tese gl)
+xyl_shader(gl_hw_tri_tesc tess_hw.tesc gl XYL_TRIANGLES)
+xyl_shader(gl_hw_tri_tese tess_hw.tese gl XYL_TRIANGLES)
+xyl_shader(vk_instanced_vert tess_instanced.vert vulkan)
+xyl_shader(vk_instanced_capture_vert tess_instanced.vert vulkan XYL_CAPTURE)
+xyl_shader(vk_shade_frag tess_shade.frag vulkan)
