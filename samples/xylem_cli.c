@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,19 +15,44 @@
 #include <time.h>
 
 #include <xylem/xyl_lsystem.h>
+#include <xylem/xyl_tess_gl.h>
+#include <xylem/xyl_tess_vk.h>
+#include <xylem/xyl_tessellate.h>
 
-enum { EXIT_USAGE = 64, EXIT_DATA = 65, EXIT_NOINPUT = 66, EXIT_OSERR = 71, EXIT_CANTCREAT = 73 };
+#include "glb_read.h"
+#include "png_write.h"
+
+enum {
+    EXIT_USAGE = 64, EXIT_DATA = 65, EXIT_NOINPUT = 66, EXIT_UNAVAILABLE = 69, EXIT_OSERR = 71,
+    EXIT_CANTCREAT = 73
+};
+
+typedef enum tess_mode { TESS_INSTANCED, TESS_HARDWARE, TESS_CPU } tess_mode;
+
+typedef struct render_options {
+    bool vulkan;
+    tess_mode tess;
+    xyl_tess_variant variant;
+    uint32_t level;          /* 0: adaptive from error_px */
+    double error_px;         /* 0: the library default (0.5 px) */
+    double azimuth, elevation; /* degrees */
+    bool has_camera;
+    uint32_t width, height;
+    bool wireframe;
+} render_options;
 
 typedef struct options {
     const char *preset;
     const char *grammar_path;
     const char *skeleton_path;
+    const char *mesh_path;
     xyl_stems_desc stems;
     const char *out;
     bool has_seed, has_depth, merge;
     uint64_t seed;
     uint32_t depth;
     xyl_turtle_desc turtle;
+    render_options render;
 } options;
 
 static const char usage_text[] =
@@ -45,10 +71,16 @@ static const char usage_text[] =
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
     "           --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it\n"
+    "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
+    "           [--backend gl|vulkan]\n"
+    "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
+    "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
+    "           [--wireframe] --out FILE.png\n"
+    "                               refine the stem mesh (PN patches) and render it headless\n"
     "\n"
     "source: --preset NAME (default: the default tree) or --grammar FILE\n"
-    "exit codes: 0 ok, 64 usage, 65 bad input, 66 unreadable input, 71 out of memory,\n"
-    "            73 output not writable\n";
+    "exit codes: 0 ok, 64 usage, 65 bad input, 66 unreadable input, 69 no usable GPU\n"
+    "            backend, 71 out of memory, 73 output not writable\n";
 
 static double now_seconds(void)
 {
@@ -71,6 +103,7 @@ static int exit_code_for(xyl_result r)
     case XYL_OK: return 0;
     case XYL_ERR_OUT_OF_MEMORY: return EXIT_OSERR;
     case XYL_ERR_IO: return EXIT_NOINPUT;
+    case XYL_ERR_UNSUPPORTED: return EXIT_UNAVAILABLE;
     case XYL_ERR_INVALID_ARGUMENT:
     case XYL_ERR_NOT_FOUND: return EXIT_USAGE;
     default: return EXIT_DATA;
@@ -111,6 +144,50 @@ static bool parse_double(const char *s, double *out)
     return true;
 }
 
+static int parse_render_option(render_options *r, const char *opt, const char *val)
+{
+    uint64_t u;
+    if (strcmp(opt, "--backend") == 0) {
+        if (strcmp(val, "gl") == 0) r->vulkan = false;
+        else if (strcmp(val, "vulkan") == 0) r->vulkan = true;
+        else return usage_error("--backend takes gl or vulkan, not '%s'", val);
+    } else if (strcmp(opt, "--tess") == 0) {
+        if (strcmp(val, "instanced") == 0) r->tess = TESS_INSTANCED;
+        else if (strcmp(val, "hardware") == 0) r->tess = TESS_HARDWARE;
+        else if (strcmp(val, "cpu") == 0) r->tess = TESS_CPU;
+        else return usage_error("--tess takes instanced, hardware or cpu, not '%s'", val);
+    } else if (strcmp(opt, "--variant") == 0) {
+        if (strcmp(val, "pn") == 0) r->variant = XYL_TESS_PN;
+        else if (strcmp(val, "rounded") == 0) r->variant = XYL_TESS_ROUNDED;
+        else if (strcmp(val, "circle") == 0) r->variant = XYL_TESS_CIRCLE;
+        else return usage_error("--variant takes pn, rounded or circle, not '%s'", val);
+    } else if (strcmp(opt, "--level") == 0) {
+        if (!parse_u64(val, XYL_TESS_MAX_LEVEL, &u) || u < 1)
+            return usage_error("--level takes a whole number from 1 to 64, not '%s'", val);
+        r->level = (uint32_t)u;
+    } else if (strcmp(opt, "--error-px") == 0) {
+        if (!parse_double(val, &r->error_px) || !(r->error_px > 0.0) || r->error_px > 1e6)
+            return usage_error("--error-px takes a positive number of pixels, not '%s'", val);
+    } else if (strcmp(opt, "--camera") == 0) {
+        char extra;
+        if (sscanf(val, "%lf,%lf%c", &r->azimuth, &r->elevation, &extra) != 2 ||
+            !(fabs(r->azimuth) <= 3600.0) || !(fabs(r->elevation) < 90.0))
+            return usage_error("--camera takes AZIMUTH,ELEVATION in degrees (|elevation| < 90), "
+                               "not '%s'", val);
+        r->has_camera = true;
+    } else if (strcmp(opt, "--size") == 0) {
+        unsigned w, h;
+        char extra;
+        if (sscanf(val, "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 8192 || h > 8192)
+            return usage_error("--size takes WIDTHxHEIGHT, each 1..8192, not '%s'", val);
+        r->width = w;
+        r->height = h;
+    } else {
+        return usage_error("unknown option '%s'", opt);
+    }
+    return 0;
+}
+
 static int parse_mesh_option(options *o, const char *opt, const char *val)
 {
     xyl_stems_desc *m = &o->stems;
@@ -130,8 +207,10 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
         else return usage_error("--normals takes branch or smooth, not '%s'", val);
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
+    } else if (strcmp(opt, "--mesh") == 0) {
+        o->mesh_path = val;
     } else {
-        return usage_error("unknown option '%s'", opt);
+        return parse_render_option(&o->render, opt, val);
     }
     return 0;
 }
@@ -166,6 +245,10 @@ static int parse_options(int argc, char **argv, options *o)
         const char *opt = argv[i];
         if (strcmp(opt, "--merge-collinear") == 0) {
             o->turtle.merge_collinear = true;
+            continue;
+        }
+        if (strcmp(opt, "--wireframe") == 0) {
+            o->render.wireframe = true;
             continue;
         }
         if (strncmp(opt, "--", 2) != 0) return usage_error("unexpected argument '%s'", opt);
@@ -445,6 +528,234 @@ static int cmd_mesh(const options *o)
     return rc;
 }
 
+/* ---- render -------------------------------------------------------------------------------- */
+
+typedef struct render_job {
+    xyl_mesh *mesh, *refined;
+    xyl_tess_patterns *patterns;
+    xyl_tess_patches *patches, *drawn; /* drawn: patches, or the refined mesh's for --tess cpu */
+    xyl_tess_batches batches;
+    xyl_tess_camera camera;
+    xyl_tess_frame frame;
+    xyl_tess_image_desc image;
+    uint8_t *rgba;
+    double select_ms, gpu_ms;
+    const char *device;
+} render_job;
+
+static void render_job_free(render_job *j)
+{
+    xyl_tess_batches_free(&j->batches);
+    if (j->drawn != j->patches) xyl_tess_patches_destroy(j->drawn);
+    xyl_tess_patches_destroy(j->patches);
+    xyl_tess_patterns_destroy(j->patterns);
+    xyl_mesh_destroy(j->refined);
+    xyl_mesh_destroy(j->mesh);
+    free(j->rgba);
+}
+
+static void frame_camera(const options *o, render_job *j)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < j->mesh->vertex_count; ++v) {
+        xyl_vec3 q = j->mesh->positions[v];
+        const float p[3] = {q.x, q.y, q.z};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fminf(lo[k], p[k]);
+            hi[k] = fmaxf(hi[k], p[k]);
+        }
+    }
+    double deg = 3.14159265358979323846 / 180.0;
+    double az = o->render.has_camera ? o->render.azimuth : 30.0;
+    double el = o->render.has_camera ? o->render.elevation : 10.0;
+    xyl_tess_camera_frame(lo, hi, (float)(az * deg), (float)(el * deg), 0.8f,
+                          (float)j->image.width / (float)j->image.height, &j->camera);
+}
+
+/* Levels for the view (or the fixed level), timed: the per-frame CPU cost of the technique. */
+static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_patches *p,
+                                uint32_t fixed, xyl_diag *d)
+{
+    xyl_tess_view view = {0};
+    memcpy(view.eye, j->camera.eye, sizeof view.eye);
+    view.fovy = j->camera.fovy;
+    view.viewport_height = j->image.height;
+    view.error_px = (float)o->render.error_px;
+    view.fixed_level = fixed;
+    double t0 = now_seconds();
+    xyl_result r = xyl_tess_select(p, j->patterns, &view, &j->batches, d);
+    j->select_ms = (now_seconds() - t0) * 1e3;
+    return r;
+}
+
+/* --tess cpu: the reference evaluator refines on the CPU; the refined triangles are drawn at
+ * level 1, where a patch shows exactly its three corners (a plain triangle). */
+static xyl_result refine_on_cpu(render_job *j, xyl_diag *d)
+{
+    xyl_result r = xyl_tess_refine(j->patches, j->patterns, &j->batches, NULL, &j->refined, d);
+    if (r == XYL_OK) r = xyl_tess_patches_create(j->refined, NULL, &j->drawn, d);
+    return r;
+}
+
+static xyl_result prepare_render(const options *o, render_job *j, xyl_diag *d)
+{
+    const render_options *ro = &o->render;
+    xyl_tess_patches_desc pd = {0};
+    pd.variant = ro->variant;
+    xyl_result r = xyl_tess_patterns_create(0, NULL, &j->patterns, d);
+    if (r == XYL_OK) r = xyl_tess_patches_create(j->mesh, &pd, &j->patches, d);
+    if (r != XYL_OK) return r;
+    j->drawn = j->patches;
+    frame_camera(o, j);
+    r = select_levels(o, j, j->patches, ro->level, d);
+    if (r == XYL_OK && ro->tess == TESS_CPU) {
+        r = refine_on_cpu(j, d);
+        if (r == XYL_OK) r = select_levels(o, j, j->drawn, 1, d);
+    }
+    return r;
+}
+
+static void fill_frame(const render_job *j, xyl_tess_variant variant, xyl_tess_frame *f)
+{
+    memset(f, 0, sizeof *f);
+    const float light[3] = {0.42f, 0.78f, 0.46f};
+    memcpy(f->light_dir, light, sizeof light);
+    const float bark[4] = {0.47f, 0.35f, 0.24f, 1.0f}, line[4] = {0.08f, 0.08f, 0.08f, 1.0f};
+    memcpy(f->color, bark, sizeof bark);
+    memcpy(f->line_color, line, sizeof line);
+    f->variant = j->drawn == j->patches ? (uint32_t)variant : (uint32_t)XYL_TESS_PN;
+}
+
+#ifdef XYL_HAVE_GL
+static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
+{
+    xyl_gl_context *ctx = NULL;
+    xyl_tess_gl *gl = NULL;
+    xyl_result r = xyl_gl_context_create_headless(&ctx, d);
+    if (r == XYL_OK) r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, d);
+    if (r == XYL_OK) r = xyl_tess_gl_create(j->patterns, &gl, d);
+    if (r == XYL_OK) r = xyl_tess_gl_set_patches(gl, j->drawn, d);
+    xyl_tess_path path = o->render.tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE
+                                                         : XYL_TESS_PATH_INSTANCED;
+    if (r == XYL_OK)
+        r = xyl_tess_gl_render_rgba(gl, &j->batches, &j->frame, path, &j->image, j->rgba, d);
+    if (r == XYL_OK) {
+        j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl);
+        printf("device: %s (OpenGL)\n", xyl_gl_context_renderer(ctx));
+    }
+    xyl_tess_gl_destroy(gl);
+    xyl_gl_context_destroy(ctx);
+    return r;
+}
+
+#else
+static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
+{
+    (void)o, (void)j;
+    snprintf(d->message, sizeof d->message, "this xylem was built without the GL backend");
+    return XYL_ERR_UNSUPPORTED;
+}
+#endif
+
+#ifdef XYL_HAVE_VULKAN
+static xyl_result render_vk(render_job *j, xyl_diag *d)
+{
+    xyl_tess_vk *vk = NULL;
+    xyl_tess_vk_desc vd = {0};
+    xyl_result r = xyl_tess_vk_create(&vd, j->patterns, &vk, d);
+    if (r == XYL_OK)
+        r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_VULKAN, j->frame.view_proj, d);
+    if (r == XYL_OK) r = xyl_tess_vk_set_patches(vk, j->drawn, d);
+    if (r == XYL_OK) r = xyl_tess_vk_render_rgba(vk, &j->batches, &j->frame, &j->image, j->rgba, d);
+    if (r == XYL_OK) {
+        j->gpu_ms = xyl_tess_vk_last_gpu_ms(vk);
+        printf("device: %s (Vulkan)\n", xyl_tess_vk_device_name(vk));
+    }
+    xyl_tess_vk_destroy(vk);
+    return r;
+}
+#else
+static xyl_result render_vk(render_job *j, xyl_diag *d)
+{
+    (void)j;
+    snprintf(d->message, sizeof d->message, "this xylem was built without the Vulkan backend");
+    return XYL_ERR_UNSUPPORTED;
+}
+#endif
+
+static void print_render(const render_job *j, const char *path)
+{
+    uint32_t lo = 64, hi = 0;
+    for (size_t c = 0; c < j->batches.cmd_count; ++c) {
+        lo = j->batches.batches[c].level < lo ? j->batches.batches[c].level : lo;
+        hi = j->batches.batches[c].level > hi ? j->batches.batches[c].level : hi;
+    }
+    printf("patches: %zu (%zu quads), levels %u..%u, %llu triangles drawn\n", j->drawn->count,
+           j->drawn->quad_count, lo, hi, (unsigned long long)j->batches.triangles);
+    printf("time: level selection %.3f ms, GPU %.3f ms\n", j->select_ms, j->gpu_ms);
+    printf("wrote %s\n", path);
+}
+
+/* A .glb (from xylem or any glTF writer) as the mesh to refine. */
+static int load_glb(const char *path, xyl_mesh **mesh)
+{
+    size_t size = 0;
+    int rc = 0;
+    char *bytes = read_all(path, &size, &rc);
+    if (!bytes) return rc;
+    xyl_diag d = {0};
+    xyl_result r = xyl_sample_read_glb((const unsigned char *)bytes, size, mesh, &d);
+    free(bytes);
+    return r ? report(path, r, &d) : 0;
+}
+
+static int cmd_render(const options *o)
+{
+    const render_options *ro = &o->render;
+    if (!o->out || !ends_with(o->out, ".png")) return usage_error("%s", "'render' needs --out FILE.png");
+    if ((o->skeleton_path != NULL) + (o->mesh_path != NULL) + (o->preset || o->grammar_path) > 1)
+        return usage_error("%s", "give one of --skeleton, --mesh or a grammar source");
+    if (ro->level && ro->error_px > 0.0) return usage_error("%s", "give --level or --error-px, not both");
+    if (ro->vulkan && ro->tess == TESS_HARDWARE)
+        return usage_error("%s", "--tess hardware is the GL backend's; use --backend gl");
+    render_job j;
+    memset(&j, 0, sizeof j);
+    j.image.width = ro->width ? ro->width : 1024;
+    j.image.height = ro->height ? ro->height : 1024;
+    j.image.wireframe = ro->wireframe;
+    j.image.samples = 4;
+    const float bg[4] = {0.86f, 0.90f, 0.95f, 1.0f};
+    memcpy(j.image.background, bg, sizeof bg);
+    xyl_skeleton *sk = NULL;
+    const char *source = NULL;
+    xyl_diag d = {0};
+    xyl_result r = XYL_OK;
+    int rc = o->mesh_path ? load_glb(o->mesh_path, &j.mesh) : load_skeleton(o, &sk, &source);
+    if (o->mesh_path) source = o->mesh_path;
+    else if (!rc) r = xyl_stems_build(sk, &o->stems, &j.mesh, &d);
+    if (!rc && r == XYL_OK) r = prepare_render(o, &j, &d);
+    if (!rc && r == XYL_OK) {
+        j.rgba = malloc((size_t)j.image.width * j.image.height * 4);
+        if (!j.rgba) r = XYL_ERR_OUT_OF_MEMORY;
+    }
+    if (!rc && r == XYL_OK) {
+        fill_frame(&j, ro->variant, &j.frame);
+        r = ro->vulkan ? render_vk(&j, &d) : render_gl(o, &j, &d);
+    }
+    if (!rc && r != XYL_OK) rc = report(source, r, &d);
+    if (!rc) {
+        char msg[512];
+        if (xyl_png_write(o->out, j.rgba, j.image.width, j.image.height, msg, sizeof msg) != 0) {
+            fprintf(stderr, "xylem: %s\n", msg);
+            rc = EXIT_CANTCREAT;
+        }
+    }
+    if (!rc) print_render(&j, o->out);
+    render_job_free(&j);
+    xyl_skeleton_destroy(sk);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -465,10 +776,11 @@ int main(int argc, char **argv)
     options o;
     memset(&o, 0, sizeof o);
     bool derive = strcmp(cmd, "derive") == 0, skeleton = strcmp(cmd, "skeleton") == 0;
-    bool mesh = strcmp(cmd, "mesh") == 0;
-    if (!derive && !skeleton && !mesh) return usage_error("unknown command '%s'", cmd);
+    bool mesh = strcmp(cmd, "mesh") == 0, render = strcmp(cmd, "render") == 0;
+    if (!derive && !skeleton && !mesh && !render) return usage_error("unknown command '%s'", cmd);
     int rc = parse_options(argc, argv, &o);
     if (rc) return rc;
     if (mesh) return cmd_mesh(&o);
+    if (render) return cmd_render(&o);
     return derive ? cmd_derive(&o) : cmd_skeleton(&o);
 }

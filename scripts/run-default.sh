@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job: builds xylem and grows the built-in default tree, writing out/tree.glb (its
-# closed stem mesh, glTF 2.0 binary), out/tree.skel (the skeleton text format) and out/tree.obj
-# (skeleton polylines for any viewer).
+# closed stem mesh, glTF 2.0 binary), out/tree.png (that mesh refined by PN tessellation on the
+# GPU, headless: EGL, llvmpipe where there is no GPU), out/tree.skel (the skeleton text format)
+# and out/tree.obj (skeleton polylines for any viewer).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
@@ -9,6 +10,7 @@ cmake -S . -B build-release -G Ninja -DCMAKE_BUILD_TYPE=Release -DXYL_BUILD_TEST
 cmake --build build-release --target xylem_cli >/dev/null
 mkdir -p out
 ./build-release/samples/xylem mesh --out out/tree.glb
+./build-release/samples/xylem render --out out/tree.png
 ./build-release/samples/xylem skeleton --out out/tree.skel >/dev/null
 ./build-release/samples/xylem skeleton --out out/tree.obj >/dev/null
 echo "wrote out/tree.skel and out/tree.obj"
