@@ -99,5 +99,26 @@ expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out 
 expect 65 "broken skeleton" -- "$XYLEM" mesh --skeleton "$data/skel/bad_parent.skel" --out "$tmp/x.glb"
 expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
 
+# render: headless GPU (llvmpipe / lavapipe without one); small images keep it quick
+png_magic() { head -c 8 "$1" | od -An -tx1 | tr -d ' \n' | grep -q '^89504e470d0a1a0a$'; }
+expect 0 "render default (GL, instanced)" -- "$XYLEM" render --size 64x48 --out "$tmp/t.png"
+contains "triangles drawn" "render summary"
+png_magic "$tmp/t.png" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: render wrote no PNG"; }
+expect 0 "render hardware path, wireframe" -- "$XYLEM" render --tess hardware --wireframe --level 2 --size 64x64 --out "$tmp/h.png"
+expect 0 "render Vulkan from a .glb" -- "$XYLEM" render --mesh "$tmp/tree.glb" --backend vulkan --variant circle --size 64x64 --out "$tmp/v.png"
+contains "(Vulkan)" "Vulkan device named"
+expect 0 "render CPU reference" -- "$XYLEM" render --tess cpu --error-px 2 --camera 90,20 --size 64x64 --out "$tmp/c.png"
+expect 64 "render needs a .png" -- "$XYLEM" render --out "$tmp/x.jpg"
+expect 64 "render level out of range" -- "$XYLEM" render --level 65 --out "$tmp/x.png"
+expect 64 "render bad backend" -- "$XYLEM" render --backend metal --out "$tmp/x.png"
+expect 64 "render bad size" -- "$XYLEM" render --size 0x10 --out "$tmp/x.png"
+expect 64 "render bad camera" -- "$XYLEM" render --camera 0,95 --out "$tmp/x.png"
+expect 64 "render hardware on Vulkan" -- "$XYLEM" render --backend vulkan --tess hardware --out "$tmp/x.png"
+expect 66 "render missing mesh" -- "$XYLEM" render --mesh "$tmp/none.glb" --out "$tmp/x.png"
+head -c 200 "$tmp/tree.glb" >"$tmp/trunc.glb"
+expect 65 "render truncated mesh" -- "$XYLEM" render --mesh "$tmp/trunc.glb" --out "$tmp/x.png"
+[ ! -e "$tmp/x.png" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: a failed render left x.png"; }
+expect 73 "render unwritable output" -- "$XYLEM" render --size 16x16 --out "$tmp/no/dir/x.png"
+
 echo "test_cli: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
