@@ -1,4 +1,4 @@
-/* Helpers shared by the benchmark programs (bench_lsystem, bench_stems): options, monotonic
+/* Helpers shared by the benchmark programs (bench_lsystem, bench_stems, bench_tess): options, monotonic
  * timing with medians of batched samples, and finding and quoting a node peer script. */
 #ifndef XYL_BENCH_COMMON_H
 #define XYL_BENCH_COMMON_H

@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # Benchmarks: installs the peers (npm packages lindenmayer and @dgreenheck/ez-tree, pinned in
-# samples/bench/), builds bench_lsystem and bench_stems in Release and runs them one after the
-# other; the figures go to the terminal and to $BUILD_DIR/bench_lsystem.txt and
-# $BUILD_DIR/bench_stems.txt. docs/BENCHMARKS.md explains the tables.
+# samples/bench/), builds bench_lsystem, bench_stems and bench_tess in Release and runs them one
+# after the other; the figures go to the terminal and to $BUILD_DIR/<name>.txt, bench_tess's
+# rows also to $BUILD_DIR/bench_tess.dat (+ .front), plotted by gnuplot into
+# $BUILD_DIR/bench_tess.png. docs/BENCHMARKS.md explains the tables.
 #
 #   scripts/bench.sh                 # full sizes (a few minutes)
 #   scripts/bench.sh --quick         # smoke sizes; options are passed to both benchmarks
 #   BUILD_DIR=build-foo scripts/bench.sh
 #
-# Both benchmarks take --quick, --no-peer, --repeats N and --node PATH (--peer-script would name
-# one script for both: run the binaries directly for that).
+# bench_lsystem and bench_stems take --quick, --no-peer, --repeats N and --node PATH
+# (--peer-script would name one script for both: run the binaries directly for that);
+# bench_tess gets --quick only (it has no peer; its own options: bench_tess --help).
 #
 # Without node/npm it tries apt-get (Debian/Ubuntu); if that is not possible the benchmark still
 # runs and reports the peer as not available.
@@ -61,7 +63,7 @@ if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; the
     generator=(-G Ninja)
 fi
 cmake -S . -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems
+cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess
 
 if commit="$(git rev-parse --short HEAD 2>/dev/null)"; then
     git diff --quiet HEAD || commit="$commit (with local changes)"
@@ -97,4 +99,15 @@ status=0
 run_bench bench_lsystem "$@" || status=$?
 echo
 run_bench bench_stems "$@" || status=$?
+echo
+tess_args=(--dat "$BUILD_DIR/bench_tess.dat")
+for a in "$@"; do [ "$a" = --quick ] && tess_args+=(--quick); done
+if run_bench bench_tess "${tess_args[@]}"; then
+    if command -v gnuplot >/dev/null 2>&1; then
+        gnuplot -e "dat='$BUILD_DIR/bench_tess.dat'; out='$BUILD_DIR/bench_tess.png'" \
+            scripts/plot_tess.gp && echo "bench.sh: plot written to $BUILD_DIR/bench_tess.png"
+    fi
+else
+    status=$?
+fi
 exit "$status"

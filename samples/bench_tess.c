@@ -1,0 +1,537 @@
+/* bench_tess: speed against error of PN tessellation (docs/BENCHMARKS.md, "Tessellation").
+ *
+ * For ring sides k, pre-subdivision, handle variant and level: the triangles drawn for the
+ * default tree, the geometric error of the refined surface against the skeleton's generalized
+ * cylinder (max and RMS radial error in % of the radius, normal error in degrees) measured on a
+ * curved test branch away from its caps, and the median wall time per frame (render and
+ * readback of a size x size image) on each backend and path. Then the Pareto front: for each
+ * error target the cheapest configuration.
+ *
+ * usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]
+ *   --dat FILE writes every row to FILE and the Pareto front to FILE.front (scripts/plot_tess.gp
+ *   plots both). */
+#define _POSIX_C_SOURCE 200809L
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bench_common.h"
+#include <xylem/xyl_lsystem.h>
+#include <xylem/xyl_tess_gl.h>
+#include <xylem/xyl_tess_vk.h>
+#include <xylem/xyl_tessellate.h>
+
+#define PI 3.14159265358979323846
+
+typedef struct bench_opts {
+    bool quick, gpu;
+    int frames;
+    uint32_t size;
+    const char *dat;
+} bench_opts;
+
+typedef struct row {
+    uint32_t k, subdiv, variant, level;
+    uint64_t triangles;
+    double max_err, rms_err, max_normal_deg; /* % of radius, degrees */
+    double ms[3];                              /* GL instanced, GL hardware, Vulkan; < 0: none */
+} row;
+
+static const char *subdiv_name[] = {"none", "catmark", "loop"};
+static const char *variant_name[] = {"pn", "rounded", "circle"};
+static const char *path_name[] = {"gl-instanced", "gl-hardware", "vk-instanced"};
+
+static void die(const char *what, xyl_result r, const xyl_diag *d)
+{
+    fprintf(stderr, "bench_tess: %s: %s: %s\n", what, xyl_result_string(r), d ? d->message : "");
+    exit(1);
+}
+
+/* ---- test skeletons ------------------------------------------------------------------------ */
+
+/* A curved branch of constant radius: 25 nodes a unit apart, turning 4 degrees per node in a
+ * plane that slowly twists. Its generalized cylinder is the sweep of the radius along it. */
+#define ARC_NODES 25
+#define ARC_RADIUS 0.25f
+
+static xyl_skeleton *arc_skeleton(void)
+{
+    xyl_skel_node n[ARC_NODES];
+    memset(n, 0, sizeof n);
+    double p[3] = {0, 0, 0}, h = 0.0;
+    for (int i = 0; i < ARC_NODES; ++i) {
+        n[i].pos = (xyl_vec3){(float)p[0], (float)p[1], (float)p[2]};
+        n[i].radius = ARC_RADIUS;
+        n[i].parent = i - 1;
+        double tw = 0.05 * i;
+        p[0] += sin(h) * cos(tw);
+        p[1] += cos(h);
+        p[2] += sin(h) * sin(tw);
+        h += 4.0 * PI / 180.0;
+    }
+    xyl_skeleton_desc sd = {0};
+    sd.nodes = n;
+    sd.node_count = ARC_NODES;
+    xyl_skeleton *sk = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_skeleton_create(&sd, &sk, &d);
+    if (r) die("arc skeleton", r, &d);
+    return sk;
+}
+
+static xyl_skeleton *default_tree(void)
+{
+    xyl_grammar_desc gd = {0};
+    gd.source = xyl_lsystem_preset_source(xyl_lsystem_default_preset());
+    xyl_grammar *g = NULL;
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_grammar_parse(&gd, &g, &d);
+    if (!r) r = xyl_lsystem_derive(g, NULL, &s, &d);
+    if (!r) r = xyl_lsystem_interpret(g, s, NULL, &sk, &d);
+    if (r) die("default tree", r, &d);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return sk;
+}
+
+static xyl_mesh *mesh_of(const xyl_skeleton *sk, uint32_t k, uint32_t subdiv)
+{
+    xyl_stems_desc sd = {0};
+    sd.sides = k;
+    sd.subdivision = (xyl_subdivision)subdiv;
+    xyl_mesh *m = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_stems_build(sk, &sd, &m, &d);
+    if (r) die("stems", r, &d);
+    return m;
+}
+
+/* ---- error against the generalized cylinder -------------------------------------------------- */
+
+typedef struct err_acc {
+    double max, sum2, max_normal;
+    size_t n;
+} err_acc;
+
+/* The arc's reference tube is the sweep of its radius along a SMOOTH centreline through the
+ * nodes (a uniform Catmull-Rom spline, sampled CENTRE_STEPS times per segment), not along the
+ * node polyline: the mesher's rings sit at the nodes of a branch meant to be smooth, and a
+ * polyline tube would count the sagitta between the nodes (L^2 / 8R = 3.5 % of the radius
+ * here) as error. Two smooth curves through the same nodes differ by O(h^4) terms, far below
+ * the figures reported. */
+#define CENTRE_STEPS 128
+#define CENTRE_SAMPLES ((ARC_NODES - 1) * CENTRE_STEPS + 1)
+
+static double centre[CENTRE_SAMPLES][3];
+
+static void arc_centreline(const xyl_skeleton *sk)
+{
+    const size_t n = sk->node_count;
+    for (size_t s = 0; s + 1 < n; ++s) {
+        double q[4][3];
+        for (int c = 0; c < 4; ++c) {
+            /* end tangents from reflected nodes */
+            long i = (long)s - 1 + c;
+            const xyl_vec3 a = sk->nodes[i < 0 ? 0 : (i >= (long)n ? n - 1 : (size_t)i)].pos;
+            q[c][0] = a.x, q[c][1] = a.y, q[c][2] = a.z;
+            if (i < 0 || i >= (long)n) {
+                const xyl_vec3 b = sk->nodes[i < 0 ? 1 : n - 2].pos;
+                q[c][0] = 2 * a.x - b.x, q[c][1] = 2 * a.y - b.y, q[c][2] = 2 * a.z - b.z;
+            }
+        }
+        for (int j = 0; j <= CENTRE_STEPS; ++j) {
+            double t = (double)j / CENTRE_STEPS, t2 = t * t, t3 = t2 * t;
+            double w[4] = {-0.5 * t3 + t2 - 0.5 * t, 1.5 * t3 - 2.5 * t2 + 1, -1.5 * t3 + 2 * t2 + 0.5 * t,
+                           0.5 * t3 - 0.5 * t2};
+            for (int c = 0; c < 3; ++c)
+                centre[s * CENTRE_STEPS + (size_t)j][c] =
+                    w[0] * q[0][c] + w[1] * q[1][c] + w[2] * q[2][c] + w[3] * q[3][c];
+        }
+    }
+}
+
+/* Distance from p to the centreline's sample segment [i, i + 1], with the radial direction
+ * and the parameter along the segment. */
+static double segment_distance(const float p[3], size_t i, double dir[3], double *t_out)
+{
+    const double *a = centre[i], *b = centre[i + 1];
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+    double t = (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    double q[3] = {w[0] - t * d[0], w[1] - t * d[1], w[2] - t * d[2]};
+    double dist = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+    for (int c = 0; c < 3; ++c) dir[c] = q[c] / (dist > 0 ? dist : 1);
+    *t_out = t;
+    return dist;
+}
+
+/* Radial error (fraction of the radius) of p against the reference tube, with the radial
+ * direction; false within 2.5 node spacings of the ends, where caps (and after subdivision
+ * their rounding) make the tube no cylinder. The nearest node segment is found first, then the
+ * nearest sample segment in it and its neighbours. */
+static bool arc_error(const xyl_skeleton *sk, const float p[3], double *err, double dir[3])
+{
+    size_t seg = 0;
+    double best = INFINITY, t = 0.0;
+    for (size_t s = 0; s + 1 < sk->node_count; ++s) {
+        double d = segment_distance(p, s * CENTRE_STEPS, dir, &t) +
+                   segment_distance(p, (s + 1) * CENTRE_STEPS - 1, dir, &t);
+        if (d < best) best = d, seg = s;
+    }
+    size_t lo = seg ? (seg - 1) * CENTRE_STEPS : 0;
+    size_t hi = (seg + 2 < sk->node_count ? seg + 2 : sk->node_count - 1) * CENTRE_STEPS;
+    best = INFINITY;
+    double along = 0.0, d3[3];
+    for (size_t i = lo; i < hi; ++i) {
+        double dd = segment_distance(p, i, d3, &t);
+        if (dd < best) {
+            best = dd;
+            along = ((double)i + t) / CENTRE_STEPS;
+            memcpy(dir, d3, sizeof d3);
+        }
+    }
+    if (along < 2.5 || along > (double)(sk->node_count - 1) - 2.5) return false;
+    *err = (best - ARC_RADIUS) / ARC_RADIUS;
+    return true;
+}
+
+static void add_point(err_acc *a, const xyl_skeleton *sk, const float p[3], const float *n)
+{
+    double e, dir[3];
+    if (!arc_error(sk, p, &e, dir)) return;
+    a->max = fmax(a->max, fabs(e));
+    a->sum2 += e * e;
+    a->n++;
+    if (n) {
+        double c = (n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2]);
+        c = c > 1 ? 1 : (c < -1 ? -1 : c);
+        a->max_normal = fmax(a->max_normal, acos(c) * 180.0 / PI);
+    }
+}
+
+/* Every refined vertex (position and normal), and inside every flat triangle the centroid and
+ * edge midpoints: what the rasterizer shows between vertices. */
+static void measure(const xyl_skeleton *sk, const xyl_mesh *refined, err_acc *a)
+{
+    for (size_t v = 0; v < refined->vertex_count; ++v) {
+        xyl_vec3 pv = refined->positions[v], nv = refined->normals[v];
+        const float p[3] = {pv.x, pv.y, pv.z}, n[3] = {nv.x, nv.y, nv.z};
+        add_point(a, sk, p, n);
+    }
+    static const float w[4][3] = {{1 / 3.f, 1 / 3.f, 1 / 3.f}, {.5f, .5f, 0}, {0, .5f, .5f}, {.5f, 0, .5f}};
+    for (size_t t = 0; t < refined->triangle_count; ++t) {
+        float c[3][3];
+        for (int i = 0; i < 3; ++i) {
+            xyl_vec3 q = refined->positions[refined->triangles[3 * t + (size_t)i]];
+            c[i][0] = q.x; c[i][1] = q.y; c[i][2] = q.z;
+        }
+        for (int s = 0; s < 4; ++s) {
+            float p[3];
+            for (int k = 0; k < 3; ++k) p[k] = w[s][0] * c[0][k] + w[s][1] * c[1][k] + w[s][2] * c[2][k];
+            add_point(a, sk, p, NULL);
+        }
+    }
+}
+
+static void refine_fixed(const xyl_mesh *m, uint32_t variant, uint32_t level,
+                         const xyl_tess_patterns *pat, xyl_tess_patches **tp,
+                         xyl_tess_batches *b, xyl_mesh **refined)
+{
+    xyl_tess_patches_desc pd = {0};
+    pd.variant = (xyl_tess_variant)variant;
+    xyl_diag d = {0};
+    xyl_result r = xyl_tess_patches_create(m, &pd, tp, &d);
+    xyl_tess_view view = {0};
+    view.fixed_level = level;
+    if (!r) r = xyl_tess_select(*tp, pat, &view, b, &d);
+    if (!r && refined) r = xyl_tess_refine(*tp, pat, b, NULL, refined, &d);
+    if (r) die("tessellate", r, &d);
+}
+
+/* ---- GPU timing ------------------------------------------------------------------------------ */
+
+typedef struct gpu {
+    xyl_gl_context *ctx;
+    xyl_tess_gl *gl;
+    xyl_tess_vk *vk;
+    uint8_t *rgba;
+} gpu;
+
+#if defined(XYL_HAVE_GL) && defined(XYL_HAVE_VULKAN)
+#define HAVE_GPU 1
+
+/* Median wall milliseconds of `frames` renders of the tree through one backend and path. */
+static double time_path(gpu *g, int path, const xyl_tess_patches *tp, const xyl_tess_batches *b,
+                        const xyl_tess_camera *cam, uint32_t variant, const bench_opts *o)
+{
+    xyl_tess_frame f;
+    memset(&f, 0, sizeof f);
+    f.variant = variant;
+    f.light_dir[1] = 1.0f;
+    f.color[0] = f.color[1] = f.color[2] = 0.5f;
+    xyl_tess_image_desc img = {0};
+    img.width = img.height = o->size;
+    xyl_diag d = {0};
+    xyl_result r = xyl_tess_camera_matrix(cam, path == 2 ? XYL_TESS_CLIP_VULKAN : XYL_TESS_CLIP_GL,
+                                          f.view_proj, &d);
+    if (!r) r = path == 2 ? xyl_tess_vk_set_patches(g->vk, tp, &d) : xyl_tess_gl_set_patches(g->gl, tp, &d);
+    if (r) die("upload", r, &d);
+    double ms[MAX_SAMPLES];
+    int n = o->frames < MAX_SAMPLES ? o->frames : MAX_SAMPLES;
+    /* one warm-up frame (pipeline compiles, first uploads), then wall time per frame: a CPU
+     * rasterizer's timer queries do not see the deferred rasterization, so the figure is the
+     * whole render_rgba call, readback included (the same for every path). */
+    for (int i = -1; i < n; ++i) {
+        double t0 = now_s();
+        r = path == 2 ? xyl_tess_vk_render_rgba(g->vk, b, &f, &img, g->rgba, &d)
+                      : xyl_tess_gl_render_rgba(g->gl, b, &f, (xyl_tess_path)path, &img, g->rgba, &d);
+        if (r) die(path_name[path], r, &d);
+        if (i >= 0) ms[i] = (now_s() - t0) * 1e3;
+    }
+    return median_of(ms, n);
+}
+
+static void gpu_open(gpu *g, const xyl_tess_patterns *pat, const bench_opts *o)
+{
+    xyl_diag d = {0};
+    xyl_result r = xyl_gl_context_create_headless(&g->ctx, &d);
+    if (!r) r = xyl_tess_gl_create(pat, &g->gl, &d);
+    if (r) die("GL backend", r, &d);
+    xyl_tess_vk_desc vd = {0};
+    r = xyl_tess_vk_create(&vd, pat, &g->vk, &d);
+    if (r) die("Vulkan backend", r, &d);
+    g->rgba = malloc((size_t)o->size * o->size * 4);
+    printf("GPU: GL %s; Vulkan %s\n", xyl_gl_context_renderer(g->ctx), xyl_tess_vk_device_name(g->vk));
+}
+
+static void gpu_close(gpu *g)
+{
+    xyl_tess_vk_destroy(g->vk);
+    xyl_tess_gl_destroy(g->gl);
+    xyl_gl_context_destroy(g->ctx);
+    free(g->rgba);
+}
+
+#else
+#define HAVE_GPU 0
+static double time_path(gpu *g, int path, const xyl_tess_patches *tp, const xyl_tess_batches *b,
+                        const xyl_tess_camera *cam, uint32_t variant, const bench_opts *o)
+{
+    (void)g, (void)path, (void)tp, (void)b, (void)cam, (void)variant, (void)o;
+    return -1.0;
+}
+static void gpu_open(gpu *g, const xyl_tess_patterns *pat, const bench_opts *o)
+{
+    (void)g, (void)pat, (void)o;
+}
+static void gpu_close(gpu *g) { (void)g; }
+#endif
+
+/* ---- table ----------------------------------------------------------------------------------- */
+
+static void run_config(row *rw, const xyl_skeleton *arc, const xyl_mesh *arc_mesh,
+                       const xyl_mesh *tree_mesh, const xyl_tess_patterns *pat, gpu *g,
+                       const xyl_tess_camera *cam, const bench_opts *o)
+{
+    xyl_tess_patches *tp = NULL;
+    xyl_tess_batches b = {0};
+    xyl_mesh *refined = NULL;
+    refine_fixed(arc_mesh, rw->variant, rw->level, pat, &tp, &b, &refined);
+    err_acc a = {0};
+    measure(arc, refined, &a);
+    rw->max_err = 100.0 * a.max;
+    rw->rms_err = a.n ? 100.0 * sqrt(a.sum2 / (double)a.n) : 0.0;
+    rw->max_normal_deg = a.max_normal;
+    xyl_mesh_destroy(refined);
+    xyl_tess_patches_destroy(tp);
+    tp = NULL;
+    refine_fixed(tree_mesh, rw->variant, rw->level, pat, &tp, &b, NULL);
+    rw->triangles = b.triangles;
+    for (int p = 0; p < 3; ++p) rw->ms[p] = -1.0;
+    /* The variants differ only in the handle rule (a square root and a division more for
+     * circle): pn is timed at every level, the others at level 8 to show that difference;
+     * and only what a CPU rasterizer draws in seconds rather than minutes. */
+    bool timed = g && (rw->variant == XYL_TESS_PN || rw->level == 8) &&
+                 (rw->k == 4 || !o->quick) && rw->triangles <= 8000000u;
+    for (int p = 0; timed && p < 3; ++p) rw->ms[p] = time_path(g, p, tp, &b, cam, rw->variant, o);
+    xyl_tess_batches_free(&b);
+    xyl_tess_patches_destroy(tp);
+}
+
+static void print_row(FILE *f, const row *r)
+{
+    fprintf(f, "| %u | %s | %s | %u | %llu | %.3f | %.3f | %.2f |", r->k, subdiv_name[r->subdiv],
+            variant_name[r->variant], r->level, (unsigned long long)r->triangles, r->max_err,
+            r->rms_err, r->max_normal_deg);
+    for (int p = 0; p < 3; ++p)
+        if (r->ms[p] >= 0) fprintf(f, " %.2f |", r->ms[p]);
+        else fprintf(f, " |");
+    fprintf(f, "\n");
+}
+
+/* For each error target: the configuration with the fewest triangles whose max error meets it. */
+static void print_pareto(const row *rows, size_t n)
+{
+    static const double targets[] = {20, 10, 5, 2, 1, 0.5, 0.2, 0.1, 0.05};
+    printf("\nPareto front (fewest triangles for the default tree meeting a max radial error):\n");
+    printf("| max error <= %% | k | subdivision | variant | level | triangles | max %% | RMS %% |\n");
+    printf("|---|---|---|---|---|---|---|---|\n");
+    for (size_t t = 0; t < sizeof targets / sizeof targets[0]; ++t) {
+        const row *best = NULL;
+        for (size_t i = 0; i < n; ++i)
+            if (rows[i].max_err <= targets[t] && (!best || rows[i].triangles < best->triangles))
+                best = &rows[i];
+        if (best)
+            printf("| %.2f | %u | %s | %s | %u | %llu | %.3f | %.3f |\n", targets[t], best->k,
+                   subdiv_name[best->subdiv], variant_name[best->variant], best->level,
+                   (unsigned long long)best->triangles, best->max_err, best->rms_err);
+        else
+            printf("| %.2f | none | | | | | | |\n", targets[t]);
+    }
+}
+
+static int by_triangles(const void *a, const void *b)
+{
+    const row *x = *(const row *const *)a, *y = *(const row *const *)b;
+    if (x->triangles != y->triangles) return x->triangles < y->triangles ? -1 : 1;
+    return (x->max_err > y->max_err) - (x->max_err < y->max_err);
+}
+
+/* The whole front: configurations that no cheaper one matches in max error, cheapest first;
+ * printed, and written to `path` (triangles, max error %) for the plot when path is set. */
+static int write_front(const row *rows, size_t n, const char *path)
+{
+    const row **order = malloc((n ? n : 1) * sizeof *order);
+    if (!order) return 71;
+    for (size_t i = 0; i < n; ++i) order[i] = &rows[i];
+    qsort(order, n, sizeof *order, by_triangles);
+    FILE *f = path ? fopen(path, "w") : NULL;
+    if (path && !f) {
+        perror(path);
+        free(order);
+        return 73;
+    }
+    printf("\nPareto front (no cheaper configuration has a lower max error):\n");
+    printf("| triangles | max %% | RMS %% | k | subdivision | variant | level |\n|---|---|---|---|---|---|---|\n");
+    double best = INFINITY;
+    for (size_t i = 0; i < n; ++i) {
+        const row *r = order[i];
+        if (!(r->max_err < best)) continue;
+        best = r->max_err;
+        printf("| %llu | %.3f | %.3f | %u | %s | %s | %u |\n", (unsigned long long)r->triangles,
+               r->max_err, r->rms_err, r->k, subdiv_name[r->subdiv], variant_name[r->variant],
+               r->level);
+        if (f) fprintf(f, "%llu %.6f\n", (unsigned long long)r->triangles, r->max_err);
+    }
+    free(order);
+    if (f && fclose(f) != 0) {
+        perror(path);
+        return 73;
+    }
+    return 0;
+}
+
+static void parse(int argc, char **argv, bench_opts *o)
+{
+    o->gpu = true;
+    o->frames = 7;
+    o->size = 1024;
+    for (int i = 1; i < argc; ++i) {
+        if (strcmp(argv[i], "--quick") == 0) o->quick = true;
+        else if (strcmp(argv[i], "--no-gpu") == 0) o->gpu = false;
+        else if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) o->frames = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) o->size = (uint32_t)atoi(argv[++i]);
+        else if (strcmp(argv[i], "--dat") == 0 && i + 1 < argc) o->dat = argv[++i];
+        else {
+            bool help = strcmp(argv[i], "--help") == 0;
+            fprintf(help ? stdout : stderr,
+                    "usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]\n");
+            exit(help ? 0 : 64);
+        }
+    }
+    if (o->frames < 1 || o->size < 16 || o->size > 8192) {
+        fprintf(stderr, "bench_tess: --frames >= 1, --size 16..8192\n");
+        exit(64);
+    }
+    if (!HAVE_GPU && o->gpu) {
+        printf("bench_tess: built without the GL and Vulkan backends: no GPU timings\n");
+        o->gpu = false;
+    }
+    if (o->quick) o->frames = o->frames < 3 ? o->frames : 3, o->size = o->size < 256 ? o->size : 256;
+}
+
+int main(int argc, char **argv)
+{
+    bench_opts o = {0};
+    parse(argc, argv, &o);
+    static const uint32_t ks[] = {3, 4, 6, 8}, levels[] = {1, 2, 3, 4, 6, 8, 12, 16, 24, 32};
+    xyl_tess_patterns *pat = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_tess_patterns_create(0, NULL, &pat, &d);
+    if (r) die("patterns", r, &d);
+    xyl_skeleton *arc = arc_skeleton(), *tree = default_tree();
+    arc_centreline(arc);
+    gpu g = {0};
+    if (o.gpu) gpu_open(&g, pat, &o);
+    size_t cap = 4 * 3 * 3 * 10, n = 0;
+    row *rows = calloc(cap, sizeof *rows);
+    printf("| k | subdivision | variant | level | triangles (tree) | max radial error %% | RMS %% "
+           "| max normal error deg | %s ms | %s ms | %s ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
+           path_name[0], path_name[1], path_name[2]);
+    for (size_t ki = 0; ki < 4; ++ki) {
+        if (o.quick && ks[ki] != 4) continue;
+        for (uint32_t sdv = 0; sdv < 3; ++sdv) {
+            xyl_mesh *am = mesh_of(arc, ks[ki], sdv), *tm = mesh_of(tree, ks[ki], sdv);
+            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            for (size_t v = 0; v < tm->vertex_count; ++v) {
+                xyl_vec3 q = tm->positions[v];
+                const float pv[3] = {q.x, q.y, q.z};
+                for (int c = 0; c < 3; ++c) {
+                    lo[c] = fminf(lo[c], pv[c]);
+                    hi[c] = fmaxf(hi[c], pv[c]);
+                }
+            }
+            xyl_tess_camera cam;
+            xyl_tess_camera_frame(lo, hi, 0.5f, 0.2f, 0.8f, 1.0f, &cam);
+            for (uint32_t var = 0; var < 3; ++var)
+                for (size_t li = 0; li < 10; ++li) {
+                    if (o.quick && levels[li] != 1 && levels[li] != 4) continue;
+                    row *rw = &rows[n++];
+                    rw->k = ks[ki]; rw->subdiv = sdv; rw->variant = var; rw->level = levels[li];
+                    run_config(rw, arc, am, tm, pat, o.gpu ? &g : NULL, &cam, &o);
+                    print_row(stdout, rw);
+                    fflush(stdout);
+                }
+            xyl_mesh_destroy(am);
+            xyl_mesh_destroy(tm);
+        }
+    }
+    print_pareto(rows, n);
+    char front_path[1024];
+    if (o.dat) snprintf(front_path, sizeof front_path, "%s.front", o.dat);
+    int rc = write_front(rows, n, o.dat ? front_path : NULL);
+    if (rc) return rc;
+    if (o.dat) {
+        FILE *f = fopen(o.dat, "w");
+        if (!f) { perror(o.dat); return 73; }
+        fprintf(f, "# k subdiv variant level triangles max_err_pct rms_err_pct normal_deg gl_inst_ms gl_hw_ms vk_ms\n");
+        for (size_t i = 0; i < n; ++i)
+            fprintf(f, "%u %u %u %u %llu %.6f %.6f %.4f %.4f %.4f %.4f\n", rows[i].k, rows[i].subdiv,
+                    rows[i].variant, rows[i].level, (unsigned long long)rows[i].triangles,
+                    rows[i].max_err, rows[i].rms_err, rows[i].max_normal_deg, rows[i].ms[0],
+                    rows[i].ms[1], rows[i].ms[2]);
+        fclose(f);
+    }
+    free(rows);
+    if (o.gpu) gpu_close(&g);
+    xyl_skeleton_destroy(arc);
+    xyl_skeleton_destroy(tree);
+    xyl_tess_patterns_destroy(pat);
+    return 0;
+}
