@@ -38,7 +38,8 @@
 #define XYL_TESS_BINDING_INSTANCES 4 /* storage: instance records (hardware path) */
 
 /* xyl_tess_frame.flags */
-#define XYL_TESS_FLAG_WIREFRAME 1u  /* the fragment shader outputs the line colour */
+#define XYL_TESS_FLAG_WIREFRAME 1u  /* the fragment shader outputs the line colour (a draw
+                                       call given it draws the surface, then the edges) */
 #define XYL_TESS_FLAG_NORMALS 2u    /* the fragment shader outputs the normal as a colour */
 #define XYL_TESS_FLAG_BACKFACES 4u  /* back-facing fragments are pure red (crack tests: a closed
                                        surface shows a back face only through a hole) */

@@ -30,6 +30,7 @@ typedef struct target {
 
 struct xyl_tess_gl {
     GLuint prog_inst, prog_capture, prog_hw[2]; /* hardware: [0] quads, [1] triangles */
+    GLuint prog_hw_edges[2];                    /* their wireframe overlay (edges from a GS) */
     GLuint vao_inst, vao_hw;
     GLuint capture_fbo; /* no attachments: captures draw with the rasterizer off, but a draw
                            still needs a complete framebuffer, which a surfaceless context's
@@ -153,6 +154,12 @@ static xyl_result build_programs(xyl_tess_gl *gl, xyl_diag *diag)
     if (r == XYL_OK) r = link_program(cap, 1, NULL, 0, &gl->prog_capture, diag);
     if (r == XYL_OK) r = link_program(quad, 4, xfb, 4, &gl->prog_hw[0], diag);
     if (r == XYL_OK) r = link_program(tri, 4, xfb, 4, &gl->prog_hw[1], diag);
+    /* the same stages with the edge geometry shader before the fragment stage */
+    const stage_src geom = {GL_GEOMETRY_SHADER, xyl__shader_gl_hw_edges_geom, "hw_edges.geom"};
+    const stage_src quad_edges[] = {quad[0], quad[1], quad[2], geom, quad[3]};
+    const stage_src tri_edges[] = {tri[0], tri[1], tri[2], geom, tri[3]};
+    if (r == XYL_OK) r = link_program(quad_edges, 5, NULL, 0, &gl->prog_hw_edges[0], diag);
+    if (r == XYL_OK) r = link_program(tri_edges, 5, NULL, 0, &gl->prog_hw_edges[1], diag);
     return r;
 }
 
@@ -269,8 +276,9 @@ void xyl_tess_gl_destroy(xyl_tess_gl *gl)
 {
     if (!gl) return;
     if (epoxy_gl_version() != 0) { /* GL objects died with the context otherwise */
-        GLuint progs[4] = {gl->prog_inst, gl->prog_capture, gl->prog_hw[0], gl->prog_hw[1]};
-        for (int i = 0; i < 4; ++i) glDeleteProgram(progs[i]);
+        GLuint progs[6] = {gl->prog_inst,     gl->prog_capture,      gl->prog_hw[0],
+                           gl->prog_hw[1],    gl->prog_hw_edges[0],  gl->prog_hw_edges[1]};
+        for (int i = 0; i < 6; ++i) glDeleteProgram(progs[i]);
         GLuint vaos[2] = {gl->vao_inst, gl->vao_hw};
         glDeleteVertexArrays(2, vaos);
         GLuint bufs[9] = {gl->pattern_vbo, gl->pattern_ibo, gl->patch_buf,
@@ -503,7 +511,8 @@ static void draw_hardware_kind(const xyl_tess_gl *gl, const xyl_tess_batches *b,
     uint32_t first, count;
     kind_span(b, kind, &first, &count);
     if (!count) return;
-    glUseProgram(gl->prog_hw[kind == XYL_TESS_KIND_QUAD ? 0 : 1]);
+    int which = kind == XYL_TESS_KIND_QUAD ? 0 : 1;
+    glUseProgram(pass == 1 && !capture ? gl->prog_hw_edges[which] : gl->prog_hw[which]);
     glBindVertexArray(gl->vao_hw);
     glPatchParameteri(GL_PATCH_VERTICES, (GLint)kind);
     bind_frame(gl, pass, kind);
@@ -556,16 +565,40 @@ static void draw_pass(const xyl_tess_gl *gl, const xyl_tess_batches *b, xyl_tess
     glCullFace(GL_BACK);
 }
 
+/* The shaded pass, then optionally the edges on top (lines pulled towards the viewer). */
+static void render_passes(xyl_tess_gl *gl, const xyl_tess_batches *b, xyl_tess_path path,
+                          const xyl_tess_frame *frames, bool wireframe)
+{
+    glDepthFunc(GL_LESS);
+    draw_pass(gl, b, path, frames[0].flags, 0);
+    if (!wireframe) return;
+    glDepthFunc(GL_LEQUAL);
+    if (path == XYL_TESS_PATH_HARDWARE) { /* pass 1 draws edges as lines (tess_hw_edges.geom) */
+        draw_pass(gl, b, path, frames[1].flags, 1);
+        glDepthFunc(GL_LESS);
+        return;
+    }
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    glEnable(GL_POLYGON_OFFSET_LINE);
+    glPolygonOffset(-1.0f, -1.0f);
+    draw_pass(gl, b, path, frames[1].flags, 1);
+    glDisable(GL_POLYGON_OFFSET_LINE);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+    glDepthFunc(GL_LESS);
+}
+
 xyl_result xyl_tess_gl_draw(xyl_tess_gl *gl, const xyl_tess_batches *batches,
                             const xyl_tess_frame *frame, xyl_tess_path path, xyl_diag *diag)
 {
     if (!frame) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "frame is required");
     xyl_result r = check_common(gl, batches, frame->variant, path, diag);
-    if (r == XYL_OK) r = upload_batches(gl, batches, frame, 1, diag);
+    bool wireframe = (frame->flags & XYL_TESS_FLAG_WIREFRAME) != 0;
+    xyl_tess_frame frames[2] = {*frame, *frame};
+    frames[0].flags &= ~XYL_TESS_FLAG_WIREFRAME;
+    if (r == XYL_OK) r = upload_batches(gl, batches, frames, wireframe ? 2 : 1, diag);
     if (r != XYL_OK) return r;
     glBeginQuery(GL_TIME_ELAPSED, gl->time_query);
-    glDepthFunc(GL_LESS);
-    draw_pass(gl, batches, path, frame->flags, 0);
+    render_passes(gl, batches, path, frames, wireframe);
     glEndQuery(GL_TIME_ELAPSED);
     gl->timed = true;
     r = gl_check(diag, "drawing");
@@ -661,22 +694,6 @@ static xyl_result check_image(const xyl_tess_image_desc *image, image_params *ip
     return XYL_OK;
 }
 
-/* The shaded pass, then optionally the edges on top (lines pulled towards the viewer). */
-static void render_passes(xyl_tess_gl *gl, const xyl_tess_batches *b, xyl_tess_path path,
-                          const xyl_tess_frame *frames, bool wireframe)
-{
-    glDepthFunc(GL_LESS);
-    draw_pass(gl, b, path, frames[0].flags, 0);
-    if (!wireframe) return;
-    glDepthFunc(GL_LEQUAL);
-    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    glEnable(GL_POLYGON_OFFSET_LINE);
-    glPolygonOffset(-1.0f, -1.0f);
-    draw_pass(gl, b, path, frames[1].flags, 1);
-    glDisable(GL_POLYGON_OFFSET_LINE);
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-    glDepthFunc(GL_LESS);
-}
 
 /* GL's rows start at the bottom; the API's at the top. */
 static void flip_rows(uint8_t *rgba, uint32_t w, uint32_t h)

@@ -50,7 +50,8 @@ XYL_API xyl_result xyl_tess_gl_set_patches(xyl_tess_gl *gl, const xyl_tess_patch
                                            xyl_diag *diag);
 
 /* Draws the batches into the bound framebuffer with the frame's uniforms (depth test on, back
- * faces culled). Errors: XYL_ERR_INVALID_ARGUMENT (batches from another patch set, a level the
+ * faces culled); with XYL_TESS_FLAG_WIREFRAME in frame->flags, the shaded surface and then its
+ * triangle edges in frame->line_color on top. Errors: XYL_ERR_INVALID_ARGUMENT (batches from another patch set, a level the
  * patterns lack), XYL_ERR_OUT_OF_MEMORY (GL_OUT_OF_MEMORY). */
 XYL_API xyl_result xyl_tess_gl_draw(xyl_tess_gl *gl, const xyl_tess_batches *batches,
                                     const xyl_tess_frame *frame, xyl_tess_path path,
