@@ -21,6 +21,9 @@
 
 #include "glb_read.h"
 #include "png_write.h"
+#ifdef XYL_HAVE_GLFW
+#include "view_glfw.h"
+#endif
 
 enum {
     EXIT_USAGE = 64, EXIT_DATA = 65, EXIT_NOINPUT = 66, EXIT_UNAVAILABLE = 69, EXIT_OSERR = 71,
@@ -39,6 +42,9 @@ typedef struct render_options {
     bool has_camera;
     uint32_t width, height;
     bool wireframe;
+    uint32_t samples;        /* MSAA samples; 0: 4 */
+    uint32_t frames;         /* view: close after N frames (0: when the window closes) */
+    const char *screenshot;  /* view: PNG of the last frame */
 } render_options;
 
 typedef struct options {
@@ -75,8 +81,15 @@ static const char usage_text[] =
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
-    "           [--wireframe] --out FILE.png\n"
+    "           [--wireframe] [--samples N] --out FILE.png\n"
     "                               refine the stem mesh (PN patches) and render it headless\n"
+    "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
+    "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
+    "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
+    "           [--wireframe] [--samples N] [--frames N] [--screenshot FILE.png]\n"
+    "                               the same in a window (GLFW, OpenGL); levels follow the\n"
+    "                               camera: drag to orbit, scroll to zoom, H hardware path,\n"
+    "                               V handle rule, L fixed level, +/- budget, W wireframe\n"
     "\n"
     "source: --preset NAME (default: the default tree) or --grammar FILE\n"
     "exit codes: 0 ok, 64 usage, 65 bad input, 66 unreadable input, 69 no usable GPU\n"
@@ -175,6 +188,16 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
             return usage_error("--camera takes AZIMUTH,ELEVATION in degrees (|elevation| < 90), "
                                "not '%s'", val);
         r->has_camera = true;
+    } else if (strcmp(opt, "--frames") == 0) {
+        if (!parse_u64(val, UINT32_MAX, &u) || u < 1)
+            return usage_error("--frames takes a whole number >= 1, not '%s'", val);
+        r->frames = (uint32_t)u;
+    } else if (strcmp(opt, "--samples") == 0) {
+        if (!parse_u64(val, 16, &u) || u < 1 || (u & (u - 1)))
+            return usage_error("--samples takes 1, 2, 4, 8 or 16, not '%s'", val);
+        r->samples = (uint32_t)u;
+    } else if (strcmp(opt, "--screenshot") == 0) {
+        r->screenshot = val;
     } else if (strcmp(opt, "--size") == 0) {
         unsigned w, h;
         char extra;
@@ -615,7 +638,10 @@ static xyl_result prepare_render(const options *o, render_job *j, xyl_diag *d)
     return r;
 }
 
-static void fill_frame(const render_job *j, xyl_tess_variant variant, xyl_tess_frame *f)
+static const float render_background[4] = {0.86f, 0.90f, 0.95f, 1.0f};
+
+/* Light and colours shared by render and view. */
+static void fill_look(xyl_tess_frame *f)
 {
     memset(f, 0, sizeof *f);
     const float light[3] = {0.42f, 0.78f, 0.46f};
@@ -623,6 +649,11 @@ static void fill_frame(const render_job *j, xyl_tess_variant variant, xyl_tess_f
     const float bark[4] = {0.47f, 0.35f, 0.24f, 1.0f}, line[4] = {0.08f, 0.08f, 0.08f, 1.0f};
     memcpy(f->color, bark, sizeof bark);
     memcpy(f->line_color, line, sizeof line);
+}
+
+static void fill_frame(const render_job *j, xyl_tess_variant variant, xyl_tess_frame *f)
+{
+    fill_look(f);
     f->variant = j->drawn == j->patches ? (uint32_t)variant : (uint32_t)XYL_TESS_PN;
 }
 
@@ -709,6 +740,22 @@ static int load_glb(const char *path, xyl_mesh **mesh)
     return r ? report(path, r, &d) : 0;
 }
 
+/* The mesh to refine: a .glb, or the stems of a skeleton (file or grammar). */
+static int load_mesh(const options *o, xyl_mesh **mesh, const char **source)
+{
+    if (o->mesh_path) {
+        *source = o->mesh_path;
+        return load_glb(o->mesh_path, mesh);
+    }
+    xyl_skeleton *sk = NULL;
+    int rc = load_skeleton(o, &sk, source);
+    if (rc) return rc;
+    xyl_diag d = {0};
+    xyl_result r = xyl_stems_build(sk, &o->stems, mesh, &d);
+    xyl_skeleton_destroy(sk);
+    return r ? report(*source, r, &d) : 0;
+}
+
 static int cmd_render(const options *o)
 {
     const render_options *ro = &o->render;
@@ -718,21 +765,19 @@ static int cmd_render(const options *o)
     if (ro->level && ro->error_px > 0.0) return usage_error("%s", "give --level or --error-px, not both");
     if (ro->vulkan && ro->tess == TESS_HARDWARE)
         return usage_error("%s", "--tess hardware is the GL backend's; use --backend gl");
+    if (ro->frames || ro->screenshot)
+        return usage_error("%s", "--frames and --screenshot are options of 'view'");
     render_job j;
     memset(&j, 0, sizeof j);
     j.image.width = ro->width ? ro->width : 1024;
     j.image.height = ro->height ? ro->height : 1024;
     j.image.wireframe = ro->wireframe;
-    j.image.samples = 4;
-    const float bg[4] = {0.86f, 0.90f, 0.95f, 1.0f};
-    memcpy(j.image.background, bg, sizeof bg);
-    xyl_skeleton *sk = NULL;
+    j.image.samples = ro->samples ? ro->samples : 4;
+    memcpy(j.image.background, render_background, sizeof render_background);
     const char *source = NULL;
     xyl_diag d = {0};
     xyl_result r = XYL_OK;
-    int rc = o->mesh_path ? load_glb(o->mesh_path, &j.mesh) : load_skeleton(o, &sk, &source);
-    if (o->mesh_path) source = o->mesh_path;
-    else if (!rc) r = xyl_stems_build(sk, &o->stems, &j.mesh, &d);
+    int rc = load_mesh(o, &j.mesh, &source);
     if (!rc && r == XYL_OK) r = prepare_render(o, &j, &d);
     if (!rc && r == XYL_OK) {
         j.rgba = malloc((size_t)j.image.width * j.image.height * 4);
@@ -752,9 +797,58 @@ static int cmd_render(const options *o)
     }
     if (!rc) print_render(&j, o->out);
     render_job_free(&j);
-    xyl_skeleton_destroy(sk);
     return rc;
 }
+
+#ifdef XYL_HAVE_GLFW
+static int cmd_view(const options *o)
+{
+    const render_options *ro = &o->render;
+    if (o->out) return usage_error("%s", "'view' writes no --out (use --screenshot FILE.png)");
+    if ((o->skeleton_path != NULL) + (o->mesh_path != NULL) + (o->preset || o->grammar_path) > 1)
+        return usage_error("%s", "give one of --skeleton, --mesh or a grammar source");
+    if (ro->level && ro->error_px > 0.0) return usage_error("%s", "give --level or --error-px, not both");
+    if (ro->vulkan || ro->tess == TESS_CPU)
+        return usage_error("%s", "'view' draws with the GL backend: --tess instanced or hardware");
+    if (ro->screenshot && (!ends_with(ro->screenshot, ".png") || !ro->frames))
+        return usage_error("%s", "--screenshot takes FILE.png and needs --frames N");
+    xyl_mesh *mesh = NULL;
+    const char *source = NULL;
+    int rc = load_mesh(o, &mesh, &source);
+    if (rc) return rc;
+    double deg = 3.14159265358979323846 / 180.0;
+    xyl_view_request req;
+    memset(&req, 0, sizeof req);
+    req.mesh = mesh;
+    req.variant = ro->variant;
+    req.path = ro->tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE : XYL_TESS_PATH_INSTANCED;
+    req.fixed_level = ro->level;
+    req.error_px = (float)ro->error_px;
+    req.azimuth = (float)((ro->has_camera ? ro->azimuth : 30.0) * deg);
+    req.elevation = (float)((ro->has_camera ? ro->elevation : 10.0) * deg);
+    req.width = ro->width ? ro->width : 1024;
+    req.height = ro->height ? ro->height : 1024;
+    req.wireframe = ro->wireframe;
+    req.samples = ro->samples ? ro->samples : 4;
+    req.frames = ro->frames;
+    req.screenshot = ro->screenshot;
+    req.background = render_background;
+    xyl_tess_frame look;
+    fill_look(&look);
+    req.look = &look;
+    rc = xyl_view_run(&req);
+    if (!rc && ro->screenshot) printf("wrote %s\n", ro->screenshot);
+    xyl_mesh_destroy(mesh);
+    return rc;
+}
+#else
+static int cmd_view(const options *o)
+{
+    (void)o;
+    fprintf(stderr, "xylem: this xylem was built without GLFW: no 'view'\n");
+    return EXIT_UNAVAILABLE;
+}
+#endif
 
 int main(int argc, char **argv)
 {
@@ -777,10 +871,13 @@ int main(int argc, char **argv)
     memset(&o, 0, sizeof o);
     bool derive = strcmp(cmd, "derive") == 0, skeleton = strcmp(cmd, "skeleton") == 0;
     bool mesh = strcmp(cmd, "mesh") == 0, render = strcmp(cmd, "render") == 0;
-    if (!derive && !skeleton && !mesh && !render) return usage_error("unknown command '%s'", cmd);
+    bool view = strcmp(cmd, "view") == 0;
+    if (!derive && !skeleton && !mesh && !render && !view)
+        return usage_error("unknown command '%s'", cmd);
     int rc = parse_options(argc, argv, &o);
     if (rc) return rc;
     if (mesh) return cmd_mesh(&o);
     if (render) return cmd_render(&o);
+    if (view) return cmd_view(&o);
     return derive ? cmd_derive(&o) : cmd_skeleton(&o);
 }

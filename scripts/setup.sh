@@ -13,6 +13,7 @@ packages=(
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers   # Vulkan backend (lavapipe), validation
   glslang-tools spirv-tools  # shaders: GLSL -> SPIR-V and validation at build time
   libpng-dev                 # xylem render writes PNG (samples only)
+  libglfw3-dev xvfb xauth    # xylem view: GL in a GLFW window; tests run it under Xvfb
   libtinygltf-dev nlohmann-json3-dev   # xylem render --mesh reads .glb (samples only)
   gnuplot-nox                # docs/ plots from bench_tess (scripts/bench.sh)
 )

@@ -120,5 +120,16 @@ expect 65 "render truncated mesh" -- "$XYLEM" render --mesh "$tmp/trunc.glb" --o
 [ ! -e "$tmp/x.png" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: a failed render left x.png"; }
 expect 73 "render unwritable output" -- "$XYLEM" render --size 16x16 --out "$tmp/no/dir/x.png"
 
+# view: the same in a GLFW window, on an X server of its own (Xvfb)
+expect 64 "view writes no --out" -- "$XYLEM" view --out "$tmp/x.png"
+expect 64 "view screenshot needs --frames" -- "$XYLEM" view --screenshot "$tmp/x.png"
+expect 64 "view is GL only" -- "$XYLEM" view --backend vulkan
+expect 64 "view has no cpu path" -- "$XYLEM" view --tess cpu
+expect 69 "view without a display" -- env -u DISPLAY -u WAYLAND_DISPLAY "$XYLEM" view --frames 1
+contains "no window system" "view says why"
+expect 0 "view two frames, screenshot" -- xvfb-run -a "$XYLEM" view --frames 2 --size 80x60 --tess hardware --wireframe --screenshot "$tmp/view.png"
+contains "GLFW window" "view names the window"
+png_magic "$tmp/view.png" && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: view wrote no PNG"; }
+
 echo "test_cli: $passed passed, $failed failed"
 [ "$failed" -eq 0 ]
