@@ -149,6 +149,40 @@ static void hard_cases_do_not_intersect_themselves(void **state)
     assert_int_equal(clean, total - (int)(sizeof known_intersecting / sizeof known_intersecting[0]));
 }
 
+/* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
+ * later nodes: only the nodes at the start of a child's chain that are still inside the parent
+ * may be absorbed, not its tip. */
+static void a_child_that_curls_back_keeps_its_tip(void **state)
+{
+    (void)state;
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0},  {{0, 1, 0}, 0.1f, 0, 0, 0},     {{0, 2, 0}, 0.1f, 1, 0, 0},
+        {{1, 1, 0}, 0.05f, 1, 0, 0},  {{1, 3, 0}, 0.05f, 3, 0, 0},    {{-1, 3, 0}, 0.05f, 4, 0, 0},
+    };
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 6;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    uint32_t child = sk->nodes[5].branch;
+    assert_int_not_equal(child, sk->nodes[0].branch);
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    assert_closed(m, sk, "curl back");
+    double nearest = INFINITY;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        if (m->branch_ids[v] != child) continue;
+        xyl_vec3 p = m->positions[v];
+        double dx = p.x + 1.0, dy = p.y - 3.0, dz = p.z;
+        nearest = fmin(nearest, sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    if (!(nearest <= 0.05 * 1.0001)) fail_msg("the child's tip ring is %g from its tip node", nearest);
+    size_t count = 0;
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    assert_int_equal(count, 0);
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
 /* ---- normals ------------------------------------------------------------------------------- */
 
 /* Worst angle (degrees) between the parent's vertex normals and the radial direction of the
@@ -347,6 +381,7 @@ int main(void)
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(hard_cases_do_not_intersect_themselves),
+        cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(catmull_clark_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(identical_input_gives_identical_meshes),

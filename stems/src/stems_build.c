@@ -275,8 +275,9 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
     for (size_t i = 0; i < s->nchain; ++i) {
         xyl__dvec3 p = node_pos(s, s->chain[i]);
         double r = s->sk->nodes[s->chain[i]].radius;
-        bool behind = bridge && xyl__d3_dot(xyl__d3_sub(p, bridge->centre), bridge->tangent) <
-                                    bridge->radius;
+        /* only the chain's start can be behind: a branch that curls back later keeps its nodes */
+        bool behind = bridge && !s->nstations &&
+                      xyl__d3_dot(xyl__d3_sub(p, bridge->centre), bridge->tangent) < bridge->radius;
         bool same = s->nstations &&
                     xyl__d3_len(xyl__d3_sub(p, s->stations[s->nstations - 1].p)) <= 1e-6 * r;
         if (behind && i + 1 < s->nchain) continue;
