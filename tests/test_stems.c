@@ -9,7 +9,6 @@
  * and these must stay manifold. */
 static const char *const known_intersecting[] = {
     "binary_depth7.skel",
-    "fork_siblings_1deg.skel",
     "spokes_16.skel",
 };
 
@@ -32,6 +31,21 @@ static xyl_mesh *build(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
     xyl_result r = xyl_stems_build(sk, &d, &m, &diag);
     if (r != XYL_OK) fail_msg("build: %s: %s", xyl_result_string(r), diag.message);
     return m;
+}
+
+/* Branches with faces: a sibling merged whole into another has none (docs/stems.md). */
+static size_t meshed_branches(const xyl_mesh *m, const xyl_skeleton *sk)
+{
+    bool *seen = calloc(sk->branch_count, sizeof *seen);
+    assert_non_null(seen);
+    size_t n = 0;
+    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
+        uint32_t b = m->face_branches[f];
+        assert_true(b < sk->branch_count);
+        if (!seen[b]) seen[b] = true, ++n;
+    }
+    free(seen);
+    return n;
 }
 
 static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char *what)
@@ -68,8 +82,8 @@ static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
         assert_int_equal(m->triangle_count, 0); /* even k: all quads */
     }
     if (t->sub == XYL_SUBDIVIDE_NONE && t->k % 2 == 1) {
-        /* odd k: one triangle per cap and per bridge, i.e. two per branch */
-        assert_int_equal(m->triangle_count, 2 * (size_t)sk->branch_count);
+        /* odd k: one triangle per cap and per bridge, i.e. two per meshed branch */
+        assert_int_equal(m->triangle_count, 2 * meshed_branches(m, sk));
     }
     xyl_mesh_destroy(m);
 }
@@ -180,6 +194,82 @@ static void a_child_that_curls_back_keeps_its_tip(void **state)
     assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
     assert_int_equal(count, 0);
     xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
+static xyl_skeleton *read_hard_case(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/stems/%s", XYL_TEST_DATA, name);
+    xyl_skeleton *sk = NULL;
+    xyl_diag diag = {0};
+    if (xyl_skeleton_read_file(path, NULL, &sk, &diag) != XYL_OK) fail_msg("%s: %s", name, diag.message);
+    return sk;
+}
+
+/* Two equal children one degree apart overlap along their whole length: the later one is
+ * merged into the earlier, so the fork has one lateral tube, and nothing crosses. */
+static void siblings_that_never_part_become_one_tube(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = read_hard_case("fork_siblings_1deg.skel");
+    assert_int_equal(sk->branch_count, 3);
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, "fork_siblings_1deg");
+        assert_int_equal(meshed_branches(m, sk), 2);
+        size_t count = 0;
+        assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+        if (count) fail_msg("k = %u: %zu intersecting pairs", k, count);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
+/* Siblings one degree apart for one segment, then parting: the thinner one is merged into the
+ * thicker until they part and grows out of it from there, so its tip is still meshed. */
+static void siblings_that_part_later_grow_out_of_each_other(void **state)
+{
+    (void)state;
+    /* a vertical parent; children at 40 and 41 degrees in the x-y plane, the thinner one
+     * turning to 100 degrees after 0.5 */
+    double c40 = cos(40 * 3.14159265358979 / 180), s40 = sin(40 * 3.14159265358979 / 180);
+    double c41 = cos(41 * 3.14159265358979 / 180), s41 = sin(41 * 3.14159265358979 / 180);
+    double c100 = cos(100 * 3.14159265358979 / 180), s100 = sin(100 * 3.14159265358979 / 180);
+    float bx = (float)(0.5 * s41), by = (float)(1 + 0.5 * c41);
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0},
+        {{0, 1, 0}, 0.1f, 0, 0, 0},
+        {{0, 2, 0}, 0.09f, 1, 0, 0},
+        {{(float)(0.5 * s40), (float)(1 + 0.5 * c40), 0}, 0.06f, 1, 0, 0},
+        {{(float)s40, (float)(1 + c40), 0}, 0.06f, 3, 0, 0},
+        {{bx, by, 0}, 0.05f, 1, 0, 0},
+        {{bx + (float)(0.6 * s100), by + (float)(0.6 * c100), 0}, 0.05f, 5, 0, 0},
+    };
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = sizeof nodes / sizeof nodes[0];
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    uint32_t thin = sk->nodes[6].branch;
+    xyl_vec3 tip = nodes[6].pos;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, "siblings parting");
+        assert_int_equal(meshed_branches(m, sk), 3);
+        double nearest = INFINITY;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            if (m->branch_ids[v] != thin) continue;
+            double dx = m->positions[v].x - tip.x, dy = m->positions[v].y - tip.y;
+            double dz = m->positions[v].z - tip.z;
+            nearest = fmin(nearest, sqrt(dx * dx + dy * dy + dz * dz));
+        }
+        if (!(nearest <= 0.05 * 1.0001)) fail_msg("k = %u: tip ring %g from the tip", k, nearest);
+        size_t count = 0;
+        assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+        if (count) fail_msg("k = %u: %zu intersecting pairs", k, count);
+        xyl_mesh_destroy(m);
+    }
     xyl_skeleton_destroy(sk);
 }
 
@@ -382,6 +472,8 @@ int main(void)
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(hard_cases_do_not_intersect_themselves),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
+        cmocka_unit_test(siblings_that_never_part_become_one_tube),
+        cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(catmull_clark_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(identical_input_gives_identical_meshes),

@@ -216,23 +216,28 @@ static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dve
 /* Children of every node in one array (counting sort by parent) and each node's main child, in
  * two passes over the nodes. A child of the parent's branch is its main child; the last one in
  * node order wins, as child_list holds children in node order. */
-static xyl_result index_children(stems *s)
+static xyl_result index_children(stems *s, const int32_t *parent_of)
 {
     size_t n = s->sk->node_count;
     const xyl_skel_node *nodes = s->sk->nodes;
     /* counts go to child_start[p + 2], so that after the prefix sum child_start[p + 1] is p's
      * first slot and filling moves it on to p's end, which is p + 1's start */
+    xyl__free(&s->alloc, s->child_start); /* the second pass of index_tree */
+    xyl__free(&s->alloc, s->child_list);
+    xyl__free(&s->alloc, s->main);
     uint32_t *start = xyl__calloc(&s->alloc, n + 2, sizeof *start);
     s->child_start = start;
     s->child_list = xyl__alloc_array(&s->alloc, n, sizeof *s->child_list);
     s->main = xyl__alloc_array(&s->alloc, n, sizeof *s->main);
     if (!start || !s->child_list || !s->main) return oom(s);
-    for (size_t i = 0; i < n; ++i)
-        if (nodes[i].parent >= 0) ++start[nodes[i].parent + 2];
-    for (size_t i = 2; i < n + 2; ++i) start[i] += start[i - 1];
-    for (size_t i = 0; i < n; ++i) s->main[i] = UINT32_MAX;
     for (size_t i = 0; i < n; ++i) {
-        int32_t p = nodes[i].parent;
+        int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
+        if (p >= 0) ++start[p + 2];
+        s->main[i] = UINT32_MAX;
+    }
+    for (size_t i = 2; i < n + 2; ++i) start[i] += start[i - 1];
+    for (size_t i = 0; i < n; ++i) {
+        int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
         if (p < 0) continue;
         s->child_list[start[p + 1]++] = (uint32_t)i;
         if (nodes[i].branch != nodes[p].branch) continue;
@@ -721,9 +726,27 @@ static void ring_bound(const stems *s, size_t *rings, size_t *chains)
     *chains = c;
 }
 
+/* Children of every node, indexed again after overlapping siblings were merged
+ * (stems_merge.c), so that the rest of the mesher sees the merged tree. One call site of
+ * index_children: inlined twice, GCC doubts its sizes. */
+static xyl_result index_tree(stems *s)
+{
+    int32_t *parent_of = NULL;
+    xyl_result r = XYL_OK;
+    for (int pass = 0; pass < 2 && !r; ++pass) {
+        r = index_children(s, parent_of);
+        if (r || pass) break;
+        parent_of = xyl__alloc_array(&s->alloc, s->sk->node_count, sizeof *parent_of);
+        if (!parent_of) r = oom(s);
+        else if (!xyl__stems_merge_siblings(s, parent_of)) break;
+    }
+    xyl__free(&s->alloc, parent_of);
+    return r;
+}
+
 static xyl_result build_all(stems *s)
 {
-    xyl_result r = index_children(s);
+    xyl_result r = index_tree(s);
     for (uint32_t j = 0; j < s->k; ++j) {
         double a = 2.0 * XYL__PI * (double)j / (double)s->k;
         s->cos_a[j] = cos(a);

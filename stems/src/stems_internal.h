@@ -77,4 +77,9 @@ typedef struct stems {
     size_t npending, pcap;
 } stems;
 
+/* Overlapping siblings (stems_merge.c): fills parent_of (node_count entries) with each node's
+ * parent as meshed: a lateral merged into a sibling is detached (-1) and the rest of it hangs
+ * from the sibling. Needs child_start, child_list and main. Returns whether anything merged. */
+bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of);
+
 #endif
