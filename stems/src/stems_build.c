@@ -472,13 +472,83 @@ static xyl__dvec3 strip_centre(const stems *s, uint32_t band, uint32_t c, uint32
     return xyl__d3_scale(sum, 1.0 / (4.0 * strip));
 }
 
-/* Best free patch for direction d among the bands between rings lo .. hi: the one facing d
- * most, and lying in direction d from the fork node (so a child leaning forward takes a band
- * ahead of the node, one leaning back a band behind). */
-static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d)
+/* Where a child's bridge from patch p goes: the patch outline, its centroid and normal, and the
+ * child's first ring. */
+typedef struct bridge_geom {
+    uint32_t loop[66];
+    xyl__dvec3 centroid, n;
+    stems_ring ring;
+} bridge_geom;
+
+static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r, bridge_geom *g)
 {
     uint32_t strip = strip_size(s);
-    patch best = {UINT32_MAX, 0, -4.0};
+    const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
+    strip_loop(s, a->first, b->first, p.column, strip, g->loop);
+    xyl__dvec3 n = strip_normal(s, a->band, p.column, strip), centroid = xyl__d3(0, 0, 0);
+    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[g->loop[j]]));
+    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
+    /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
+     * tube widens to its own radius over its first segment */
+    double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
+    double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
+    double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
+    double h = fmax(r, 0.25 * parent_r);
+    stems_ring *ring = &g->ring;
+    memset(ring, 0, sizeof *ring);
+    ring->centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
+    ring->tangent = n;
+    xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[g->loop[0]]), centroid);
+    to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
+    if (!xyl__d3_normalize_ok(to0, &ring->u)) ring->u = xyl__d3_any_orthogonal(n);
+    ring->radius = r;
+    ring->band = UINT32_MAX;
+    g->centroid = centroid;
+    g->n = n;
+}
+
+/* The first segment of child's tube if it bridges from patch p: from its bridge ring to its
+ * first station as make_stations will place it. *reaches: that station is one of the child's
+ * nodes, not a stub in front of the ring (every node behind it). */
+static xyl__stems_cone first_cone(const stems *s, patch p, uint32_t child, double parent_r,
+                                  bool *reaches)
+{
+    bridge_geom g;
+    plan_bridge(s, p, child, parent_r, &g);
+    const stems_ring *ring = &g.ring;
+    xyl__stems_cone c = {ring->centre, xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, 2 * ring->radius)),
+                         ring->radius, ring->radius};
+    *reaches = false;
+    for (uint32_t n = child; n != UINT32_MAX; n = main_child(s, n)) {
+        xyl__dvec3 q = node_pos(s, n);
+        c.r1 = s->sk->nodes[n].radius;
+        if (xyl__d3_dot(xyl__d3_sub(q, ring->centre), ring->tangent) >= ring->radius) {
+            c.p1 = q;
+            *reaches = true;
+            break;
+        }
+    }
+    return c;
+}
+
+static bool clashes(const stems *s, const xyl__stems_cone *c)
+{
+    for (size_t i = 0; i < s->ncones; ++i)
+        if (xyl__cones_clash(c, &s->cones[i])) return true;
+    return false;
+}
+
+/* Best free patch for direction d among the bands between rings lo .. hi: the one facing d
+ * most, and lying in direction d from the fork node (so a child leaning forward takes a band
+ * ahead of the node, one leaning back a band behind), among those whose first segment does not
+ * run into a sibling's placed before (s->cones). Such a patch must still face the child and
+ * reach its nodes, or the child would become a stub on the wrong side; if there is none, the
+ * best of all. */
+static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d,
+                          uint32_t child, double parent_r)
+{
+    uint32_t strip = strip_size(s);
+    patch best = {UINT32_MAX, 0, -4.0}, fallback = best;
     for (size_t r = lo; r < hi; ++r) {
         uint32_t band = s->rings[r].band;
         for (uint32_t c = 0; c < s->k; ++c) {
@@ -488,14 +558,20 @@ static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node,
              * cannot beat the best even so is skipped before its centre is normalised */
             if (facing + (1.0 + 1e-9) < best.score) continue;
             xyl__dvec3 to = xyl__d3_normalize_or(xyl__d3_sub(strip_centre(s, band, c, strip), node), d);
-            double score = facing + xyl__d3_dot(to, d);
-            if (score > best.score) {
-                patch p = {(uint32_t)r, c, score};
-                best = p;
+            patch p = {(uint32_t)r, c, facing + xyl__d3_dot(to, d)};
+            if (p.score <= best.score) continue;
+            if (s->ncones) {
+                bool reaches;
+                xyl__stems_cone cone = first_cone(s, p, child, parent_r, &reaches);
+                if (facing <= 0.0 || !reaches || clashes(s, &cone)) {
+                    if (p.score > fallback.score) fallback = p;
+                    continue;
+                }
             }
+            best = p;
         }
     }
-    return best;
+    return best.ring != UINT32_MAX ? best : fallback;
 }
 
 /* Faces from the patch outline loop (n vertices, counter-clockwise from outside) to the child's
@@ -535,29 +611,15 @@ static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *l
 /* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
 static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
 {
-    uint32_t strip = strip_size(s), loop[66];
-    const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
-    uint32_t band = a->band, branch = s->sk->nodes[child].branch;
-    strip_loop(s, a->first, b->first, p.column, strip, loop);
-    xyl__dvec3 n = strip_normal(s, band, p.column, strip), centroid = xyl__d3(0, 0, 0);
-    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[loop[j]]));
-    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
+    uint32_t strip = strip_size(s), band = s->rings[p.ring].band;
+    uint32_t branch = s->sk->nodes[child].branch;
+    bridge_geom g;
+    plan_bridge(s, p, child, parent_r, &g);
     for (uint32_t j = 0; j < strip; ++j) s->taken[strip_quad(s, band, p.column, j)] = 1;
-    /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
-     * tube widens to its own radius over its first segment */
-    double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
-    double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
-    double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
-    double h = fmax(r, 0.25 * parent_r);
-    stems_ring ring;
-    memset(&ring, 0, sizeof ring);
-    ring.centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
-    ring.tangent = n;
-    xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[loop[0]]), centroid);
-    to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
-    if (!xyl__d3_normalize_ok(to0, &ring.u)) ring.u = xyl__d3_any_orthogonal(n);
-    ring.radius = r;
-    ring.band = UINT32_MAX;
+    const uint32_t *loop = g.loop;
+    xyl__dvec3 n = g.n, centroid = g.centroid;
+    stems_ring ring = g.ring;
+    double r = ring.radius;
     if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
     ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
     if (s->k % 2) align_to_outline(s, &ring, loop, centroid, r);
@@ -603,16 +665,21 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
     const stems_station *st = &s->stations[i];
     xyl_result r = grow_taken(s);
     if (r) return r;
+    s->ncones = 0;
     for (uint32_t c = st->first; c <= st->last && st->first != UINT32_MAX; ++c) {
         uint32_t node = s->chain[c], main = main_child(s, node);
         for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
             uint32_t child = s->child_list[j];
             if (child == main) continue;
             xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
-            patch p = choose_patch(s, lo, hi, node_pos(s, node), d);
+            patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
             if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
                 return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                                  "internal: no free patch left at node %u", node);
+            if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
+                return oom(s);
+            bool reaches;
+            s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
             r = bridge(s, p, child, st->r);
             if (r) return r;
         }
@@ -865,7 +932,7 @@ static void free_state(stems *s)
 {
     void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->nrm,
                       s->quads, s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations,
-                      s->rings, s->spans, s->pending};
+                      s->rings, s->spans, s->pending, s->cones};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 

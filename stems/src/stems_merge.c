@@ -136,3 +136,41 @@ bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
     }
     return any;
 }
+
+/* Closest points of segments p0-p1 and q0-q1 as parameters *s, *t in [0, 1] (Ericson 2005,
+ * "Real-Time Collision Detection", 5.1.9). */
+static void closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
+                           double *t)
+{
+    xyl__dvec3 d1 = xyl__d3_sub(p1, p0), d2 = xyl__d3_sub(q1, q0), r = xyl__d3_sub(p0, q0);
+    double a = xyl__d3_dot(d1, d1), e = xyl__d3_dot(d2, d2), f = xyl__d3_dot(d2, r);
+    const double eps = XYL__EPS_NORMALIZE;
+    if (a <= eps) {
+        *s = 0.0;
+        *t = e <= eps ? 0.0 : fmin(1.0, fmax(0.0, f / e));
+        return;
+    }
+    double c = xyl__d3_dot(d1, r);
+    if (e <= eps) {
+        *t = 0.0;
+        *s = fmin(1.0, fmax(0.0, -c / a));
+        return;
+    }
+    double b = xyl__d3_dot(d1, d2), denom = a * e - b * b;
+    double sv = denom > 0.0 ? fmin(1.0, fmax(0.0, (b * f - c * e) / denom)) : 0.0;
+    double tv = (b * sv + f) / e;
+    if (tv < 0.0) tv = 0.0, sv = fmin(1.0, fmax(0.0, -c / a));
+    else if (tv > 1.0) tv = 1.0, sv = fmin(1.0, fmax(0.0, (b - c) / a));
+    *s = sv;
+    *t = tv;
+}
+
+bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b)
+{
+    double s, t;
+    closest_params(a->p0, a->p1, b->p0, b->p1, &s, &t);
+    xyl__dvec3 pa = xyl__d3_add(a->p0, xyl__d3_scale(xyl__d3_sub(a->p1, a->p0), s));
+    xyl__dvec3 pb = xyl__d3_add(b->p0, xyl__d3_scale(xyl__d3_sub(b->p1, b->p0), t));
+    double ra = a->r0 + (a->r1 - a->r0) * s, rb = b->r0 + (b->r1 - b->r0) * t;
+    return xyl__d3_len(xyl__d3_sub(pa, pb)) < ra + rb;
+}
