@@ -230,6 +230,12 @@ static void no_hard_case_intersects_at_a_joint_k4(void **state)
     assert_no_joint_intersects(4);
 }
 
+static void no_hard_case_intersects_at_a_joint_k7(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(7);
+}
+
 /* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
  * later nodes: only the nodes at the start of a child's chain that are still inside the parent
  * may be absorbed, not its tip. */
@@ -538,6 +544,7 @@ int main(void)
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k4),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),

@@ -493,7 +493,12 @@ static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r
     double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
     double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
     double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
-    double h = fmax(r, 0.25 * parent_r);
+    /* a strip of several quads bulges out past its centroid (by 1 - cos(pi strip / k) of the
+     * parent radius): the ring goes beyond the bulge, or the bridge folds back into the parent */
+    double bulge = 0.0;
+    for (uint32_t j = 0; j < 2 * strip + 2; ++j)
+        bulge = fmax(bulge, xyl__d3_dot(xyl__d3_sub(xyl__from_f3(s->pos[g->loop[j]]), centroid), n));
+    double h = fmax(fmax(r, 0.25 * parent_r), bulge + r);
     stems_ring *ring = &g->ring;
     memset(ring, 0, sizeof *ring);
     ring->centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
