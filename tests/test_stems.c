@@ -76,7 +76,7 @@ static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
 static void every_hard_case_is_a_closed_manifold(void **state)
 {
     (void)state;
-    static const uint32_t sides[] = {3, 4, 5, 6, 7, 8};
+    static const uint32_t sides[] = {3, 4, 5, 6, 7, 8, 16, 32};
     for (size_t i = 0; i < sizeof sides / sizeof sides[0]; ++i) {
         topo_ctx t = {sides[i], XYL_SUBDIVIDE_NONE};
         assert_true(tu_for_each_hard_case(check_topology, &t) >= 40);
@@ -228,6 +228,12 @@ static void no_hard_case_intersects_at_a_joint_k4(void **state)
 {
     (void)state;
     assert_no_joint_intersects(4);
+}
+
+static void no_hard_case_intersects_at_a_joint_k6(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(6);
 }
 
 static void no_hard_case_intersects_at_a_joint_k7(void **state)
@@ -544,6 +550,7 @@ int main(void)
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k4),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),

@@ -174,7 +174,7 @@ static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
 
 /* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
  * the tube leaves behind it (a tip), false for one it starts from (a root). */
-static xyl_result put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
+static xyl_result put_flat_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
 {
     uint32_t j = 1;
     for (; j + 2 < s->k; j += 2) {
@@ -187,6 +187,46 @@ static xyl_result put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch
         return forward ? put_tri(s, a, b, c, branch) : put_tri(s, a, c, b, branch);
     }
     return XYL_OK;
+}
+
+/* The apex of a domed cap: a quarter of the ring's radius beyond its centre, outwards. */
+static uint32_t put_apex(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
+{
+    double h = (forward ? 0.25 : -0.25) * ring->radius * s->inflate;
+    size_t v = s->nv;
+    s->pos[v] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, h)));
+    s->uv[2 * v] = 0.5f;
+    s->uv[2 * v + 1] = (float)(ring->v + h / (2.0 * XYL__PI * ring->radius));
+    s->vbranch[v] = branch;
+    if (s->nrm) memset(s->nrm + v, 0, sizeof *s->nrm);
+    s->nv = v + 1;
+    return (uint32_t)v;
+}
+
+/* Closes a ring of k >= 5 with a low dome: k / 2 quads around an apex (odd k: and one
+ * triangle). A flat cap of three or more triangles has two that share one vertex and lie in
+ * one plane, which no test can tell from touching once rounding makes them almost, not
+ * exactly, coplanar; the dome's faces meet at an angle. */
+static xyl_result put_dome_cap(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
+{
+    uint32_t a = put_apex(s, ring, forward, branch), f = ring->first, k = s->k;
+    for (uint32_t j = 0; j + 1 < k; j += 2) {
+        uint32_t b = f + j, c = f + j + 1, d = j + 2 < k ? f + j + 2 : f;
+        if (forward) put_quad(s, a, b, c, d, branch);
+        else put_quad(s, a, d, c, b, branch);
+    }
+    if (k % 2 == 0) return XYL_OK;
+    return forward ? put_tri(s, a, f + k - 1, f, branch) : put_tri(s, a, f, f + k - 1, branch);
+}
+
+/* The cap of ring i of the branch being built (its root or its tip). */
+static xyl_result put_cap(stems *s, size_t i, bool forward, uint32_t branch)
+{
+    const stems_ring *ring = &s->rings[i];
+    if (s->k < 5) return put_flat_cap(s, ring->first, forward, branch);
+    xyl_result r = put_dome_cap(s, ring, forward, branch);
+    if (s->unit_per_branch) s->apex[forward] = (uint32_t)s->nv - 1;
+    return r;
 }
 
 /* Rotation-minimising frame transport (double reflection, Wang et al. 2008): the reference
@@ -735,7 +775,8 @@ static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, stems_fork_span *
 /* With even k (no triangles) a vertex's own-branch faces are the bands, caps and bridge of its
  * branch, all made once the branch is built: its normals are normalised then, while they are
  * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
- * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings. */
+ * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings and the
+ * apexes of its domed caps. */
 static void unit_branch_normals(stems *s)
 {
     for (size_t i = 0; i < s->nrings; ++i) {
@@ -744,6 +785,12 @@ static void unit_branch_normals(stems *s)
             if (xyl__has_direction(n[j])) n[j] = xyl__unit_or_up(n[j]);
             else s->lonely = true;
         }
+    }
+    for (int e = 0; e < 2; ++e) {
+        if (s->apex[e] == UINT32_MAX) continue;
+        xyl_vec3 *n = s->nrm + s->apex[e];
+        if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
+        else s->lonely = true;
     }
 }
 
@@ -772,9 +819,10 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     size_t nspans = 0;
     r = branch_rings(s, dir, spans, &nspans);
     if (!r) r = emit_rings(s, from ? 1 : 0, branch);
-    if (!r && !out_reserve(s, s->nv, s->nq + s->k)) r = oom(s);
-    if (!r && !from) r = put_cap(s, s->rings[0].first, false, branch);
-    if (!r) r = put_cap(s, s->rings[s->nrings - 1].first, true, branch);
+    if (!r && !out_reserve(s, s->nv + 2, s->nq + s->k)) r = oom(s); /* the caps */
+    s->apex[0] = s->apex[1] = UINT32_MAX;
+    if (!r && !from) r = put_cap(s, 0, false, branch);
+    if (!r) r = put_cap(s, s->nrings - 1, true, branch);
     if (!r && s->unit_per_branch) unit_branch_normals(s);
     for (size_t f = 0; f < nspans && !r; ++f)
         r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
@@ -784,8 +832,9 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 /* Upper bounds on the rings (each k vertices) and on the branch chains of the mesh: a chain's
  * stations are at most its nodes plus one (ensure_two_stations), a fork station adds
  * fork_extra_rings for the laterals merged into it (no more than the sum over its nodes), and
- * each lateral child adds its bridge ring. Faces: k per band and per bridge, fewer than k per
- * chain for the caps, so k (rings + chains) covers quads and triangles together. */
+ * each lateral child adds its bridge ring. Faces: k per band and per bridge, at most k per
+ * chain for the caps, so k (rings + chains) covers quads and triangles together; vertices: k
+ * per ring and two cap apexes per chain. */
 static void ring_bound(const stems *s, size_t *rings, size_t *chains)
 {
     size_t n = s->sk->node_count, r = 16, c = 0;
@@ -829,7 +878,7 @@ static xyl_result build_all(stems *s)
      * allocator can hand the same pages back on the next build instead of fresh ones */
     size_t rings = 0, chains = 0;
     if (!r) ring_bound(s, &rings, &chains);
-    if (!r && !out_reserve(s, rings * s->k, (rings + chains) * s->k)) r = oom(s);
+    if (!r && !out_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k)) r = oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
         r = build_branch(s, (uint32_t)i, NULL);

@@ -60,6 +60,8 @@ typedef struct stems {
     bool sum_normals;   /* branch normals, no subdivision: nrm is summed while meshing */
     bool unit_per_branch; /* nrm of a branch's vertices is normalised once it is built */
     bool lonely;        /* some vertex has no own-branch face normal (see xyl__mesh_normals) */
+    uint32_t apex[2];   /* the domed caps' apexes of the branch being built (root, tip), or
+                           UINT32_MAX (k < 5, no root cap) */
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     size_t nq, qcap;
