@@ -109,10 +109,14 @@ static void every_preset_is_a_closed_manifold(void **state)
     for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
         const char *name = xyl_lsystem_preset_name(i);
         xyl_skeleton *sk = grow_preset(name);
-        xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
-        assert_closed(m, sk, name);
-        xyl_mesh_destroy(m);
-        m = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
+        for (uint32_t k = 3; k <= 8; ++k) {
+            char what[128];
+            snprintf(what, sizeof what, "%s k=%u", name, k);
+            xyl_mesh *plain = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+            assert_closed(plain, sk, what);
+            xyl_mesh_destroy(plain);
+        }
+        xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
         assert_closed(m, sk, name);
         xyl_mesh_destroy(m);
         m = build(sk, 5, XYL_SUBDIVIDE_LOOP, XYL_NORMALS_BRANCH);
@@ -228,6 +232,12 @@ static void no_hard_case_intersects_at_a_joint_k4(void **state)
 {
     (void)state;
     assert_no_joint_intersects(4);
+}
+
+static void no_hard_case_intersects_at_a_joint_k5(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(5);
 }
 
 static void no_hard_case_intersects_at_a_joint_k6(void **state)
@@ -550,6 +560,7 @@ int main(void)
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k4),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k5),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),

@@ -430,6 +430,16 @@ static size_t fork_extra_rings(const stems *s, size_t laterals)
     return want < 2 ? 2 : want;
 }
 
+/* The unit direction a fraction f of the way from unit a to unit b (normalised lerp); a and b
+ * themselves at the ends, and where they agree. */
+static xyl__dvec3 blend(xyl__dvec3 a, xyl__dvec3 b, double f)
+{
+    if (f <= 0.0 || (a.x == b.x && a.y == b.y && a.z == b.z)) return a;
+    if (f >= 1.0) return b;
+    xyl__dvec3 m = xyl__d3_add(xyl__d3_scale(a, 1.0 - f), xyl__d3_scale(b, f));
+    return xyl__d3_normalize_or(m, b);
+}
+
 /* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
  * delta, so the bands between them offer patches to the lateral children. */
 static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
@@ -450,11 +460,21 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
     double d_in = behind ? fmin(lat_r, 0.45 * seg_in / (double)behind) : 0.0;
     double d_out = ahead ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : 0.0;
     xyl_result r = XYL_OK;
-    for (size_t m = behind; m >= 1 && !r; --m)
-        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r);
+    /* a ring delta from the node ring whose plane is turned by the half bend against the node
+     * ring's crosses it on the inside of the bend when delta < r sin(half bend); the rings on
+     * that side then turn from t_in to t_out in even steps instead */
+    double rr = 1.05 * st->r * s->inflate;
+    bool turn_in = d_in < rr * xyl__d3_len(xyl__d3_cross(t_in, t));
+    bool turn_out = d_out < rr * xyl__d3_len(xyl__d3_cross(t, t_out));
+    for (size_t m = behind; m >= 1 && !r; --m) {
+        xyl__dvec3 tm = turn_in ? blend(t_in, t, (double)(behind - m) / (double)behind) : t_in;
+        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), tm, st->r);
+    }
     if (!r) r = add_ring(s, st->p, t, st->r);
-    for (size_t m = 1; m <= ahead && !r; ++m)
-        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r);
+    for (size_t m = 1; m <= ahead && !r; ++m) {
+        xyl__dvec3 tm = turn_out ? blend(t, t_out, (double)m / (double)ahead) : t_out;
+        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), tm, st->r);
+    }
     return r;
 }
 
@@ -637,20 +657,28 @@ static xyl_result bridge_faces(stems *s, const uint32_t *loop, uint32_t n, uint3
 
 /* Odd k: the outline has k + 1 vertices, so evenly spaced ring vertices would drift against it
  * and twist the bridge; ring vertex j goes instead where outline vertex j is, seen around the
- * ring's axis. */
+ * ring's axis. A skewed outline (a patch on a bend) can show two vertices in one direction, or
+ * out of order: the ring then keeps its even spacing, as two ring vertices in one place would
+ * make a sliver and a step backwards a fold. Steps of at least 1/200 of an even one count. */
 static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *loop,
                              xyl__dvec3 centroid, double r)
 {
-    xyl__dvec3 n = ring->tangent;
-    double rr = r * s->inflate;
+    xyl__dvec3 n = ring->tangent, dir[32];
+    double rr = r * s->inflate, prev = 0.0, min_step = 0.005 * 2.0 * XYL__PI / (double)s->k;
     for (uint32_t j = 0; j < s->k; ++j) {
         xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(s->pos[loop[j]]), centroid);
         d = xyl__d3_sub(d, xyl__d3_scale(n, xyl__d3_dot(d, n)));
-        double l2 = xyl__d3_dot(d, d);
-        if (!(l2 > XYL__EPS_NORMALIZE)) continue; /* keep the even spacing */
-        xyl__dvec3 p = xyl__d3_add(ring->centre, xyl__d3_scale(d, rr / sqrt(l2)));
-        s->pos[ring->first + j] = xyl__to_f3(p);
+        if (!xyl__d3_normalize_ok(d, &dir[j])) return; /* keep the even spacing */
+        if (!j) continue;
+        /* the angle from outline vertex 0, counter-clockwise seen from +n */
+        double a = atan2(xyl__d3_dot(xyl__d3_cross(dir[0], dir[j]), n), xyl__d3_dot(dir[0], dir[j]));
+        if (a < 0.0) a += 2.0 * XYL__PI;
+        if (a - prev < min_step) return;
+        prev = a;
     }
+    if (2.0 * XYL__PI - prev < min_step) return;
+    for (uint32_t j = 0; j < s->k; ++j)
+        s->pos[ring->first + j] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(dir[j], rr)));
 }
 
 /* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
