@@ -252,6 +252,12 @@ static void no_hard_case_intersects_at_a_joint_k7(void **state)
     assert_no_joint_intersects(7);
 }
 
+static void no_hard_case_intersects_at_a_joint_k8(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(8);
+}
+
 /* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
  * later nodes: only the nodes at the start of a child's chain that are still inside the parent
  * may be absorbed, not its tip. */
@@ -563,6 +569,7 @@ int main(void)
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k5),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k8),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),

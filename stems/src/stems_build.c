@@ -655,11 +655,12 @@ static xyl_result bridge_faces(stems *s, const uint32_t *loop, uint32_t n, uint3
     return put_tri(s, loop[k - 1], loop[k], ring + k - 1, branch);
 }
 
-/* Odd k: the outline has k + 1 vertices, so evenly spaced ring vertices would drift against it
- * and twist the bridge; ring vertex j goes instead where outline vertex j is, seen around the
- * ring's axis. A skewed outline (a patch on a bend) can show two vertices in one direction, or
- * out of order: the ring then keeps its even spacing, as two ring vertices in one place would
- * make a sliver and a step backwards a fold. Steps of at least 1/200 of an even one count. */
+/* Ring vertex j goes where outline vertex j is, seen around the ring's axis: evenly spaced
+ * ring vertices would drift against an outline that is not a regular polygon and twist the
+ * bridge (with odd k the outline even has k + 1 vertices; with even k a patch on a bend is
+ * skewed). A skewed outline can show two vertices in one direction, or out of order: the ring
+ * then keeps its even spacing, as two ring vertices in one place would make a sliver and a
+ * step backwards a fold. Steps of at least 1/200 of an even one count. */
 static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *loop,
                              xyl__dvec3 centroid, double r)
 {
@@ -695,7 +696,7 @@ static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
     double r = ring.radius;
     if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
     ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
-    if (s->k % 2) align_to_outline(s, &ring, loop, centroid, r);
+    align_to_outline(s, &ring, loop, centroid, r);
     xyl_result res = bridge_faces(s, loop, 2 * strip + 2, ring.first, branch);
     if (res) return res;
     if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
