@@ -398,6 +398,30 @@ static void siblings_that_part_later_grow_out_of_each_other(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* A skeleton the fuzzer found: a lateral's nodes all lie behind its bridge ring and so far out
+ * (1e16) that the station added after them rounds onto them, leaving its fork without a band
+ * for the fork's own lateral. Every k must still mesh into a closed manifold; its faces at
+ * 1e16 are below the degenerate-face tolerance, as the fuzzer allows. */
+static void a_fork_whose_stations_round_together_still_meshes(void **state)
+{
+    (void)state;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/skel/fuzz_stations_round_together.skel", XYL_TEST_DATA);
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_read_file(path, NULL, &sk, NULL), XYL_OK);
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        xyl_mesh_report rep;
+        assert_int_equal(xyl_mesh_check(m, &rep, NULL), XYL_OK);
+        assert_int_equal(rep.boundary_edges + rep.nonmanifold_edges + rep.misoriented_edges, 0);
+        assert_int_equal(rep.nonmanifold_vertices + rep.duplicate_faces, 0);
+        assert_int_equal(rep.euler, 2 * (int64_t)sk->root_count);
+        assert_int_equal(rep.components, sk->root_count);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
 /* ---- normals ------------------------------------------------------------------------------- */
 
 /* Worst angle (degrees) between the parent's vertex normals and the radial direction of the
@@ -604,6 +628,7 @@ int main(void)
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
+        cmocka_unit_test(a_fork_whose_stations_round_together_still_meshes),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(catmull_clark_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(identical_input_gives_identical_meshes),

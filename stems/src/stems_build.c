@@ -449,8 +449,10 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
     size_t want = fork_extra_rings(s, laterals);
     double seg_in = i ? xyl__d3_len(xyl__d3_sub(st->p, s->stations[i - 1].p)) : 0.0;
     double seg_out = i + 1 < s->nstations ? xyl__d3_len(xyl__d3_sub(s->stations[i + 1].p, st->p)) : 0.0;
+    /* without a segment of any length on either side (coordinates so large that the station
+     * after it rounds onto it), the laterals still need their bands: all go ahead */
     size_t behind = seg_in > 0.0 ? (seg_out > 0.0 ? want / 2 : want) : 0;
-    size_t ahead = seg_out > 0.0 ? want - behind : 0;
+    size_t ahead = want - behind;
     double lat_r = 0.0;
     for (uint32_t c = st->first; c <= st->last; ++c) {
         uint32_t node = s->chain[c];
@@ -458,7 +460,7 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
             if (s->sk->nodes[s->child_list[j]].radius > lat_r) lat_r = s->sk->nodes[s->child_list[j]].radius;
     }
     double d_in = behind ? fmin(lat_r, 0.45 * seg_in / (double)behind) : 0.0;
-    double d_out = ahead ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : 0.0;
+    double d_out = !ahead ? 0.0 : seg_out > 0.0 ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : lat_r;
     xyl_result r = XYL_OK;
     /* a ring delta from the node ring whose plane is turned by the half bend against the node
      * ring's crosses it on the inside of the bend when delta < r sin(half bend); the rings on
