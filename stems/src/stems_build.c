@@ -742,6 +742,9 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
     xyl_result r = grow_taken(s);
     if (r) return r;
     s->ncones = 0;
+    /* the siblings still to come test their first segments against those placed before
+     * (choose_patch); the last one's is never read */
+    size_t left = st->first == UINT32_MAX ? 0 : lateral_count(s, st);
     for (uint32_t c = st->first; c <= st->last && st->first != UINT32_MAX; ++c) {
         uint32_t node = s->chain[c], main = main_child(s, node);
         for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
@@ -752,10 +755,12 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
             if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
                 return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                                  "internal: no free patch left at node %u", node);
-            if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
-                return oom(s);
-            bool reaches;
-            s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+            if (--left) {
+                if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
+                    return oom(s);
+                bool reaches;
+                s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+            }
             r = bridge(s, p, child, st->r);
             if (r) return r;
         }
@@ -878,6 +883,14 @@ static void ring_bound(const stems *s, size_t *rings, size_t *chains)
     *chains = c;
 }
 
+/* Whether some node has two or more lateral children, the only place siblings can merge. */
+static bool has_sibling_laterals(const stems *s)
+{
+    for (size_t n = 0; n < s->sk->node_count; ++n)
+        if (s->child_start[n + 1] - s->child_start[n] > 1u + (s->main[n] != UINT32_MAX)) return true;
+    return false;
+}
+
 /* Children of every node, indexed again after overlapping siblings were merged
  * (stems_merge.c), so that the rest of the mesher sees the merged tree. One call site of
  * index_children: inlined twice, GCC doubts its sizes. */
@@ -888,6 +901,7 @@ static xyl_result index_tree(stems *s)
     for (int pass = 0; pass < 2 && !r; ++pass) {
         r = index_children(s, parent_of);
         if (r || pass) break;
+        if (!has_sibling_laterals(s)) break; /* nothing to merge: no scratch array */
         parent_of = xyl__alloc_array(&s->alloc, s->sk->node_count, sizeof *parent_of);
         if (!parent_of) r = oom(s);
         else if (!xyl__stems_merge_siblings(s, parent_of)) break;
