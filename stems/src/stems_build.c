@@ -662,25 +662,30 @@ static xyl_result bridge_faces(stems *s, const uint32_t *loop, uint32_t n, uint3
  * bridge (with odd k the outline even has k + 1 vertices; with even k a patch on a bend is
  * skewed). A skewed outline can show two vertices in one direction, or out of order: the ring
  * then keeps its even spacing, as two ring vertices in one place would make a sliver and a
- * step backwards a fold. Steps of at least 1/200 of an even one count. */
+ * step backwards a fold. Steps of more than 1/200 of an even one count (s->align_cos). */
 static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *loop,
                              xyl__dvec3 centroid, double r)
 {
-    xyl__dvec3 n = ring->tangent, dir[32];
-    double rr = r * s->inflate, prev = 0.0, min_step = 0.005 * 2.0 * XYL__PI / (double)s->k;
-    for (uint32_t j = 0; j < s->k; ++j) {
+    xyl__dvec3 n = ring->tangent, dir[33];
+    uint32_t k = s->k;
+    for (uint32_t j = 0; j < k; ++j) {
         xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(s->pos[loop[j]]), centroid);
         d = xyl__d3_sub(d, xyl__d3_scale(n, xyl__d3_dot(d, n)));
         if (!xyl__d3_normalize_ok(d, &dir[j])) return; /* keep the even spacing */
-        if (!j) continue;
-        /* the angle from outline vertex 0, counter-clockwise seen from +n */
-        double a = atan2(xyl__d3_dot(xyl__d3_cross(dir[0], dir[j]), n), xyl__d3_dot(dir[0], dir[j]));
-        if (a < 0.0) a += 2.0 * XYL__PI;
-        if (a - prev < min_step) return;
-        prev = a;
     }
-    if (2.0 * XYL__PI - prev < min_step) return;
-    for (uint32_t j = 0; j < s->k; ++j)
+    dir[k] = dir[0];
+    /* every step, the closing one too, turns counter-clockwise (seen from +n) by more than
+     * min_step and less than pi, and none after the first passes direction 0 again: the
+     * outline goes round once, in order. Signs of cross and dot products, no angles. */
+    for (uint32_t j = 0; j < k; ++j) {
+        double sj = xyl__d3_dot(xyl__d3_cross(dir[j], dir[j + 1]), n);
+        if (!(sj > 0.0 && xyl__d3_dot(dir[j], dir[j + 1]) < s->align_cos)) return;
+        if (j && j + 1 < k && xyl__d3_dot(xyl__d3_cross(dir[j], dir[0]), n) > 0.0 &&
+            xyl__d3_dot(xyl__d3_cross(dir[0], dir[j + 1]), n) >= 0.0)
+            return;
+    }
+    double rr = r * s->inflate;
+    for (uint32_t j = 0; j < k; ++j)
         s->pos[ring->first + j] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(dir[j], rr)));
 }
 
@@ -919,6 +924,7 @@ static xyl_result build_all(stems *s)
         s->sin_a[j] = sin(a);
         s->u_of[j] = (float)((double)j / (double)s->k);
     }
+    s->align_cos = cos(0.005 * 2.0 * XYL__PI / (double)s->k);
     /* reserving once avoids regrowth copies; a tight bound keeps the footprint small, so the
      * allocator can hand the same pages back on the next build instead of fresh ones */
     size_t rings = 0, chains = 0;

@@ -50,6 +50,7 @@ typedef struct stems {
     uint32_t *main;      /* per node: the child continuing its branch, or UINT32_MAX */
     double cos_a[32], sin_a[32]; /* ring vertex directions, j = 0 .. k - 1 */
     float u_of[32];              /* texture u of ring vertex j: j / k */
+    double align_cos;            /* cos of the smallest step align_to_outline takes */
 
     /* output */
     xyl_vec3 *pos;
