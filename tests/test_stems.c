@@ -188,7 +188,7 @@ static bool segments_overlap(const xyl_skeleton *sk, uint32_t i, uint32_t j)
  * mesher can part without moving the skeleton: segments of a and b that overlap
  * (segments_overlap), where a and b are the same branch or unrelated (neither parent and child
  * nor children of one node: there the joint is the mesher's to build). */
-static bool skeletons_cross(const xyl_skeleton *sk, uint32_t a, uint32_t b)
+static bool skeletons_cross(const xyl_skeleton *sk, uint32_t a, uint32_t b, uint32_t seg[2])
 {
     if (a != b) {
         int32_t fa = sk->nodes[branch_start(sk, a)].parent, fb = sk->nodes[branch_start(sk, b)].parent;
@@ -200,9 +200,28 @@ static bool skeletons_cross(const xyl_skeleton *sk, uint32_t a, uint32_t b)
     for (uint32_t i = 0; i < sk->node_count; ++i) {
         if (n[i].branch != a || n[i].parent < 0) continue;
         for (uint32_t j = 0; j < sk->node_count; ++j)
-            if (n[j].branch == b && n[j].parent >= 0 && segments_overlap(sk, i, j)) return true;
+            if (n[j].branch == b && n[j].parent >= 0 && segments_overlap(sk, i, j)) {
+                seg[0] = i, seg[1] = j;
+                return true;
+            }
     }
     return false;
+}
+
+/* What a hard case's intersections rest on: the first pair of overlapping segments. */
+static void print_overlap(const char *name, uint32_t k, size_t count, const xyl_skeleton *sk,
+                          const uint32_t seg[2])
+{
+    const xyl_skel_node *n = sk->nodes;
+    uint32_t i = seg[0], j = seg[1], pi = (uint32_t)n[i].parent, pj = (uint32_t)n[j].parent;
+    double r = fmax(n[i].radius, n[pi].radius) + fmax(n[j].radius, n[pj].radius);
+    if (i == pj || j == pi || pi == pj)
+        print_message("  %s k = %u: %zu pairs; segments %u-%u and %u-%u fold onto each other "
+                      "(radii %.4f)\n", name, k, count, pi, i, pj, j, r);
+    else
+        print_message("  %s k = %u: %zu pairs; segments %u-%u and %u-%u are %.4f apart, radii "
+                      "%.4f\n", name, k, count, pi, i, pj, j,
+                      segment_distance(n[pi].pos, n[i].pos, n[pj].pos, n[j].pos), r);
 }
 
 static uint32_t tri_branch(const xyl_mesh *m, uint32_t t)
@@ -232,12 +251,15 @@ static void check_intersections(const char *name, const xyl_skeleton *sk, void *
     uint32_t *pairs = malloc(2 * count * sizeof *pairs);
     assert_non_null(pairs);
     assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
+    uint32_t seg[2] = {0, 0}, first[2] = {0, 0};
     for (size_t i = 0; i < count; ++i) {
         uint32_t a = tri_branch(m, pairs[2 * i]), b = tri_branch(m, pairs[2 * i + 1]);
-        if (!skeletons_cross(sk, a, b))
+        if (!skeletons_cross(sk, a, b, seg))
             fail_msg("%s k = %u: %zu intersecting pairs, one on branches %u and %u at a joint",
                      name, c->k, count, a, b);
+        if (i == 0) first[0] = seg[0], first[1] = seg[1];
     }
+    print_overlap(name, c->k, count, sk, first);
     ++c->crossing;
     free(pairs);
     xyl_mesh_destroy(m);
