@@ -420,6 +420,45 @@ static void siblings_that_part_later_grow_out_of_each_other(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* 64 thin spokes (radius 1e-4) around one node of a parent of radius 0.1: neighbours are 0.04
+ * apart at their first nodes, far more than their radii, so none may merge into another and
+ * each grows out of the fork. (The fork node's radius is the parent's: a sibling's tube is its
+ * own radius from the start.) */
+static void thin_spokes_stay_separate_branches(void **state)
+{
+    (void)state;
+    enum { spokes = 64 };
+    xyl_skel_node nodes[2 + 2 * spokes];
+    memset(nodes, 0, sizeof nodes);
+    nodes[0] = (xyl_skel_node){{0, 0, 0}, 0.1f, -1, 0, 0};
+    nodes[1] = (xyl_skel_node){{0, 1, 0}, 0.1f, 0, 0, 0};
+    for (int i = 0; i < spokes; ++i) {
+        double a = 2 * 3.14159265358979 * i / spokes, sx = 0.866 * cos(a), sz = 0.866 * sin(a);
+        nodes[2 + 2 * i] = (xyl_skel_node){{(float)(0.5 * sx), 1.25f, (float)(0.5 * sz)}, 1e-4f, 1, 0, 0};
+        nodes[3 + 2 * i] = (xyl_skel_node){{(float)sx, 1.5f, (float)sz}, 1e-4f, 2 + 2 * i, 0, 0};
+    }
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 2 + 2 * spokes;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    assert_closed(m, sk, "thin spokes");
+    /* each spoke grows out of the fork, not out of a neighbour further out */
+    for (int i = 0; i < spokes; ++i) {
+        uint32_t b = sk->nodes[3 + 2 * i].branch;
+        double nearest = INFINITY;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            if (m->branch_ids[v] != b) continue;
+            xyl_vec3 p = m->positions[v];
+            nearest = fmin(nearest, sqrt((double)p.x * p.x + (p.y - 1.0) * (p.y - 1.0) + (double)p.z * p.z));
+        }
+        if (!(nearest < 0.2)) fail_msg("spoke %d starts %g from the fork", i, nearest);
+    }
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
 /* A skeleton the fuzzer found: a lateral's nodes all lie behind its bridge ring and so far out
  * (1e16) that the station added after them rounds onto them, leaving its fork without a band
  * for the fork's own lateral. Every k must still mesh into a closed manifold; its faces at
@@ -651,6 +690,7 @@ int main(void)
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
         cmocka_unit_test(a_fork_whose_stations_round_together_still_meshes),
+        cmocka_unit_test(thin_spokes_stay_separate_branches),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(catmull_clark_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(identical_input_gives_identical_meshes),

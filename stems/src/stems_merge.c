@@ -24,15 +24,24 @@ static xyl__dvec3 pos_of(const stems *s, uint32_t n)
 }
 
 /* Whether a ball at p of radius r overlaps the tube of the chain that leaves fork through its
- * child `host` (each segment taken with the larger radius of its two nodes). */
-static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host)
+ * child `host`: its first segment with radius first_r, each later one with the larger radius of
+ * its two nodes. */
+static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host,
+                           double first_r)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
+    double seg_r = first_r;
     for (uint32_t a = fork, b = host; b != UINT32_MAX; a = b, b = s->main[b]) {
-        double rr = r + fmax(nodes[a].radius, nodes[b].radius);
-        if (point_segment_distance(p, pos_of(s, a), pos_of(s, b)) < rr) return true;
+        if (point_segment_distance(p, pos_of(s, a), pos_of(s, b)) < r + seg_r) return true;
+        if (s->main[b] != UINT32_MAX) seg_r = fmax(nodes[b].radius, nodes[s->main[b]].radius);
     }
     return false;
+}
+
+/* A sibling's tube starts at its own radius: the fork node's is the parent's. */
+static bool overlaps_sibling(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host)
+{
+    return overlaps_chain(s, p, r, fork, host, s->sk->nodes[host].radius);
 }
 
 static bool has_laterals(const stems *s, uint32_t n)
@@ -62,7 +71,9 @@ static bool overlaps_parent(const stems *s, xyl__dvec3 p, double r, uint32_t for
         double rr = r + fmax(nodes[before].radius, nodes[fork].radius);
         if (point_segment_distance(p, pos_of(s, (uint32_t)before), pos_of(s, fork)) < rr) return true;
     }
-    return s->main[fork] != UINT32_MAX && overlaps_chain(s, p, r, fork, s->main[fork]);
+    uint32_t main = s->main[fork];
+    return main != UINT32_MAX &&
+           overlaps_chain(s, p, r, fork, main, fmax(nodes[fork].radius, nodes[main].radius));
 }
 
 /* Merges lateral `child` of fork into sibling `host` if they overlap where the child leaves
@@ -78,11 +89,11 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     for (; n != UINT32_MAX && overlaps_parent(s, pos_of(s, n), nodes[n].radius, fork);
          last = n, n = s->main[n])
         if (has_laterals(s, n)) return false;
-    if (n == UINT32_MAX || !overlaps_chain(s, pos_of(s, n), nodes[n].radius, fork, host))
+    if (n == UINT32_MAX || !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host))
         return false;
     for (; n != UINT32_MAX; last = n, n = s->main[n]) {
         if (has_laterals(s, n)) break;
-        if (!overlaps_chain(s, pos_of(s, n), nodes[n].radius, fork, host)) break;
+        if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) break;
     }
     if (last == UINT32_MAX) return false; /* the first node has children */
     parent_of[child] = -1;
