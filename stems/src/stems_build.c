@@ -674,8 +674,8 @@ static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *l
         if (!xyl__d3_normalize_ok(d, &dir[j])) return; /* keep the even spacing */
     }
     dir[k] = dir[0];
-    /* every step, the closing one too, turns counter-clockwise (seen from +n) by more than
-     * min_step and less than pi, and none after the first passes direction 0 again: the
+    /* every step, the closing one too, turns counter-clockwise (seen from +n) by more than the
+     * smallest step and less than pi, and none after the first passes direction 0 again: the
      * outline goes round once, in order. Signs of cross and dot products, no angles. */
     for (uint32_t j = 0; j < k; ++j) {
         double sj = xyl__d3_dot(xyl__d3_cross(dir[j], dir[j + 1]), n);
