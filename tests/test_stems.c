@@ -4,22 +4,6 @@
 
 #include "test_util.h"
 
-/* Hard cases whose meshes (k = 4) still intersect themselves (docs/stems.md): siblings whose
- * tubes overlap along their length are not merged yet. Every other case must have none,
- * and these must stay manifold. */
-static const char *const known_intersecting[] = {
-    "binary_depth7.skel",
-    "fork_siblings_1deg.skel",
-    "spokes_16.skel",
-};
-
-static bool is_known_intersecting(const char *name)
-{
-    for (size_t i = 0; i < sizeof known_intersecting / sizeof known_intersecting[0]; ++i)
-        if (strcmp(name, known_intersecting[i]) == 0) return true;
-    return false;
-}
-
 static xyl_mesh *build(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
                        xyl_normal_mode normals)
 {
@@ -32,6 +16,21 @@ static xyl_mesh *build(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
     xyl_result r = xyl_stems_build(sk, &d, &m, &diag);
     if (r != XYL_OK) fail_msg("build: %s: %s", xyl_result_string(r), diag.message);
     return m;
+}
+
+/* Branches with faces: a sibling merged whole into another has none (docs/stems.md). */
+static size_t meshed_branches(const xyl_mesh *m, const xyl_skeleton *sk)
+{
+    bool *seen = calloc(sk->branch_count, sizeof *seen);
+    assert_non_null(seen);
+    size_t n = 0;
+    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
+        uint32_t b = m->face_branches[f];
+        assert_true(b < sk->branch_count);
+        if (!seen[b]) seen[b] = true, ++n;
+    }
+    free(seen);
+    return n;
 }
 
 static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char *what)
@@ -68,8 +67,8 @@ static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
         assert_int_equal(m->triangle_count, 0); /* even k: all quads */
     }
     if (t->sub == XYL_SUBDIVIDE_NONE && t->k % 2 == 1) {
-        /* odd k: one triangle per cap and per bridge, i.e. two per branch */
-        assert_int_equal(m->triangle_count, 2 * (size_t)sk->branch_count);
+        /* odd k: one triangle per cap and per bridge, i.e. two per meshed branch */
+        assert_int_equal(m->triangle_count, 2 * meshed_branches(m, sk));
     }
     xyl_mesh_destroy(m);
 }
@@ -77,7 +76,7 @@ static void check_topology(const char *name, const xyl_skeleton *sk, void *ctx)
 static void every_hard_case_is_a_closed_manifold(void **state)
 {
     (void)state;
-    static const uint32_t sides[] = {3, 4, 5, 6, 7, 8};
+    static const uint32_t sides[] = {3, 4, 5, 6, 7, 8, 16, 32};
     for (size_t i = 0; i < sizeof sides / sizeof sides[0]; ++i) {
         topo_ctx t = {sides[i], XYL_SUBDIVIDE_NONE};
         assert_true(tu_for_each_hard_case(check_topology, &t) >= 40);
@@ -110,10 +109,14 @@ static void every_preset_is_a_closed_manifold(void **state)
     for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
         const char *name = xyl_lsystem_preset_name(i);
         xyl_skeleton *sk = grow_preset(name);
-        xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
-        assert_closed(m, sk, name);
-        xyl_mesh_destroy(m);
-        m = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
+        for (uint32_t k = 3; k <= 8; ++k) {
+            char what[128];
+            snprintf(what, sizeof what, "%s k=%u", name, k);
+            xyl_mesh *plain = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+            assert_closed(plain, sk, what);
+            xyl_mesh_destroy(plain);
+        }
+        xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_CATMARK, XYL_NORMALS_BRANCH);
         assert_closed(m, sk, name);
         xyl_mesh_destroy(m);
         m = build(sk, 5, XYL_SUBDIVIDE_LOOP, XYL_NORMALS_BRANCH);
@@ -126,27 +129,358 @@ static void every_preset_is_a_closed_manifold(void **state)
 
 /* ---- self-intersection --------------------------------------------------------------------- */
 
+/* Distance between segments p0-p1 and q0-q1, by sampling p0-p1 finely enough for the test:
+ * the skeleton crossings it looks for are deep (a fraction of the radii). */
+static double segment_distance(xyl_vec3 p0, xyl_vec3 p1, xyl_vec3 q0, xyl_vec3 q1)
+{
+    double best = INFINITY, d[3] = {q1.x - q0.x, q1.y - q0.y, q1.z - q0.z};
+    double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    for (int i = 0; i <= 256; ++i) {
+        double f = i / 256.0, p[3] = {p0.x + (p1.x - p0.x) * f, p0.y + (p1.y - p0.y) * f,
+                                      p0.z + (p1.z - p0.z) * f};
+        double w[3] = {p[0] - q0.x, p[1] - q0.y, p[2] - q0.z};
+        double t = dd > 0 ? (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd : 0.0;
+        t = fmin(1.0, fmax(0.0, t));
+        double e[3] = {w[0] - t * d[0], w[1] - t * d[1], w[2] - t * d[2]};
+        best = fmin(best, sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]));
+    }
+    return best;
+}
+
+/* The skeleton node a branch starts from (its first node in node order). */
+static uint32_t branch_start(const xyl_skeleton *sk, uint32_t branch)
+{
+    for (uint32_t i = 0; i < sk->node_count; ++i)
+        if (sk->nodes[i].branch == branch) return i;
+    fail_msg("branch %u has no node", branch);
+    return 0;
+}
+
+/* Whether the far end f of one segment folds back onto the other, s-g (s the node they share):
+ * f lies within r of s-g at a point more than r from s, so not just the joint's own overlap. */
+static bool folds_onto(xyl_vec3 f, xyl_vec3 s, xyl_vec3 g, double r)
+{
+    double d[3] = {g.x - s.x, g.y - s.y, g.z - s.z}, w[3] = {f.x - s.x, f.y - s.y, f.z - s.z};
+    double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    double t = dd > 0 ? fmin(1.0, fmax(0.0, (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd)) : 0.0;
+    double e[3] = {w[0] - t * d[0], w[1] - t * d[1], w[2] - t * d[2]};
+    return sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) < r && t * sqrt(dd) > r;
+}
+
+/* Whether segments i and j (each given by its lower node, which has a parent) overlap in the
+ * skeleton itself: closer than the sum of their radii where they share no node; where they share
+ * one, when either folds back onto the other (a hairpin). */
+static bool segments_overlap(const xyl_skeleton *sk, uint32_t i, uint32_t j)
+{
+    const xyl_skel_node *n = sk->nodes;
+    uint32_t pi = (uint32_t)n[i].parent, pj = (uint32_t)n[j].parent;
+    if (i == j) return false;
+    double r = fmax(n[i].radius, n[pi].radius) + fmax(n[j].radius, n[pj].radius);
+    if (i != pj && pi != j && pi != pj)
+        return segment_distance(n[pi].pos, n[i].pos, n[pj].pos, n[j].pos) < r;
+    uint32_t sh = i == pj ? i : j == pi ? j : pi; /* the shared node */
+    uint32_t fi = sh == i ? pi : i, fj = sh == j ? pj : j;
+    return folds_onto(n[fi].pos, n[sh].pos, n[fj].pos, r) ||
+           folds_onto(n[fj].pos, n[sh].pos, n[fi].pos, r);
+}
+
+/* Whether the skeletons of branches a and b (a may be b) overlap themselves, in a way no
+ * mesher can part without moving the skeleton: segments of a and b that overlap
+ * (segments_overlap), where a and b are the same branch or unrelated (neither parent and child
+ * nor children of one node: there the joint is the mesher's to build). */
+static bool skeletons_cross(const xyl_skeleton *sk, uint32_t a, uint32_t b, uint32_t seg[2])
+{
+    if (a != b) {
+        int32_t fa = sk->nodes[branch_start(sk, a)].parent, fb = sk->nodes[branch_start(sk, b)].parent;
+        if (fa == fb || (fa >= 0 && sk->nodes[fa].branch == b) ||
+            (fb >= 0 && sk->nodes[fb].branch == a))
+            return false;
+    }
+    const xyl_skel_node *n = sk->nodes;
+    for (uint32_t i = 0; i < sk->node_count; ++i) {
+        if (n[i].branch != a || n[i].parent < 0) continue;
+        for (uint32_t j = 0; j < sk->node_count; ++j)
+            if (n[j].branch == b && n[j].parent >= 0 && segments_overlap(sk, i, j)) {
+                seg[0] = i, seg[1] = j;
+                return true;
+            }
+    }
+    return false;
+}
+
+/* What a hard case's intersections rest on: the first pair of overlapping segments. */
+static void print_overlap(const char *name, uint32_t k, size_t count, const xyl_skeleton *sk,
+                          const uint32_t seg[2])
+{
+    const xyl_skel_node *n = sk->nodes;
+    uint32_t i = seg[0], j = seg[1], pi = (uint32_t)n[i].parent, pj = (uint32_t)n[j].parent;
+    double r = fmax(n[i].radius, n[pi].radius) + fmax(n[j].radius, n[pj].radius);
+    if (i == pj || j == pi || pi == pj)
+        print_message("  %s k = %u: %zu pairs; segments %u-%u and %u-%u fold onto each other "
+                      "(radii %.4f)\n", name, k, count, pi, i, pj, j, r);
+    else
+        print_message("  %s k = %u: %zu pairs; segments %u-%u and %u-%u are %.4f apart, radii "
+                      "%.4f\n", name, k, count, pi, i, pj, j,
+                      segment_distance(n[pi].pos, n[i].pos, n[pj].pos, n[j].pos), r);
+}
+
+static uint32_t tri_branch(const xyl_mesh *m, uint32_t t)
+{
+    size_t face = t < 2 * m->quad_count ? t / 2 : m->quad_count + (t - 2 * m->quad_count);
+    return m->face_branches[face];
+}
+
+typedef struct isect_ctx {
+    uint32_t k;
+    int clean, crossing; /* cases without intersections; cases whose only ones cross (above) */
+} isect_ctx;
+
+/* Every intersecting pair of a hard case's mesh must lie on two branches whose skeletons
+ * cross; anything at a joint fails. */
 static void check_intersections(const char *name, const xyl_skeleton *sk, void *ctx)
 {
-    int *clean = ctx;
-    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    isect_ctx *c = ctx;
+    xyl_mesh *m = build(sk, c->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
     size_t count = 0;
     assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
-    if (is_known_intersecting(name)) {
-        if (count == 0) fail_msg("%s no longer intersects: remove it from the known list", name);
-    } else {
-        if (count != 0) fail_msg("%s: %zu intersecting triangle pairs", name, count);
-        ++*clean;
+    if (count == 0) {
+        ++c->clean;
+        xyl_mesh_destroy(m);
+        return;
     }
+    uint32_t *pairs = malloc(2 * count * sizeof *pairs);
+    assert_non_null(pairs);
+    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
+    uint32_t seg[2] = {0, 0}, first[2] = {0, 0};
+    for (size_t i = 0; i < count; ++i) {
+        uint32_t a = tri_branch(m, pairs[2 * i]), b = tri_branch(m, pairs[2 * i + 1]);
+        if (!skeletons_cross(sk, a, b, seg))
+            fail_msg("%s k = %u: %zu intersecting pairs, one on branches %u and %u at a joint",
+                     name, c->k, count, a, b);
+        if (i == 0) first[0] = seg[0], first[1] = seg[1];
+    }
+    print_overlap(name, c->k, count, sk, first);
+    ++c->crossing;
+    free(pairs);
     xyl_mesh_destroy(m);
 }
 
-static void hard_cases_do_not_intersect_themselves(void **state)
+static void assert_no_joint_intersects(uint32_t k)
+{
+    isect_ctx c = {k, 0, 0};
+    int total = tu_for_each_hard_case(check_intersections, &c);
+    print_message("k = %u: %d of %d hard cases clean, %d intersect only where their skeletons "
+                  "cross\n", k, c.clean, total, c.crossing);
+    assert_int_equal(c.clean + c.crossing, total);
+}
+
+static void no_hard_case_intersects_at_a_joint_k3(void **state)
 {
     (void)state;
-    int clean = 0;
-    int total = tu_for_each_hard_case(check_intersections, &clean);
-    assert_int_equal(clean, total - (int)(sizeof known_intersecting / sizeof known_intersecting[0]));
+    assert_no_joint_intersects(3);
+}
+
+static void no_hard_case_intersects_at_a_joint_k4(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(4);
+}
+
+static void no_hard_case_intersects_at_a_joint_k5(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(5);
+}
+
+static void no_hard_case_intersects_at_a_joint_k6(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(6);
+}
+
+static void no_hard_case_intersects_at_a_joint_k7(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(7);
+}
+
+static void no_hard_case_intersects_at_a_joint_k8(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(8);
+}
+
+/* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
+ * later nodes: only the nodes at the start of a child's chain that are still inside the parent
+ * may be absorbed, not its tip. */
+static void a_child_that_curls_back_keeps_its_tip(void **state)
+{
+    (void)state;
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0},  {{0, 1, 0}, 0.1f, 0, 0, 0},     {{0, 2, 0}, 0.1f, 1, 0, 0},
+        {{1, 1, 0}, 0.05f, 1, 0, 0},  {{1, 3, 0}, 0.05f, 3, 0, 0},    {{-1, 3, 0}, 0.05f, 4, 0, 0},
+    };
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 6;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    uint32_t child = sk->nodes[5].branch;
+    assert_int_not_equal(child, sk->nodes[0].branch);
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    assert_closed(m, sk, "curl back");
+    double nearest = INFINITY;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        if (m->branch_ids[v] != child) continue;
+        xyl_vec3 p = m->positions[v];
+        double dx = p.x + 1.0, dy = p.y - 3.0, dz = p.z;
+        nearest = fmin(nearest, sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    if (!(nearest <= 0.05 * 1.0001)) fail_msg("the child's tip ring is %g from its tip node", nearest);
+    size_t count = 0;
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    assert_int_equal(count, 0);
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
+static xyl_skeleton *read_hard_case(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/stems/%s", XYL_TEST_DATA, name);
+    xyl_skeleton *sk = NULL;
+    xyl_diag diag = {0};
+    if (xyl_skeleton_read_file(path, NULL, &sk, &diag) != XYL_OK) fail_msg("%s: %s", name, diag.message);
+    return sk;
+}
+
+/* Two equal children one degree apart overlap along their whole length: the later one is
+ * merged into the earlier, so the fork has one lateral tube, and nothing crosses. */
+static void siblings_that_never_part_become_one_tube(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = read_hard_case("fork_siblings_1deg.skel");
+    assert_int_equal(sk->branch_count, 3);
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, "fork_siblings_1deg");
+        assert_int_equal(meshed_branches(m, sk), 2);
+        size_t count = 0;
+        assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+        if (count) fail_msg("k = %u: %zu intersecting pairs", k, count);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
+/* Siblings one degree apart for one segment, then parting: the thinner one is merged into the
+ * thicker until they part and grows out of it from there, so its tip is still meshed. */
+static void siblings_that_part_later_grow_out_of_each_other(void **state)
+{
+    (void)state;
+    /* a vertical parent; children at 40 and 41 degrees in the x-y plane, the thinner one
+     * turning to 100 degrees after 0.5 */
+    double c40 = cos(40 * 3.14159265358979 / 180), s40 = sin(40 * 3.14159265358979 / 180);
+    double c41 = cos(41 * 3.14159265358979 / 180), s41 = sin(41 * 3.14159265358979 / 180);
+    double c100 = cos(100 * 3.14159265358979 / 180), s100 = sin(100 * 3.14159265358979 / 180);
+    float bx = (float)(0.5 * s41), by = (float)(1 + 0.5 * c41);
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0},
+        {{0, 1, 0}, 0.1f, 0, 0, 0},
+        {{0, 2, 0}, 0.09f, 1, 0, 0},
+        {{(float)(0.5 * s40), (float)(1 + 0.5 * c40), 0}, 0.06f, 1, 0, 0},
+        {{(float)s40, (float)(1 + c40), 0}, 0.06f, 3, 0, 0},
+        {{bx, by, 0}, 0.05f, 1, 0, 0},
+        {{bx + (float)(0.6 * s100), by + (float)(0.6 * c100), 0}, 0.05f, 5, 0, 0},
+    };
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = sizeof nodes / sizeof nodes[0];
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    uint32_t thin = sk->nodes[6].branch;
+    xyl_vec3 tip = nodes[6].pos;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, "siblings parting");
+        assert_int_equal(meshed_branches(m, sk), 3);
+        double nearest = INFINITY;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            if (m->branch_ids[v] != thin) continue;
+            double dx = m->positions[v].x - tip.x, dy = m->positions[v].y - tip.y;
+            double dz = m->positions[v].z - tip.z;
+            nearest = fmin(nearest, sqrt(dx * dx + dy * dy + dz * dz));
+        }
+        if (!(nearest <= 0.05 * 1.0001)) fail_msg("k = %u: tip ring %g from the tip", k, nearest);
+        size_t count = 0;
+        assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+        if (count) fail_msg("k = %u: %zu intersecting pairs", k, count);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
+/* 64 thin spokes (radius 1e-4) around one node of a parent of radius 0.1: neighbours are 0.04
+ * apart at their first nodes, far more than their radii, so none may merge into another and
+ * each grows out of the fork. (The fork node's radius is the parent's: a sibling's tube is its
+ * own radius from the start.) */
+static void thin_spokes_stay_separate_branches(void **state)
+{
+    (void)state;
+    enum { spokes = 64 };
+    xyl_skel_node nodes[2 + 2 * spokes];
+    memset(nodes, 0, sizeof nodes);
+    nodes[0] = (xyl_skel_node){{0, 0, 0}, 0.1f, -1, 0, 0};
+    nodes[1] = (xyl_skel_node){{0, 1, 0}, 0.1f, 0, 0, 0};
+    for (int i = 0; i < spokes; ++i) {
+        double a = 2 * 3.14159265358979 * i / spokes, sx = 0.866 * cos(a), sz = 0.866 * sin(a);
+        nodes[2 + 2 * i] = (xyl_skel_node){{(float)(0.5 * sx), 1.25f, (float)(0.5 * sz)}, 1e-4f, 1, 0, 0};
+        nodes[3 + 2 * i] = (xyl_skel_node){{(float)sx, 1.5f, (float)sz}, 1e-4f, 2 + 2 * i, 0, 0};
+    }
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 2 + 2 * spokes;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    assert_closed(m, sk, "thin spokes");
+    /* each spoke grows out of the fork, not out of a neighbour further out */
+    for (int i = 0; i < spokes; ++i) {
+        uint32_t b = sk->nodes[3 + 2 * i].branch;
+        double nearest = INFINITY;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            if (m->branch_ids[v] != b) continue;
+            xyl_vec3 p = m->positions[v];
+            nearest = fmin(nearest, sqrt((double)p.x * p.x + (p.y - 1.0) * (p.y - 1.0) + (double)p.z * p.z));
+        }
+        if (!(nearest < 0.2)) fail_msg("spoke %d starts %g from the fork", i, nearest);
+    }
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
+/* A skeleton the fuzzer found: a lateral's nodes all lie behind its bridge ring and so far out
+ * (1e16) that the station added after them rounds onto them, leaving its fork without a band
+ * for the fork's own lateral. Every k must still mesh into a closed manifold; its faces at
+ * 1e16 are below the degenerate-face tolerance, as the fuzzer allows. */
+static void a_fork_whose_stations_round_together_still_meshes(void **state)
+{
+    (void)state;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/skel/fuzz_stations_round_together.skel", XYL_TEST_DATA);
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_read_file(path, NULL, &sk, NULL), XYL_OK);
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        xyl_mesh_report rep;
+        assert_int_equal(xyl_mesh_check(m, &rep, NULL), XYL_OK);
+        assert_int_equal(rep.boundary_edges + rep.nonmanifold_edges + rep.misoriented_edges, 0);
+        assert_int_equal(rep.nonmanifold_vertices + rep.duplicate_faces, 0);
+        assert_int_equal(rep.euler, 2 * (int64_t)sk->root_count);
+        assert_int_equal(rep.components, sk->root_count);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
 }
 
 /* ---- normals ------------------------------------------------------------------------------- */
@@ -397,7 +731,17 @@ int main(void)
         cmocka_unit_test(every_hard_case_is_a_closed_manifold),
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
-        cmocka_unit_test(hard_cases_do_not_intersect_themselves),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k3),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k4),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k5),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k8),
+        cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
+        cmocka_unit_test(siblings_that_never_part_become_one_tube),
+        cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
+        cmocka_unit_test(a_fork_whose_stations_round_together_still_meshes),
+        cmocka_unit_test(thin_spokes_stay_separate_branches),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(subdivision_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(subdivided_vertices_sit_on_the_limit_surface),

@@ -174,7 +174,7 @@ static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
 
 /* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
  * the tube leaves behind it (a tip), false for one it starts from (a root). */
-static xyl_result put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
+static xyl_result put_flat_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
 {
     uint32_t j = 1;
     for (; j + 2 < s->k; j += 2) {
@@ -187,6 +187,46 @@ static xyl_result put_cap(stems *s, uint32_t ring, bool forward, uint32_t branch
         return forward ? put_tri(s, a, b, c, branch) : put_tri(s, a, c, b, branch);
     }
     return XYL_OK;
+}
+
+/* The apex of a domed cap: a quarter of the ring's radius beyond its centre, outwards. */
+static uint32_t put_apex(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
+{
+    double h = (forward ? 0.25 : -0.25) * ring->radius * s->inflate;
+    size_t v = s->nv;
+    s->pos[v] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, h)));
+    s->uv[2 * v] = 0.5f;
+    s->uv[2 * v + 1] = (float)(ring->v + h / (2.0 * XYL__PI * ring->radius));
+    s->vbranch[v] = branch;
+    if (s->nrm) memset(s->nrm + v, 0, sizeof *s->nrm);
+    s->nv = v + 1;
+    return (uint32_t)v;
+}
+
+/* Closes a ring of k >= 5 with a low dome: k / 2 quads around an apex (odd k: and one
+ * triangle). A flat cap of three or more triangles has two that share one vertex and lie in
+ * one plane, which no test can tell from touching once rounding makes them almost, not
+ * exactly, coplanar; the dome's faces meet at an angle. */
+static xyl_result put_dome_cap(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
+{
+    uint32_t a = put_apex(s, ring, forward, branch), f = ring->first, k = s->k;
+    for (uint32_t j = 0; j + 1 < k; j += 2) {
+        uint32_t b = f + j, c = f + j + 1, d = j + 2 < k ? f + j + 2 : f;
+        if (forward) put_quad(s, a, b, c, d, branch);
+        else put_quad(s, a, d, c, b, branch);
+    }
+    if (k % 2 == 0) return XYL_OK;
+    return forward ? put_tri(s, a, f + k - 1, f, branch) : put_tri(s, a, f, f + k - 1, branch);
+}
+
+/* The cap of ring i of the branch being built (its root or its tip). */
+static xyl_result put_cap(stems *s, size_t i, bool forward, uint32_t branch)
+{
+    const stems_ring *ring = &s->rings[i];
+    if (s->k < 5) return put_flat_cap(s, ring->first, forward, branch);
+    xyl_result r = put_dome_cap(s, ring, forward, branch);
+    if (s->unit_per_branch) s->apex[forward] = (uint32_t)s->nv - 1;
+    return r;
 }
 
 /* Rotation-minimising frame transport (double reflection, Wang et al. 2008): the reference
@@ -216,23 +256,28 @@ static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dve
 /* Children of every node in one array (counting sort by parent) and each node's main child, in
  * two passes over the nodes. A child of the parent's branch is its main child; the last one in
  * node order wins, as child_list holds children in node order. */
-static xyl_result index_children(stems *s)
+static xyl_result index_children(stems *s, const int32_t *parent_of)
 {
     size_t n = s->sk->node_count;
     const xyl_skel_node *nodes = s->sk->nodes;
     /* counts go to child_start[p + 2], so that after the prefix sum child_start[p + 1] is p's
      * first slot and filling moves it on to p's end, which is p + 1's start */
+    xyl__free(&s->alloc, s->child_start); /* the second pass of index_tree */
+    xyl__free(&s->alloc, s->child_list);
+    xyl__free(&s->alloc, s->main);
     uint32_t *start = xyl__calloc(&s->alloc, n + 2, sizeof *start);
     s->child_start = start;
     s->child_list = xyl__alloc_array(&s->alloc, n, sizeof *s->child_list);
     s->main = xyl__alloc_array(&s->alloc, n, sizeof *s->main);
     if (!start || !s->child_list || !s->main) return oom(s);
-    for (size_t i = 0; i < n; ++i)
-        if (nodes[i].parent >= 0) ++start[nodes[i].parent + 2];
-    for (size_t i = 2; i < n + 2; ++i) start[i] += start[i - 1];
-    for (size_t i = 0; i < n; ++i) s->main[i] = UINT32_MAX;
     for (size_t i = 0; i < n; ++i) {
-        int32_t p = nodes[i].parent;
+        int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
+        if (p >= 0) ++start[p + 2];
+        s->main[i] = UINT32_MAX;
+    }
+    for (size_t i = 2; i < n + 2; ++i) start[i] += start[i - 1];
+    for (size_t i = 0; i < n; ++i) {
+        int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
         if (p < 0) continue;
         s->child_list[start[p + 1]++] = (uint32_t)i;
         if (nodes[i].branch != nodes[p].branch) continue;
@@ -275,8 +320,9 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
     for (size_t i = 0; i < s->nchain; ++i) {
         xyl__dvec3 p = node_pos(s, s->chain[i]);
         double r = s->sk->nodes[s->chain[i]].radius;
-        bool behind = bridge && xyl__d3_dot(xyl__d3_sub(p, bridge->centre), bridge->tangent) <
-                                    bridge->radius;
+        /* only the chain's start can be behind: a branch that curls back later keeps its nodes */
+        bool behind = bridge && !s->nstations &&
+                      xyl__d3_dot(xyl__d3_sub(p, bridge->centre), bridge->tangent) < bridge->radius;
         bool same = s->nstations &&
                     xyl__d3_len(xyl__d3_sub(p, s->stations[s->nstations - 1].p)) <= 1e-6 * r;
         if (behind && i + 1 < s->nchain) continue;
@@ -384,6 +430,16 @@ static size_t fork_extra_rings(const stems *s, size_t laterals)
     return want < 2 ? 2 : want;
 }
 
+/* The unit direction a fraction f of the way from unit a to unit b (normalised lerp); a and b
+ * themselves at the ends, and where they agree. */
+static xyl__dvec3 blend(xyl__dvec3 a, xyl__dvec3 b, double f)
+{
+    if (f <= 0.0 || (a.x == b.x && a.y == b.y && a.z == b.z)) return a;
+    if (f >= 1.0) return b;
+    xyl__dvec3 m = xyl__d3_add(xyl__d3_scale(a, 1.0 - f), xyl__d3_scale(b, f));
+    return xyl__d3_normalize_or(m, b);
+}
+
 /* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
  * delta, so the bands between them offer patches to the lateral children. */
 static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
@@ -393,8 +449,10 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
     size_t want = fork_extra_rings(s, laterals);
     double seg_in = i ? xyl__d3_len(xyl__d3_sub(st->p, s->stations[i - 1].p)) : 0.0;
     double seg_out = i + 1 < s->nstations ? xyl__d3_len(xyl__d3_sub(s->stations[i + 1].p, st->p)) : 0.0;
+    /* without a segment of any length on either side (coordinates so large that the station
+     * after it rounds onto it), the laterals still need their bands: all go ahead */
     size_t behind = seg_in > 0.0 ? (seg_out > 0.0 ? want / 2 : want) : 0;
-    size_t ahead = seg_out > 0.0 ? want - behind : 0;
+    size_t ahead = want - behind;
     double lat_r = 0.0;
     for (uint32_t c = st->first; c <= st->last; ++c) {
         uint32_t node = s->chain[c];
@@ -402,13 +460,23 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
             if (s->sk->nodes[s->child_list[j]].radius > lat_r) lat_r = s->sk->nodes[s->child_list[j]].radius;
     }
     double d_in = behind ? fmin(lat_r, 0.45 * seg_in / (double)behind) : 0.0;
-    double d_out = ahead ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : 0.0;
+    double d_out = !ahead ? 0.0 : seg_out > 0.0 ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : lat_r;
     xyl_result r = XYL_OK;
-    for (size_t m = behind; m >= 1 && !r; --m)
-        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), t_in, st->r);
+    /* a ring delta from the node ring whose plane is turned by the half bend against the node
+     * ring's crosses it on the inside of the bend when delta < r sin(half bend); the rings on
+     * that side then turn from t_in to t_out in even steps instead */
+    double rr = 1.05 * st->r * s->inflate;
+    bool turn_in = d_in < rr * xyl__d3_len(xyl__d3_cross(t_in, t));
+    bool turn_out = d_out < rr * xyl__d3_len(xyl__d3_cross(t, t_out));
+    for (size_t m = behind; m >= 1 && !r; --m) {
+        xyl__dvec3 tm = turn_in ? blend(t_in, t, (double)(behind - m) / (double)behind) : t_in;
+        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), tm, st->r);
+    }
     if (!r) r = add_ring(s, st->p, t, st->r);
-    for (size_t m = 1; m <= ahead && !r; ++m)
-        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), t_out, st->r);
+    for (size_t m = 1; m <= ahead && !r; ++m) {
+        xyl__dvec3 tm = turn_out ? blend(t, t_out, (double)m / (double)ahead) : t_out;
+        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), tm, st->r);
+    }
     return r;
 }
 
@@ -466,13 +534,88 @@ static xyl__dvec3 strip_centre(const stems *s, uint32_t band, uint32_t c, uint32
     return xyl__d3_scale(sum, 1.0 / (4.0 * strip));
 }
 
-/* Best free patch for direction d among the bands between rings lo .. hi: the one facing d
- * most, and lying in direction d from the fork node (so a child leaning forward takes a band
- * ahead of the node, one leaning back a band behind). */
-static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d)
+/* Where a child's bridge from patch p goes: the patch outline, its centroid and normal, and the
+ * child's first ring. */
+typedef struct bridge_geom {
+    uint32_t loop[66];
+    xyl__dvec3 centroid, n;
+    stems_ring ring;
+} bridge_geom;
+
+static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r, bridge_geom *g)
 {
     uint32_t strip = strip_size(s);
-    patch best = {UINT32_MAX, 0, -4.0};
+    const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
+    strip_loop(s, a->first, b->first, p.column, strip, g->loop);
+    xyl__dvec3 n = strip_normal(s, a->band, p.column, strip), centroid = xyl__d3(0, 0, 0);
+    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[g->loop[j]]));
+    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
+    /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
+     * tube widens to its own radius over its first segment */
+    double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
+    double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
+    double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
+    /* a strip of several quads bulges out past its centroid (by 1 - cos(pi strip / k) of the
+     * parent radius): the ring goes beyond the bulge, or the bridge folds back into the parent */
+    double bulge = 0.0;
+    for (uint32_t j = 0; j < 2 * strip + 2; ++j)
+        bulge = fmax(bulge, xyl__d3_dot(xyl__d3_sub(xyl__from_f3(s->pos[g->loop[j]]), centroid), n));
+    double h = fmax(fmax(r, 0.25 * parent_r), bulge + r);
+    stems_ring *ring = &g->ring;
+    memset(ring, 0, sizeof *ring);
+    ring->centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
+    ring->tangent = n;
+    xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[g->loop[0]]), centroid);
+    to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
+    if (!xyl__d3_normalize_ok(to0, &ring->u)) ring->u = xyl__d3_any_orthogonal(n);
+    ring->radius = r;
+    ring->band = UINT32_MAX;
+    g->centroid = centroid;
+    g->n = n;
+}
+
+/* The first segment of child's tube if it bridges from patch p: from its bridge ring to its
+ * first station as make_stations will place it. *reaches: that station is one of the child's
+ * nodes, not a stub in front of the ring (every node behind it). */
+static xyl__stems_cone first_cone(const stems *s, patch p, uint32_t child, double parent_r,
+                                  bool *reaches)
+{
+    bridge_geom g;
+    plan_bridge(s, p, child, parent_r, &g);
+    const stems_ring *ring = &g.ring;
+    xyl__stems_cone c = {ring->centre, xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, 2 * ring->radius)),
+                         ring->radius, ring->radius};
+    *reaches = false;
+    for (uint32_t n = child; n != UINT32_MAX; n = main_child(s, n)) {
+        xyl__dvec3 q = node_pos(s, n);
+        c.r1 = s->sk->nodes[n].radius;
+        if (xyl__d3_dot(xyl__d3_sub(q, ring->centre), ring->tangent) >= ring->radius) {
+            c.p1 = q;
+            *reaches = true;
+            break;
+        }
+    }
+    return c;
+}
+
+static bool clashes(const stems *s, const xyl__stems_cone *c)
+{
+    for (size_t i = 0; i < s->ncones; ++i)
+        if (xyl__cones_clash(c, &s->cones[i])) return true;
+    return false;
+}
+
+/* Best free patch for direction d among the bands between rings lo .. hi: the one facing d
+ * most, and lying in direction d from the fork node (so a child leaning forward takes a band
+ * ahead of the node, one leaning back a band behind), among those whose first segment does not
+ * run into a sibling's placed before (s->cones). Such a patch must still face the child and
+ * reach its nodes, or the child would become a stub on the wrong side; if there is none, the
+ * best of all. */
+static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d,
+                          uint32_t child, double parent_r)
+{
+    uint32_t strip = strip_size(s);
+    patch best = {UINT32_MAX, 0, -4.0}, fallback = best;
     for (size_t r = lo; r < hi; ++r) {
         uint32_t band = s->rings[r].band;
         for (uint32_t c = 0; c < s->k; ++c) {
@@ -482,14 +625,20 @@ static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node,
              * cannot beat the best even so is skipped before its centre is normalised */
             if (facing + (1.0 + 1e-9) < best.score) continue;
             xyl__dvec3 to = xyl__d3_normalize_or(xyl__d3_sub(strip_centre(s, band, c, strip), node), d);
-            double score = facing + xyl__d3_dot(to, d);
-            if (score > best.score) {
-                patch p = {(uint32_t)r, c, score};
-                best = p;
+            patch p = {(uint32_t)r, c, facing + xyl__d3_dot(to, d)};
+            if (p.score <= best.score) continue;
+            if (s->ncones) {
+                bool reaches;
+                xyl__stems_cone cone = first_cone(s, p, child, parent_r, &reaches);
+                if (facing <= 0.0 || !reaches || clashes(s, &cone)) {
+                    if (p.score > fallback.score) fallback = p;
+                    continue;
+                }
             }
+            best = p;
         }
     }
-    return best;
+    return best.ring != UINT32_MAX ? best : fallback;
 }
 
 /* Faces from the patch outline loop (n vertices, counter-clockwise from outside) to the child's
@@ -508,53 +657,53 @@ static xyl_result bridge_faces(stems *s, const uint32_t *loop, uint32_t n, uint3
     return put_tri(s, loop[k - 1], loop[k], ring + k - 1, branch);
 }
 
-/* Odd k: the outline has k + 1 vertices, so evenly spaced ring vertices would drift against it
- * and twist the bridge; ring vertex j goes instead where outline vertex j is, seen around the
- * ring's axis. */
+/* Ring vertex j goes where outline vertex j is, seen around the ring's axis: evenly spaced
+ * ring vertices would drift against an outline that is not a regular polygon and twist the
+ * bridge (with odd k the outline even has k + 1 vertices; with even k a patch on a bend is
+ * skewed). A skewed outline can show two vertices in one direction, or out of order: the ring
+ * then keeps its even spacing, as two ring vertices in one place would make a sliver and a
+ * step backwards a fold. Steps of more than 1/200 of an even one count (s->align_cos). */
 static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *loop,
                              xyl__dvec3 centroid, double r)
 {
-    xyl__dvec3 n = ring->tangent;
-    double rr = r * s->inflate;
-    for (uint32_t j = 0; j < s->k; ++j) {
+    xyl__dvec3 n = ring->tangent, dir[33];
+    uint32_t k = s->k;
+    for (uint32_t j = 0; j < k; ++j) {
         xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(s->pos[loop[j]]), centroid);
         d = xyl__d3_sub(d, xyl__d3_scale(n, xyl__d3_dot(d, n)));
-        double l2 = xyl__d3_dot(d, d);
-        if (!(l2 > XYL__EPS_NORMALIZE)) continue; /* keep the even spacing */
-        xyl__dvec3 p = xyl__d3_add(ring->centre, xyl__d3_scale(d, rr / sqrt(l2)));
-        s->pos[ring->first + j] = xyl__to_f3(p);
+        if (!xyl__d3_normalize_ok(d, &dir[j])) return; /* keep the even spacing */
     }
+    dir[k] = dir[0];
+    /* every step, the closing one too, turns counter-clockwise (seen from +n) by more than the
+     * smallest step and less than pi, and none after the first passes direction 0 again: the
+     * outline goes round once, in order. Signs of cross and dot products, no angles. */
+    for (uint32_t j = 0; j < k; ++j) {
+        double sj = xyl__d3_dot(xyl__d3_cross(dir[j], dir[j + 1]), n);
+        if (!(sj > 0.0 && xyl__d3_dot(dir[j], dir[j + 1]) < s->align_cos)) return;
+        if (j && j + 1 < k && xyl__d3_dot(xyl__d3_cross(dir[j], dir[0]), n) > 0.0 &&
+            xyl__d3_dot(xyl__d3_cross(dir[0], dir[j + 1]), n) >= 0.0)
+            return;
+    }
+    double rr = r * s->inflate;
+    for (uint32_t j = 0; j < k; ++j)
+        s->pos[ring->first + j] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(dir[j], rr)));
 }
 
 /* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
 static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
 {
-    uint32_t strip = strip_size(s), loop[66];
-    const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
-    uint32_t band = a->band, branch = s->sk->nodes[child].branch;
-    strip_loop(s, a->first, b->first, p.column, strip, loop);
-    xyl__dvec3 n = strip_normal(s, band, p.column, strip), centroid = xyl__d3(0, 0, 0);
-    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[loop[j]]));
-    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
+    uint32_t strip = strip_size(s), band = s->rings[p.ring].band;
+    uint32_t branch = s->sk->nodes[child].branch;
+    bridge_geom g;
+    plan_bridge(s, p, child, parent_r, &g);
     for (uint32_t j = 0; j < strip; ++j) s->taken[strip_quad(s, band, p.column, j)] = 1;
-    /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
-     * tube widens to its own radius over its first segment */
-    double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
-    double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
-    double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
-    double h = fmax(r, 0.25 * parent_r);
-    stems_ring ring;
-    memset(&ring, 0, sizeof ring);
-    ring.centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
-    ring.tangent = n;
-    xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[loop[0]]), centroid);
-    to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
-    if (!xyl__d3_normalize_ok(to0, &ring.u)) ring.u = xyl__d3_any_orthogonal(n);
-    ring.radius = r;
-    ring.band = UINT32_MAX;
+    const uint32_t *loop = g.loop;
+    xyl__dvec3 n = g.n, centroid = g.centroid;
+    stems_ring ring = g.ring;
+    double r = ring.radius;
     if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
     ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
-    if (s->k % 2) align_to_outline(s, &ring, loop, centroid, r);
+    align_to_outline(s, &ring, loop, centroid, r);
     xyl_result res = bridge_faces(s, loop, 2 * strip + 2, ring.first, branch);
     if (res) return res;
     if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
@@ -597,16 +746,26 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
     const stems_station *st = &s->stations[i];
     xyl_result r = grow_taken(s);
     if (r) return r;
+    s->ncones = 0;
+    /* the siblings still to come test their first segments against those placed before
+     * (choose_patch); the last one's is never read */
+    size_t left = st->first == UINT32_MAX ? 0 : lateral_count(s, st);
     for (uint32_t c = st->first; c <= st->last && st->first != UINT32_MAX; ++c) {
         uint32_t node = s->chain[c], main = main_child(s, node);
         for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
             uint32_t child = s->child_list[j];
             if (child == main) continue;
             xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
-            patch p = choose_patch(s, lo, hi, node_pos(s, node), d);
+            patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
             if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
                 return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                                  "internal: no free patch left at node %u", node);
+            if (--left) {
+                if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
+                    return oom(s);
+                bool reaches;
+                s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+            }
             r = bridge(s, p, child, st->r);
             if (r) return r;
         }
@@ -657,7 +816,8 @@ static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, stems_fork_span *
 /* With even k (no triangles) a vertex's own-branch faces are the bands, caps and bridge of its
  * branch, all made once the branch is built: its normals are normalised then, while they are
  * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
- * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings. */
+ * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings and the
+ * apexes of its domed caps. */
 static void unit_branch_normals(stems *s)
 {
     for (size_t i = 0; i < s->nrings; ++i) {
@@ -666,6 +826,12 @@ static void unit_branch_normals(stems *s)
             if (xyl__has_direction(n[j])) n[j] = xyl__unit_or_up(n[j]);
             else s->lonely = true;
         }
+    }
+    for (int e = 0; e < 2; ++e) {
+        if (s->apex[e] == UINT32_MAX) continue;
+        xyl_vec3 *n = s->nrm + s->apex[e];
+        if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
+        else s->lonely = true;
     }
 }
 
@@ -694,9 +860,10 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     size_t nspans = 0;
     r = branch_rings(s, dir, spans, &nspans);
     if (!r) r = emit_rings(s, from ? 1 : 0, branch);
-    if (!r && !out_reserve(s, s->nv, s->nq + s->k)) r = oom(s);
-    if (!r && !from) r = put_cap(s, s->rings[0].first, false, branch);
-    if (!r) r = put_cap(s, s->rings[s->nrings - 1].first, true, branch);
+    if (!r && !out_reserve(s, s->nv + 2, s->nq + s->k)) r = oom(s); /* the caps */
+    s->apex[0] = s->apex[1] = UINT32_MAX;
+    if (!r && !from) r = put_cap(s, 0, false, branch);
+    if (!r) r = put_cap(s, s->nrings - 1, true, branch);
     if (!r && s->unit_per_branch) unit_branch_normals(s);
     for (size_t f = 0; f < nspans && !r; ++f)
         r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
@@ -706,8 +873,9 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 /* Upper bounds on the rings (each k vertices) and on the branch chains of the mesh: a chain's
  * stations are at most its nodes plus one (ensure_two_stations), a fork station adds
  * fork_extra_rings for the laterals merged into it (no more than the sum over its nodes), and
- * each lateral child adds its bridge ring. Faces: k per band and per bridge, fewer than k per
- * chain for the caps, so k (rings + chains) covers quads and triangles together. */
+ * each lateral child adds its bridge ring. Faces: k per band and per bridge, at most k per
+ * chain for the caps, so k (rings + chains) covers quads and triangles together; vertices: k
+ * per ring and two cap apexes per chain. */
 static void ring_bound(const stems *s, size_t *rings, size_t *chains)
 {
     size_t n = s->sk->node_count, r = 16, c = 0;
@@ -720,20 +888,48 @@ static void ring_bound(const stems *s, size_t *rings, size_t *chains)
     *chains = c;
 }
 
+/* Whether some node has two or more lateral children, the only place siblings can merge. */
+static bool has_sibling_laterals(const stems *s)
+{
+    for (size_t n = 0; n < s->sk->node_count; ++n)
+        if (s->child_start[n + 1] - s->child_start[n] > 1u + (s->main[n] != UINT32_MAX)) return true;
+    return false;
+}
+
+/* Children of every node, indexed again after overlapping siblings were merged
+ * (stems_merge.c), so that the rest of the mesher sees the merged tree. One call site of
+ * index_children: inlined twice, GCC doubts its sizes. */
+static xyl_result index_tree(stems *s)
+{
+    int32_t *parent_of = NULL;
+    xyl_result r = XYL_OK;
+    for (int pass = 0; pass < 2 && !r; ++pass) {
+        r = index_children(s, parent_of);
+        if (r || pass) break;
+        if (!has_sibling_laterals(s)) break; /* nothing to merge: no scratch array */
+        parent_of = xyl__alloc_array(&s->alloc, s->sk->node_count, sizeof *parent_of);
+        if (!parent_of) r = oom(s);
+        else if (!xyl__stems_merge_siblings(s, parent_of)) break;
+    }
+    xyl__free(&s->alloc, parent_of);
+    return r;
+}
+
 static xyl_result build_all(stems *s)
 {
-    xyl_result r = index_children(s);
+    xyl_result r = index_tree(s);
     for (uint32_t j = 0; j < s->k; ++j) {
         double a = 2.0 * XYL__PI * (double)j / (double)s->k;
         s->cos_a[j] = cos(a);
         s->sin_a[j] = sin(a);
         s->u_of[j] = (float)((double)j / (double)s->k);
     }
+    s->align_cos = cos(0.005 * 2.0 * XYL__PI / (double)s->k);
     /* reserving once avoids regrowth copies; a tight bound keeps the footprint small, so the
      * allocator can hand the same pages back on the next build instead of fresh ones */
     size_t rings = 0, chains = 0;
     if (!r) ring_bound(s, &rings, &chains);
-    if (!r && !out_reserve(s, rings * s->k, (rings + chains) * s->k)) r = oom(s);
+    if (!r && !out_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k)) r = oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
         r = build_branch(s, (uint32_t)i, NULL);
@@ -844,7 +1040,7 @@ static void free_state(stems *s)
 {
     void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->nrm,
                       s->quads, s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations,
-                      s->rings, s->spans, s->pending};
+                      s->rings, s->spans, s->pending, s->cones};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 

@@ -31,6 +31,12 @@ typedef struct stems_fork_span {
     size_t station, lo, hi;
 } stems_fork_span;
 
+/* The first segment of a lateral child's tube: from its bridge ring to its first station. */
+typedef struct xyl__stems_cone {
+    xyl__dvec3 p0, p1;
+    double r0, r1;
+} xyl__stems_cone;
+
 typedef struct stems {
     const xyl_skeleton *sk;
     uint32_t k;
@@ -44,6 +50,7 @@ typedef struct stems {
     uint32_t *main;      /* per node: the child continuing its branch, or UINT32_MAX */
     double cos_a[32], sin_a[32]; /* ring vertex directions, j = 0 .. k - 1 */
     float u_of[32];              /* texture u of ring vertex j: j / k */
+    double align_cos;            /* cos of the smallest step align_to_outline takes */
 
     /* output */
     xyl_vec3 *pos;
@@ -54,6 +61,8 @@ typedef struct stems {
     bool sum_normals;   /* branch normals, no subdivision: nrm is summed while meshing */
     bool unit_per_branch; /* nrm of a branch's vertices is normalised once it is built */
     bool lonely;        /* some vertex has no own-branch face normal (see xyl__mesh_normals) */
+    uint32_t apex[2];   /* the domed caps' apexes of the branch being built (root, tip), or
+                           UINT32_MAX (k < 5, no root cap) */
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     size_t nq, qcap;
@@ -75,6 +84,18 @@ typedef struct stems {
 
     stems_pending *pending;
     size_t npending, pcap;
+
+    xyl__stems_cone *cones; /* the laterals placed so far at the fork being attached */
+    size_t ncones, cone_cap;
 } stems;
+
+/* Overlapping siblings (stems_merge.c): fills parent_of (node_count entries) with each node's
+ * parent as meshed: a lateral merged into a sibling is detached (-1) and the rest of it hangs
+ * from the sibling. Needs child_start, child_list and main. Returns whether anything merged. */
+bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of);
+
+/* Whether two cones come closer than their radii at their axes' closest points: a cheap test
+ * for two lateral tubes that would cross (stems_merge.c). */
+bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b);
 
 #endif

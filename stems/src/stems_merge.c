@@ -1,0 +1,187 @@
+/* Siblings that overlap along their length (docs/stems.md, "Overlapping siblings").
+ *
+ * Two lateral children of one node whose axes stay closer than the sum of their radii cannot be
+ * two separate tubes without their surfaces crossing. The thinner one (of equal ones, the later
+ * in node order) is merged into the thicker: its nodes up to the first one that clears the
+ * thicker sibling's tube are not meshed, and the rest of it grows out of the thicker sibling,
+ * from that sibling's node nearest to where they part. A sibling that never clears is not meshed
+ * at all: its axis stays within (r_host + r_own) of the host's, so the host's tube already covers
+ * all of it but a rim thinner than its own radius. */
+#include "stems_internal.h"
+
+/* Distance from p to segment a-b. */
+static double point_segment_distance(xyl__dvec3 p, xyl__dvec3 a, xyl__dvec3 b)
+{
+    xyl__dvec3 ab = xyl__d3_sub(b, a), ap = xyl__d3_sub(p, a);
+    double l2 = xyl__d3_dot(ab, ab), t = l2 > XYL__EPS_NORMALIZE ? xyl__d3_dot(ap, ab) / l2 : 0.0;
+    t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+    return xyl__d3_len(xyl__d3_sub(ap, xyl__d3_scale(ab, t)));
+}
+
+static xyl__dvec3 pos_of(const stems *s, uint32_t n)
+{
+    return xyl__from_f3(s->sk->nodes[n].pos);
+}
+
+/* Whether a ball at p of radius r overlaps the tube of the chain that leaves fork through its
+ * child `host`: its first segment with radius first_r, each later one with the larger radius of
+ * its two nodes. */
+static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host,
+                           double first_r)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    double seg_r = first_r;
+    for (uint32_t a = fork, b = host; b != UINT32_MAX; a = b, b = s->main[b]) {
+        if (point_segment_distance(p, pos_of(s, a), pos_of(s, b)) < r + seg_r) return true;
+        if (s->main[b] != UINT32_MAX) seg_r = fmax(nodes[b].radius, nodes[s->main[b]].radius);
+    }
+    return false;
+}
+
+/* A sibling's tube starts at its own radius: the fork node's is the parent's. */
+static bool overlaps_sibling(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host)
+{
+    return overlaps_chain(s, p, r, fork, host, s->sk->nodes[host].radius);
+}
+
+static bool has_laterals(const stems *s, uint32_t n)
+{
+    return s->child_start[n + 1] - s->child_start[n] > (uint32_t)(s->main[n] != UINT32_MAX);
+}
+
+/* The node of host's chain nearest to p. */
+static uint32_t nearest_on_chain(const stems *s, xyl__dvec3 p, uint32_t host)
+{
+    uint32_t best = host;
+    double best_d = INFINITY;
+    for (uint32_t n = host; n != UINT32_MAX; n = s->main[n]) {
+        double d = xyl__d3_len(xyl__d3_sub(pos_of(s, n), p));
+        if (d < best_d) best_d = d, best = n;
+    }
+    return best;
+}
+
+/* Whether a ball at p of radius r overlaps the tube of fork's own branch next to the fork: the
+ * segment into the fork and the chain that continues it. */
+static bool overlaps_parent(const stems *s, xyl__dvec3 p, double r, uint32_t fork)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    int32_t before = nodes[fork].parent;
+    if (before >= 0) {
+        double rr = r + fmax(nodes[before].radius, nodes[fork].radius);
+        if (point_segment_distance(p, pos_of(s, (uint32_t)before), pos_of(s, fork)) < rr) return true;
+    }
+    uint32_t main = s->main[fork];
+    return main != UINT32_MAX &&
+           overlaps_chain(s, p, r, fork, main, fmax(nodes[fork].radius, nodes[main].radius));
+}
+
+/* Merges lateral `child` of fork into sibling `host` if they overlap where the child leaves
+ * its parent's tube (inside it, the parent's rules place the child's first ring): child's
+ * first node is detached from fork, and its first node that clears host (or has children of
+ * its own, which need its branch) is attached to host's nearest node. Returns whether it
+ * merged. */
+static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t child,
+                       int32_t *parent_of)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    uint32_t last = UINT32_MAX, n = child;
+    for (; n != UINT32_MAX && overlaps_parent(s, pos_of(s, n), nodes[n].radius, fork);
+         last = n, n = s->main[n])
+        if (has_laterals(s, n)) return false;
+    if (n == UINT32_MAX || !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host))
+        return false;
+    for (; n != UINT32_MAX; last = n, n = s->main[n]) {
+        if (has_laterals(s, n)) break;
+        if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) break;
+    }
+    if (last == UINT32_MAX) return false; /* the first node has children */
+    parent_of[child] = -1;
+    if (n != UINT32_MAX) parent_of[n] = (int32_t)nearest_on_chain(s, pos_of(s, last), host);
+    return true;
+}
+
+/* Whether lateral a comes before lateral b: thicker first, then in node order. */
+static bool before(const stems *s, uint32_t a, uint32_t b)
+{
+    float ra = s->sk->nodes[a].radius, rb = s->sk->nodes[b].radius;
+    return ra != rb ? ra > rb : a < b;
+}
+
+/* The laterals of fork in `before` order, each tried against those before it that are still
+ * meshed from the fork: so a host is never merged away after a thinner sibling joined it. */
+static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
+{
+    uint32_t lo = s->child_start[fork], hi = s->child_start[fork + 1], main = s->main[fork];
+    bool any = false;
+    for (uint32_t prev = UINT32_MAX;;) {
+        uint32_t child = UINT32_MAX; /* the first lateral after prev */
+        for (uint32_t j = lo; j < hi; ++j) {
+            uint32_t c = s->child_list[j];
+            if (c != main && (prev == UINT32_MAX || before(s, prev, c)) &&
+                (child == UINT32_MAX || before(s, c, child)))
+                child = c;
+        }
+        if (child == UINT32_MAX) return any;
+        for (uint32_t i = lo; i < hi; ++i) {
+            uint32_t host = s->child_list[i];
+            if (host == main || !before(s, host, child)) continue;
+            if (parent_of[host] != (int32_t)fork) continue; /* merged itself */
+            if (merge_into(s, fork, host, child, parent_of)) {
+                any = true;
+                break;
+            }
+        }
+        prev = child;
+    }
+}
+
+bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
+{
+    size_t n = s->sk->node_count;
+    bool any = false;
+    for (size_t i = 0; i < n; ++i) parent_of[i] = s->sk->nodes[i].parent;
+    for (uint32_t f = 0; f < n; ++f) {
+        uint32_t laterals = s->child_start[f + 1] - s->child_start[f] - (s->main[f] != UINT32_MAX);
+        if (laterals >= 2 && merge_at(s, f, parent_of)) any = true;
+    }
+    return any;
+}
+
+/* Closest points of segments p0-p1 and q0-q1 as parameters *s, *t in [0, 1] (Ericson 2005,
+ * "Real-Time Collision Detection", 5.1.9). */
+static void closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
+                           double *t)
+{
+    xyl__dvec3 d1 = xyl__d3_sub(p1, p0), d2 = xyl__d3_sub(q1, q0), r = xyl__d3_sub(p0, q0);
+    double a = xyl__d3_dot(d1, d1), e = xyl__d3_dot(d2, d2), f = xyl__d3_dot(d2, r);
+    const double eps = XYL__EPS_NORMALIZE;
+    if (a <= eps) {
+        *s = 0.0;
+        *t = e <= eps ? 0.0 : fmin(1.0, fmax(0.0, f / e));
+        return;
+    }
+    double c = xyl__d3_dot(d1, r);
+    if (e <= eps) {
+        *t = 0.0;
+        *s = fmin(1.0, fmax(0.0, -c / a));
+        return;
+    }
+    double b = xyl__d3_dot(d1, d2), denom = a * e - b * b;
+    double sv = denom > 0.0 ? fmin(1.0, fmax(0.0, (b * f - c * e) / denom)) : 0.0;
+    double tv = (b * sv + f) / e;
+    if (tv < 0.0) tv = 0.0, sv = fmin(1.0, fmax(0.0, -c / a));
+    else if (tv > 1.0) tv = 1.0, sv = fmin(1.0, fmax(0.0, (b - c) / a));
+    *s = sv;
+    *t = tv;
+}
+
+bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b)
+{
+    double s, t;
+    closest_params(a->p0, a->p1, b->p0, b->p1, &s, &t);
+    xyl__dvec3 pa = xyl__d3_add(a->p0, xyl__d3_scale(xyl__d3_sub(a->p1, a->p0), s));
+    xyl__dvec3 pb = xyl__d3_add(b->p0, xyl__d3_scale(xyl__d3_sub(b->p1, b->p0), t));
+    double ra = a->r0 + (a->r1 - a->r0) * s, rb = b->r0 + (b->r1 - b->r0) * t;
+    return xyl__d3_len(xyl__d3_sub(pa, pb)) < ra + rb;
+}
