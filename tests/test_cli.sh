@@ -99,6 +99,14 @@ expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out 
 expect 65 "broken skeleton" -- "$XYLEM" mesh --skeleton "$data/skel/bad_parent.skel" --out "$tmp/x.glb"
 expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
 
+if [ "${XYL_CLI_GPU:-0}" != 1 ]; then  # a build without the GL and Vulkan backends
+  expect 69 "render without backends" -- "$XYLEM" render --size 16x16 --out "$tmp/x.png"
+  contains "built without" "render says why"
+  echo "test_cli: $passed passed, $failed failed (render and view: not built)"
+  [ "$failed" -eq 0 ]
+  exit
+fi
+
 # render: headless GPU (llvmpipe / lavapipe without one); small images keep it quick
 png_magic() { head -c 8 "$1" | od -An -tx1 | tr -d ' \n' | grep -q '^89504e470d0a1a0a$'; }
 expect 0 "render default (GL, instanced)" -- "$XYLEM" render --size 64x48 --out "$tmp/t.png"
