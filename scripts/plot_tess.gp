@@ -9,7 +9,7 @@ set output out
 set multiplot layout 1,2
 set logscale xy
 set grid
-set key top right box opaque
+set key bottom left box opaque
 set xlabel "triangles drawn for the default tree"
 sub(s) = s == 0 ? "none" : (s == 1 ? "catmark" : "loop")
 var(v) = v == 0 ? "pn" : (v == 1 ? "rounded" : "circle")
