@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static int encode(FILE *f, const uint8_t *rgba, uint32_t w, uint32_t h)
@@ -49,6 +50,11 @@ int xyl_png_write(const char *path, const uint8_t *rgba, uint32_t width, uint32_
     int bad = !f || encode(f, rgba, width, height) != 0;
     int e = bad ? (errno ? errno : EIO) : 0;
     if (f && fflush(f) != 0 && !bad) bad = 1, e = errno;
+    if (f && !bad) { /* mkstemp makes 0600 files; give the image the usual permissions */
+        mode_t mask = umask(0);
+        umask(mask);
+        if (fchmod(fileno(f), 0666 & ~mask) != 0) bad = 1, e = errno;
+    }
     if (f && !bad && fsync(fileno(f)) != 0) bad = 1, e = errno;
     if (f) fclose(f); else close(fd);
     if (!bad && rename(tmp, path) != 0) bad = 1, e = errno;
