@@ -896,20 +896,25 @@ static bool has_sibling_laterals(const stems *s)
     return false;
 }
 
-/* Children of every node, indexed again after overlapping siblings were merged
- * (stems_merge.c), so that the rest of the mesher sees the merged tree. One call site of
- * index_children: inlined twice, GCC doubts its sizes. */
+/* Children of every node, indexed again after laterals inside their parent were moved and
+ * overlapping siblings merged (stems_merge.c), so that the rest of the mesher sees the tree as
+ * meshed. One call site of index_children: inlined twice, GCC doubts its sizes. */
 static xyl_result index_tree(stems *s)
 {
+    size_t n = s->sk->node_count;
     int32_t *parent_of = NULL;
     xyl_result r = XYL_OK;
-    for (int pass = 0; pass < 2 && !r; ++pass) {
-        r = index_children(s, parent_of);
-        if (r || pass) break;
-        if (!has_sibling_laterals(s)) break; /* nothing to merge: no scratch array */
-        parent_of = xyl__alloc_array(&s->alloc, s->sk->node_count, sizeof *parent_of);
-        if (!parent_of) r = oom(s);
-        else if (!xyl__stems_merge_siblings(s, parent_of)) break;
+    bool moved = true;
+    for (int step = 0; step < 3 && !r; ++step) {
+        if (moved) r = index_children(s, parent_of);
+        if (r) break;
+        if (step == 0) { /* parent_of, then the hosts of hidden nodes */
+            parent_of = xyl__alloc_array(&s->alloc, n ? 2 * n : 1, sizeof *parent_of);
+            if (!parent_of) r = oom(s);
+            else moved = xyl__stems_hide_inside(s, parent_of, (uint32_t *)(parent_of + n));
+        } else if (step == 1) {
+            moved = has_sibling_laterals(s) && xyl__stems_merge_siblings(s, parent_of);
+        }
     }
     xyl__free(&s->alloc, parent_of);
     return r;

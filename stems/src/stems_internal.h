@@ -89,9 +89,18 @@ typedef struct stems {
     size_t ncones, cone_cap;
 } stems;
 
-/* Overlapping siblings (stems_merge.c): fills parent_of (node_count entries) with each node's
- * parent as meshed: a lateral merged into a sibling is detached (-1) and the rest of it hangs
- * from the sibling. Needs child_start, child_list and main. Returns whether anything merged. */
+/* Laterals that start inside their parent (stems_merge.c): fills parent_of (node_count
+ * entries) with each node's parent as meshed. A lateral's nodes up to its first one clear of
+ * its parent's tube are hidden (host: the visible fork node they are hidden in, else
+ * UINT32_MAX): its first node is detached (-1) and the first clear one hangs from the parent's
+ * node nearest to it; laterals of hidden nodes grow out of the same parent. Needs child_start,
+ * child_list and main. Returns whether any lateral moved. */
+bool xyl__stems_hide_inside(const stems *s, int32_t *parent_of, uint32_t *host);
+
+/* Overlapping siblings (stems_merge.c): updates parent_of (each node's parent as meshed so far):
+ * a lateral merged into a sibling is detached (-1) and the rest of it hangs from the sibling.
+ * Needs child_start, child_list and main of the tree parent_of describes. Returns whether
+ * anything merged. */
 bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of);
 
 /* Whether two cones come closer than their radii at their axes' closest points: a cheap test

@@ -1,4 +1,13 @@
-/* Siblings that overlap along their length (docs/stems.md, "Overlapping siblings").
+/* Which skeleton nodes are meshed, and from where (docs/stems.md, "Children inside their
+ * parent", "Overlapping siblings").
+ *
+ * A lateral that starts inside its parent's tube cannot leave it where it forks: its first
+ * ring would lie in the parent's surface, or its first segment run along inside it. Its nodes
+ * up to the first one clear of the parent's tube are not meshed, and the rest of it grows out of
+ * the parent's node nearest to that one; the laterals of the hidden nodes grow out of the same
+ * parent. A lateral that never clears is not meshed at all: its axis stays within
+ * (r_parent + r_own) of the parent's, so the parent's tube covers all of it but a rim thinner
+ * than its own radius.
  *
  * Two lateral children of one node whose axes stay closer than the sum of their radii cannot be
  * two separate tubes without their surfaces crossing. The thinner one (of equal ones, the later
@@ -9,13 +18,15 @@
  * all of it but a rim thinner than its own radius. */
 #include "stems_internal.h"
 
-/* Distance from p to segment a-b. */
-static double point_segment_distance(xyl__dvec3 p, xyl__dvec3 a, xyl__dvec3 b)
+/* Whether a ball at p of radius r overlaps the tube from a (radius ra) to b (radius rb), as the
+ * mesher's rings taper it: p is within r of the axis' nearest point plus the radius there. */
+static bool ball_meets_cone(xyl__dvec3 p, double r, xyl__dvec3 a, double ra, xyl__dvec3 b,
+                            double rb)
 {
     xyl__dvec3 ab = xyl__d3_sub(b, a), ap = xyl__d3_sub(p, a);
     double l2 = xyl__d3_dot(ab, ab), t = l2 > XYL__EPS_NORMALIZE ? xyl__d3_dot(ap, ab) / l2 : 0.0;
     t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
-    return xyl__d3_len(xyl__d3_sub(ap, xyl__d3_scale(ab, t)));
+    return xyl__d3_len(xyl__d3_sub(ap, xyl__d3_scale(ab, t))) < r + ra + (rb - ra) * t;
 }
 
 static xyl__dvec3 pos_of(const stems *s, uint32_t n)
@@ -24,16 +35,15 @@ static xyl__dvec3 pos_of(const stems *s, uint32_t n)
 }
 
 /* Whether a ball at p of radius r overlaps the tube of the chain that leaves fork through its
- * child `host`: its first segment with radius first_r, each later one with the larger radius of
- * its two nodes. */
+ * child `host`: first_r at the fork, each node's own radius after it. */
 static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host,
                            double first_r)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
-    double seg_r = first_r;
+    double ra = first_r;
     for (uint32_t a = fork, b = host; b != UINT32_MAX; a = b, b = s->main[b]) {
-        if (point_segment_distance(p, pos_of(s, a), pos_of(s, b)) < r + seg_r) return true;
-        if (s->main[b] != UINT32_MAX) seg_r = fmax(nodes[b].radius, nodes[s->main[b]].radius);
+        if (ball_meets_cone(p, r, pos_of(s, a), ra, pos_of(s, b), nodes[b].radius)) return true;
+        ra = nodes[b].radius;
     }
     return false;
 }
@@ -62,18 +72,17 @@ static uint32_t nearest_on_chain(const stems *s, xyl__dvec3 p, uint32_t host)
 }
 
 /* Whether a ball at p of radius r overlaps the tube of fork's own branch next to the fork: the
- * segment into the fork and the chain that continues it. */
-static bool overlaps_parent(const stems *s, xyl__dvec3 p, double r, uint32_t fork)
+ * segment into the fork (from its parent as meshed, parent_of) and the chain that continues it. */
+static bool overlaps_parent(const stems *s, const int32_t *parent_of, xyl__dvec3 p, double r,
+                            uint32_t fork)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
-    int32_t before = nodes[fork].parent;
-    if (before >= 0) {
-        double rr = r + fmax(nodes[before].radius, nodes[fork].radius);
-        if (point_segment_distance(p, pos_of(s, (uint32_t)before), pos_of(s, fork)) < rr) return true;
-    }
+    int32_t before = parent_of[fork];
+    if (before >= 0 && ball_meets_cone(p, r, pos_of(s, (uint32_t)before), nodes[before].radius,
+                                       pos_of(s, fork), nodes[fork].radius))
+        return true;
     uint32_t main = s->main[fork];
-    return main != UINT32_MAX &&
-           overlaps_chain(s, p, r, fork, main, fmax(nodes[fork].radius, nodes[main].radius));
+    return main != UINT32_MAX && overlaps_chain(s, p, r, fork, main, nodes[fork].radius);
 }
 
 /* Merges lateral `child` of fork into sibling `host` if they overlap where the child leaves
@@ -86,7 +95,7 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     uint32_t last = UINT32_MAX, n = child;
-    for (; n != UINT32_MAX && overlaps_parent(s, pos_of(s, n), nodes[n].radius, fork);
+    for (; n != UINT32_MAX && overlaps_parent(s, parent_of, pos_of(s, n), nodes[n].radius, fork);
          last = n, n = s->main[n])
         if (has_laterals(s, n)) return false;
     if (n == UINT32_MAX || !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host))
@@ -140,10 +149,48 @@ bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
 {
     size_t n = s->sk->node_count;
     bool any = false;
-    for (size_t i = 0; i < n; ++i) parent_of[i] = s->sk->nodes[i].parent;
     for (uint32_t f = 0; f < n; ++f) {
         uint32_t laterals = s->child_start[f + 1] - s->child_start[f] - (s->main[f] != UINT32_MAX);
         if (laterals >= 2 && merge_at(s, f, parent_of)) any = true;
+    }
+    return any;
+}
+
+/* ---- laterals that start inside their parent ------------------------------------------- */
+
+/* The node of fork's branch, as meshed around it, nearest to p: fork's parent if it is on the
+ * same branch, fork, and the chain after it. */
+static uint32_t nearest_on_branch(const stems *s, const int32_t *parent_of, xyl__dvec3 p,
+                                  uint32_t fork)
+{
+    uint32_t best = nearest_on_chain(s, p, fork);
+    int32_t before = parent_of[fork];
+    if (before >= 0 && s->sk->nodes[before].branch == s->sk->nodes[fork].branch &&
+        xyl__d3_len(xyl__d3_sub(pos_of(s, (uint32_t)before), p)) <
+            xyl__d3_len(xyl__d3_sub(pos_of(s, best), p)))
+        best = (uint32_t)before;
+    return best;
+}
+
+bool xyl__stems_hide_inside(const stems *s, int32_t *parent_of, uint32_t *host)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    uint32_t n = (uint32_t)s->sk->node_count;
+    bool any = false;
+    for (uint32_t i = 0; i < n; ++i) parent_of[i] = nodes[i].parent, host[i] = UINT32_MAX;
+    /* node order: a node's parent, and so its host, is settled before the node */
+    for (uint32_t i = 0; i < n; ++i) {
+        int32_t p = nodes[i].parent;
+        if (p < 0 || nodes[p].branch == nodes[i].branch) continue; /* a root, or along a chain */
+        uint32_t h = host[p] != UINT32_MAX ? host[p] : (uint32_t)p, c = i;
+        for (; c != UINT32_MAX && overlaps_parent(s, parent_of, pos_of(s, c), nodes[c].radius, h);
+             c = s->main[c])
+            host[c] = h;
+        if (c == i && h == (uint32_t)p) continue; /* leaves its parent at once */
+        any = true;
+        if (c != i) parent_of[i] = -1;
+        if (c != UINT32_MAX)
+            parent_of[c] = (int32_t)nearest_on_branch(s, parent_of, pos_of(s, c), h);
     }
     return any;
 }
