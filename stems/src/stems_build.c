@@ -740,37 +740,50 @@ static xyl_result grow_taken(stems *s)
     return XYL_OK;
 }
 
-/* Attaches every lateral child of station i to a patch among rings lo .. hi. */
+/* Bridges lateral `child` of `node` (at station st) from the best patch among rings lo .. hi;
+ * more: siblings follow, which test their first segments against this one's. */
+static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, uint32_t child,
+                             size_t lo, size_t hi, bool more)
+{
+    xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
+    patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
+    if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
+        return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
+                         "internal: no free patch left at node %u", node);
+    if (more) {
+        if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
+            return oom(s);
+        bool reaches;
+        s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+    }
+    return bridge(s, p, child, st->r);
+}
+
+/* Attaches every lateral child of station i to a patch among rings lo .. hi, thickest first
+ * (xyl__lateral_before): a thin sibling then keeps clear of the thick one's first segment,
+ * which has less room to move. */
 static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
 {
     const stems_station *st = &s->stations[i];
     xyl_result r = grow_taken(s);
     if (r) return r;
     s->ncones = 0;
-    /* the siblings still to come test their first segments against those placed before
-     * (choose_patch); the last one's is never read */
     size_t left = st->first == UINT32_MAX ? 0 : lateral_count(s, st);
-    for (uint32_t c = st->first; c <= st->last && st->first != UINT32_MAX; ++c) {
-        uint32_t node = s->chain[c], main = main_child(s, node);
-        for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
-            uint32_t child = s->child_list[j];
-            if (child == main) continue;
-            xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
-            patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
-            if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
-                return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
-                                 "internal: no free patch left at node %u", node);
-            if (--left) {
-                if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
-                    return oom(s);
-                bool reaches;
-                s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+    for (uint32_t prev = UINT32_MAX; left && !r; --left) {
+        uint32_t child = UINT32_MAX, at = 0; /* the next lateral after prev */
+        for (uint32_t c = st->first; c <= st->last; ++c) {
+            uint32_t node = s->chain[c], main = main_child(s, node);
+            for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
+                uint32_t x = s->child_list[j];
+                if (x == main || (prev != UINT32_MAX && !xyl__lateral_before(s->sk, prev, x)))
+                    continue;
+                if (child == UINT32_MAX || xyl__lateral_before(s->sk, x, child)) child = x, at = node;
             }
-            r = bridge(s, p, child, st->r);
-            if (r) return r;
         }
+        r = attach_one(s, st, at, child, lo, hi, left > 1);
+        prev = child;
     }
-    return XYL_OK;
+    return r;
 }
 
 /* ---- branches ------------------------------------------------------------------------------ */
@@ -896,9 +909,10 @@ static bool has_sibling_laterals(const stems *s)
     return false;
 }
 
-/* Children of every node, indexed again after laterals inside their parent were moved and
- * overlapping siblings merged (stems_merge.c), so that the rest of the mesher sees the tree as
- * meshed. One call site of index_children: inlined twice, GCC doubts its sizes. */
+/* Children of every node, indexed again after laterals inside their parent or a sibling were
+ * moved, and again after laterals that came to hang from one node were merged (stems_merge.c),
+ * so that the rest of the mesher sees the tree as meshed. One call site of index_children:
+ * inlined twice, GCC doubts its sizes. */
 static xyl_result index_tree(stems *s)
 {
     size_t n = s->sk->node_count;
@@ -908,10 +922,10 @@ static xyl_result index_tree(stems *s)
     for (int step = 0; step < 3 && !r; ++step) {
         if (moved) r = index_children(s, parent_of);
         if (r) break;
-        if (step == 0) { /* parent_of, then the hosts of hidden nodes */
-            parent_of = xyl__alloc_array(&s->alloc, n ? 2 * n : 1, sizeof *parent_of);
+        if (step == 0) { /* parent_of, then scratch */
+            parent_of = xyl__alloc_array(&s->alloc, n ? 5 * n : 1, sizeof *parent_of);
             if (!parent_of) r = oom(s);
-            else moved = xyl__stems_hide_inside(s, parent_of, (uint32_t *)(parent_of + n));
+            else moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
         } else if (step == 1) {
             moved = has_sibling_laterals(s) && xyl__stems_merge_siblings(s, parent_of);
         }

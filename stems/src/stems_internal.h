@@ -89,15 +89,24 @@ typedef struct stems {
     size_t ncones, cone_cap;
 } stems;
 
-/* Laterals that start inside their parent (stems_merge.c): fills parent_of (node_count
- * entries) with each node's parent as meshed. A lateral's nodes up to its first one clear of
- * its parent's tube are hidden (host: the visible fork node they are hidden in, else
- * UINT32_MAX): its first node is detached (-1) and the first clear one hangs from the parent's
- * node nearest to it; laterals of hidden nodes grow out of the same parent. Needs child_start,
- * child_list and main. Returns whether any lateral moved. */
-bool xyl__stems_hide_inside(const stems *s, int32_t *parent_of, uint32_t *host);
+/* Whether lateral a comes before lateral b where siblings are ordered: thicker first, then in
+ * node order. */
+static inline bool xyl__lateral_before(const xyl_skeleton *sk, uint32_t a, uint32_t b)
+{
+    float ra = sk->nodes[a].radius, rb = sk->nodes[b].radius;
+    return ra != rb ? ra > rb : a < b;
+}
 
-/* Overlapping siblings (stems_merge.c): updates parent_of (each node's parent as meshed so far):
+/* Which nodes are meshed, and from where (stems_merge.c): fills parent_of (node_count entries)
+ * with each node's parent as meshed. A lateral's nodes are hidden while they lie in its
+ * parent's tube or in one placed before it there (a thicker sibling's, or the meshed part of a
+ * chain its fork is hidden in); its first node is then detached (-1) and its first clear one
+ * hangs from the nearest node of the tube it left. Laterals of hidden nodes grow out of the
+ * meshed node their fork is hidden at. scratch: 4 node_count entries. Needs child_start,
+ * child_list and main of the skeleton's own tree. Returns whether any lateral moved. */
+bool xyl__stems_place_laterals(const stems *s, int32_t *parent_of, uint32_t *scratch);
+
+/* Overlapping laterals of one node of the tree as meshed (stems_merge.c): updates parent_of:
  * a lateral merged into a sibling is detached (-1) and the rest of it hangs from the sibling.
  * Needs child_start, child_list and main of the tree parent_of describes. Returns whether
  * anything merged. */

@@ -1,21 +1,21 @@
-/* Which skeleton nodes are meshed, and from where (docs/stems.md, "Children inside their
+/* Which skeleton nodes are meshed, and from where (docs/stems.md, "Laterals inside their
  * parent", "Overlapping siblings").
  *
  * A lateral that starts inside its parent's tube cannot leave it where it forks: its first
  * ring would lie in the parent's surface, or its first segment run along inside it. Its nodes
- * up to the first one clear of the parent's tube are not meshed, and the rest of it grows out of
- * the parent's node nearest to that one; the laterals of the hidden nodes grow out of the same
- * parent. A lateral that never clears is not meshed at all: its axis stays within
- * (r_parent + r_own) of the parent's, so the parent's tube covers all of it but a rim thinner
- * than its own radius.
+ * are hidden (not meshed) while they lie in the parent's tube or in a tube placed before it at
+ * its fork (a thicker sibling's, or the meshed part of a chain the fork itself is hidden in),
+ * and its first clear node grows out of the node of the tube it left nearest to where it comes
+ * from. Laterals of hidden nodes are placed in turn, from the meshed node their fork is hidden
+ * at. A lateral that never clears is not meshed at all: its axis stays within
+ * (r_tube + r_own) of the tube's, which covers all of it but a rim thinner than its own radius.
  *
- * Two lateral children of one node whose axes stay closer than the sum of their radii cannot be
- * two separate tubes without their surfaces crossing. The thinner one (of equal ones, the later
- * in node order) is merged into the thicker: its nodes up to the first one that clears the
- * thicker sibling's tube are not meshed, and the rest of it grows out of the thicker sibling,
- * from that sibling's node nearest to where they part. A sibling that never clears is not meshed
- * at all: its axis stays within (r_host + r_own) of the host's, so the host's tube already covers
- * all of it but a rim thinner than its own radius. */
+ * Laterals that come to hang from one node this way are siblings again, and are merged as
+ * siblings are: the thinner one (of equal ones, the later in node order) into the thicker, if
+ * they overlap where it leaves its parent, or if its first segment is still inside the
+ * thicker one halfway along. Its nodes up to the first one that clears the thicker sibling's
+ * tube are not meshed, and the rest of it grows out of the thicker sibling, from that
+ * sibling's node nearest to where they part. */
 #include "stems_internal.h"
 
 /* Whether a ball at p of radius r overlaps the tube from a (radius ra) to b (radius rb), as the
@@ -86,10 +86,11 @@ static bool overlaps_parent(const stems *s, const int32_t *parent_of, xyl__dvec3
 }
 
 /* Merges lateral `child` of fork into sibling `host` if they overlap where the child leaves
- * its parent's tube (inside it, the parent's rules place the child's first ring): child's
- * first node is detached from fork, and its first node that clears host (or has children of
- * its own, which need its branch) is attached to host's nearest node. Returns whether it
- * merged. */
+ * its parent's tube (inside it, the parent's rules place the child's first ring), or if the
+ * child's first segment is still inside the sibling's tube halfway along: the patches of one
+ * fork part two tubes by about a radius, not along a whole segment. The child's nodes up to its
+ * first one that clears host (or has children of its own, which need its branch) are not
+ * meshed, and that one hangs from host's nearest node. Returns whether it merged. */
 static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t child,
                        int32_t *parent_of)
 {
@@ -98,8 +99,14 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     for (; n != UINT32_MAX && overlaps_parent(s, parent_of, pos_of(s, n), nodes[n].radius, fork);
          last = n, n = s->main[n])
         if (has_laterals(s, n)) return false;
-    if (n == UINT32_MAX || !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host))
-        return false;
+    if (n == UINT32_MAX) return false;
+    xyl__dvec3 half = xyl__d3_scale(xyl__d3_add(pos_of(s, fork), pos_of(s, n)), 0.5);
+    if (n == child && overlaps_sibling(s, half, nodes[n].radius, fork, host) &&
+        !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) {
+        parent_of[child] = (int32_t)nearest_on_chain(s, pos_of(s, child), host);
+        return true; /* clear of host at its first node: all of it hangs from host */
+    }
+    if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) return false;
     for (; n != UINT32_MAX; last = n, n = s->main[n]) {
         if (has_laterals(s, n)) break;
         if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) break;
@@ -110,11 +117,23 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     return true;
 }
 
-/* Whether lateral a comes before lateral b: thicker first, then in node order. */
 static bool before(const stems *s, uint32_t a, uint32_t b)
 {
-    float ra = s->sk->nodes[a].radius, rb = s->sk->nodes[b].radius;
-    return ra != rb ? ra > rb : a < b;
+    return xyl__lateral_before(s->sk, a, b);
+}
+
+/* The lateral of node p that comes next after prev in `before` order (the first one after
+ * UINT32_MAX), or UINT32_MAX. */
+static uint32_t next_lateral(const stems *s, uint32_t p, uint32_t prev)
+{
+    uint32_t child = UINT32_MAX, main = s->main[p];
+    for (uint32_t j = s->child_start[p]; j < s->child_start[p + 1]; ++j) {
+        uint32_t c = s->child_list[j];
+        if (c != main && (prev == UINT32_MAX || before(s, prev, c)) &&
+            (child == UINT32_MAX || before(s, c, child)))
+            child = c;
+    }
+    return child;
 }
 
 /* The laterals of fork in `before` order, each tried against those before it that are still
@@ -124,13 +143,7 @@ static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
     uint32_t lo = s->child_start[fork], hi = s->child_start[fork + 1], main = s->main[fork];
     bool any = false;
     for (uint32_t prev = UINT32_MAX;;) {
-        uint32_t child = UINT32_MAX; /* the first lateral after prev */
-        for (uint32_t j = lo; j < hi; ++j) {
-            uint32_t c = s->child_list[j];
-            if (c != main && (prev == UINT32_MAX || before(s, prev, c)) &&
-                (child == UINT32_MAX || before(s, c, child)))
-                child = c;
-        }
+        uint32_t child = next_lateral(s, fork, prev);
         if (child == UINT32_MAX) return any;
         for (uint32_t i = lo; i < hi; ++i) {
             uint32_t host = s->child_list[i];
@@ -156,6 +169,7 @@ bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
     return any;
 }
 
+
 /* ---- laterals that start inside their parent ------------------------------------------- */
 
 /* The node of fork's branch, as meshed around it, nearest to p: fork's parent if it is on the
@@ -172,25 +186,95 @@ static uint32_t nearest_on_branch(const stems *s, const int32_t *parent_of, xyl_
     return best;
 }
 
-bool xyl__stems_hide_inside(const stems *s, int32_t *parent_of, uint32_t *host)
+/* Whether a ball at p of radius r overlaps one of the tubes placed before it around its fork:
+ * the tube from a chain's parent as meshed through its meshed nodes (placed: the chains' first
+ * nodes), at the chain's own radius from the start (the fork node's is the parent's). Returns
+ * that first node, or UINT32_MAX. */
+static uint32_t overlapping_placed(const stems *s, const int32_t *parent_of, xyl__dvec3 p,
+                                   double r, const uint32_t *placed, size_t nplaced)
+{
+    for (size_t j = 0; j < nplaced; ++j) {
+        uint32_t c = placed[j];
+        if (overlaps_chain(s, p, r, (uint32_t)parent_of[c], c, s->sk->nodes[c].radius)) return c;
+    }
+    return UINT32_MAX;
+}
+
+/* Per node: hidden ones record where their chain forks off (link: the parent of the chain's
+ * first node), the chain's first meshed node (owner, or UINT32_MAX if it has none) and the tube
+ * they lie in (tube: a placed chain's first node, or UINT32_MAX for the parent's branch);
+ * visible ones have link UINT32_MAX. placed: scratch. */
+typedef struct placing {
+    int32_t *parent_of;
+    uint32_t *link, *owner, *tube, *placed;
+    size_t nplaced;
+} placing;
+
+/* Places lateral i of node p at fork h (p itself, or the meshed node p is hidden at): hides its
+ * nodes while they lie in the parent's tube or one placed before it, and hangs the first clear
+ * one from the nearest node of the tube it left: the parent's branch, or that chain near where
+ * they part. Returns whether i moved. */
+static bool place_lateral(const stems *s, uint32_t i, uint32_t p, uint32_t h, placing *pl)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    int32_t *parent_of = pl->parent_of;
+    /* where it comes from: its fork, in the tube the fork is hidden in if it is */
+    uint32_t c = i, last = p, in = pl->link[p] != UINT32_MAX ? pl->tube[p] : UINT32_MAX;
+    for (; c != UINT32_MAX; last = c, c = s->main[c]) {
+        xyl__dvec3 q = pos_of(s, c);
+        double r = nodes[c].radius;
+        uint32_t t = UINT32_MAX;
+        if (!overlaps_parent(s, parent_of, q, r, h) &&
+            (t = overlapping_placed(s, parent_of, q, r, pl->placed, pl->nplaced)) == UINT32_MAX)
+            break;
+        in = t;
+        pl->tube[c] = t;
+    }
+    for (uint32_t x = i; x != c; x = s->main[x]) pl->link[x] = p, pl->owner[x] = c;
+    if (c != UINT32_MAX) pl->placed[pl->nplaced++] = c;
+    if (c == i && h == p) return false; /* leaves its parent at once */
+    if (c != i) parent_of[i] = -1;
+    if (c == UINT32_MAX) return true; /* never clears: not meshed */
+    /* from the node of the tube it leaves (the parent's branch, or a chain placed before)
+     * nearest to where it comes from */
+    xyl__dvec3 from = pos_of(s, last);
+    uint32_t at = in != UINT32_MAX ? nearest_on_chain(s, from, in)
+                                   : nearest_on_branch(s, parent_of, from, h);
+    parent_of[c] = (int32_t)at;
+    return true;
+}
+
+/* The laterals of p in `before` order, so that a sibling is only ever hidden in a thicker one
+ * (or an equal one earlier in node order). If p is hidden, its laterals grow out of the meshed
+ * node it is hidden at and keep clear of the meshed parts of the chains p is hidden in. */
+static bool place_laterals_of(const stems *s, uint32_t p, placing *pl)
+{
+    uint32_t h = p;
+    pl->nplaced = 0;
+    for (; pl->link[h] != UINT32_MAX; h = pl->link[h])
+        if (pl->owner[h] != UINT32_MAX) pl->placed[pl->nplaced++] = pl->owner[h];
+    bool any = false;
+    for (uint32_t prev = UINT32_MAX;;) {
+        uint32_t child = next_lateral(s, p, prev);
+        if (child == UINT32_MAX) return any;
+        if (place_lateral(s, child, p, h, pl)) any = true;
+        prev = child;
+    }
+}
+
+bool xyl__stems_place_laterals(const stems *s, int32_t *parent_of, uint32_t *scratch)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     uint32_t n = (uint32_t)s->sk->node_count;
+    placing pl = {parent_of, scratch, scratch + n, scratch + 2 * (size_t)n,
+                  scratch + 3 * (size_t)n, 0};
     bool any = false;
-    for (uint32_t i = 0; i < n; ++i) parent_of[i] = nodes[i].parent, host[i] = UINT32_MAX;
-    /* node order: a node's parent, and so its host, is settled before the node */
-    for (uint32_t i = 0; i < n; ++i) {
-        int32_t p = nodes[i].parent;
-        if (p < 0 || nodes[p].branch == nodes[i].branch) continue; /* a root, or along a chain */
-        uint32_t h = host[p] != UINT32_MAX ? host[p] : (uint32_t)p, c = i;
-        for (; c != UINT32_MAX && overlaps_parent(s, parent_of, pos_of(s, c), nodes[c].radius, h);
-             c = s->main[c])
-            host[c] = h;
-        if (c == i && h == (uint32_t)p) continue; /* leaves its parent at once */
-        any = true;
-        if (c != i) parent_of[i] = -1;
-        if (c != UINT32_MAX)
-            parent_of[c] = (int32_t)nearest_on_branch(s, parent_of, pos_of(s, c), h);
+    for (uint32_t i = 0; i < n; ++i) parent_of[i] = nodes[i].parent, pl.link[i] = UINT32_MAX;
+    /* node order: a node's parent, and so where it is meshed, is settled before its laterals */
+    for (uint32_t p = 0; p < n; ++p) {
+        uint32_t children = s->child_start[p + 1] - s->child_start[p];
+        if (children > (uint32_t)(s->main[p] != UINT32_MAX) && place_laterals_of(s, p, &pl))
+            any = true;
     }
     return any;
 }
