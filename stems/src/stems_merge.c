@@ -103,8 +103,11 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     xyl__dvec3 half = xyl__d3_scale(xyl__d3_add(pos_of(s, fork), pos_of(s, n)), 0.5);
     if (n == child && overlaps_sibling(s, half, nodes[n].radius, fork, host) &&
         !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) {
-        parent_of[child] = (int32_t)nearest_on_chain(s, pos_of(s, child), host);
-        return true; /* clear of host at its first node: all of it hangs from host */
+        /* clear of host at its first node: all of it hangs from host, but not from host's tip,
+         * which has no segment ahead to fork from */
+        uint32_t at = nearest_on_chain(s, pos_of(s, child), host);
+        parent_of[child] = s->main[at] != UINT32_MAX ? (int32_t)at : -1;
+        return true;
     }
     if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) return false;
     for (; n != UINT32_MAX; last = n, n = s->main[n]) {
@@ -117,9 +120,13 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     return true;
 }
 
-static bool before(const stems *s, uint32_t a, uint32_t b)
+/* Whether lateral a of node p comes before lateral b: its own laterals (children of p in the
+ * skeleton) before those that came to hang from it, then xyl__lateral_before. A lateral that
+ * was moved here so gives way to one that forks here. */
+static bool before(const stems *s, uint32_t p, uint32_t a, uint32_t b)
 {
-    return xyl__lateral_before(s->sk, a, b);
+    bool own_a = s->sk->nodes[a].parent == (int32_t)p, own_b = s->sk->nodes[b].parent == (int32_t)p;
+    return own_a != own_b ? own_a : xyl__lateral_before(s->sk, a, b);
 }
 
 /* The lateral of node p that comes next after prev in `before` order (the first one after
@@ -129,8 +136,8 @@ static uint32_t next_lateral(const stems *s, uint32_t p, uint32_t prev)
     uint32_t child = UINT32_MAX, main = s->main[p];
     for (uint32_t j = s->child_start[p]; j < s->child_start[p + 1]; ++j) {
         uint32_t c = s->child_list[j];
-        if (c != main && (prev == UINT32_MAX || before(s, prev, c)) &&
-            (child == UINT32_MAX || before(s, c, child)))
+        if (c != main && (prev == UINT32_MAX || before(s, p, prev, c)) &&
+            (child == UINT32_MAX || before(s, p, c, child)))
             child = c;
     }
     return child;
@@ -147,7 +154,7 @@ static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
         if (child == UINT32_MAX) return any;
         for (uint32_t i = lo; i < hi; ++i) {
             uint32_t host = s->child_list[i];
-            if (host == main || !before(s, host, child)) continue;
+            if (host == main || !before(s, fork, host, child)) continue;
             if (parent_of[host] != (int32_t)fork) continue; /* merged itself */
             if (merge_into(s, fork, host, child, parent_of)) {
                 any = true;
