@@ -560,7 +560,10 @@ static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r
     double bulge = 0.0;
     for (uint32_t j = 0; j < 2 * strip + 2; ++j)
         bulge = fmax(bulge, xyl__d3_dot(xyl__d3_sub(xyl__from_f3(s->pos[g->loop[j]]), centroid), n));
-    double h = fmax(fmax(r, 0.25 * parent_r), bulge + r);
+    /* a quarter of the parent's radius keeps the bridge from lying flat on a thick parent,
+     * but not past the child's first node: that must stay a station, r ahead of the ring */
+    double room = xyl__d3_dot(xyl__d3_sub(node_pos(s, child), centroid), n) - 2.0 * r;
+    double h = fmax(fmin(fmax(r, 0.25 * parent_r), room), bulge + r);
     stems_ring *ring = &g->ring;
     memset(ring, 0, sizeof *ring);
     ring->centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));

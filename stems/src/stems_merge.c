@@ -217,38 +217,73 @@ typedef struct placing {
     size_t nplaced;
 } placing;
 
-/* Places lateral i of node p at fork h (p itself, or the meshed node p is hidden at): hides its
- * nodes while they lie in the parent's tube or one placed before it, and hangs the first clear
- * one from the nearest node of the tube it left: the parent's branch, or that chain near where
- * they part. Returns whether i moved. */
-static bool place_lateral(const stems *s, uint32_t i, uint32_t p, uint32_t h, placing *pl)
+/* Whether node x lies in the parent's tube around fork h or in one placed before it; *tube: the
+ * placed chain's first node, or UINT32_MAX for the parent's. */
+static bool inside(const stems *s, const placing *pl, uint32_t x, uint32_t h, uint32_t *tube)
 {
-    const xyl_skel_node *nodes = s->sk->nodes;
-    int32_t *parent_of = pl->parent_of;
-    /* where it comes from: its fork, in the tube the fork is hidden in if it is */
-    uint32_t c = i, last = p, in = pl->link[p] != UINT32_MAX ? pl->tube[p] : UINT32_MAX;
-    for (; c != UINT32_MAX; last = c, c = s->main[c]) {
-        xyl__dvec3 q = pos_of(s, c);
-        double r = nodes[c].radius;
-        uint32_t t = UINT32_MAX;
-        if (!overlaps_parent(s, parent_of, q, r, h) &&
-            (t = overlapping_placed(s, parent_of, q, r, pl->placed, pl->nplaced)) == UINT32_MAX)
-            break;
-        in = t;
-        pl->tube[c] = t;
-    }
-    for (uint32_t x = i; x != c; x = s->main[x]) pl->link[x] = p, pl->owner[x] = c;
-    if (c != UINT32_MAX) pl->placed[pl->nplaced++] = c;
-    if (c == i && h == p) return false; /* leaves its parent at once */
-    if (c != i) parent_of[i] = -1;
-    if (c == UINT32_MAX) return true; /* never clears: not meshed */
-    /* from the node of the tube it leaves (the parent's branch, or a chain placed before)
-     * nearest to where it comes from */
+    xyl__dvec3 q = pos_of(s, x);
+    double r = s->sk->nodes[x].radius;
+    *tube = UINT32_MAX;
+    if (overlaps_parent(s, pl->parent_of, q, r, h)) return true;
+    *tube = overlapping_placed(s, pl->parent_of, q, r, pl->placed, pl->nplaced);
+    return *tube != UINT32_MAX;
+}
+
+/* Hides the nodes of a chain of fork p (placed at h) from x on while they lie inside a tube,
+ * recording each one's tube; *last and *in become the last hidden node and its tube (unchanged
+ * if none is hidden).
+ * Returns the first node that is clear, or UINT32_MAX. */
+static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, uint32_t h,
+                         uint32_t *last, uint32_t *in)
+{
+    uint32_t first = x, t;
+    for (; x != UINT32_MAX && inside(s, pl, x, h, &t); x = s->main[x])
+        *last = x, *in = t, pl->tube[x] = t;
+    for (uint32_t y = first; y != x; y = s->main[y]) pl->link[y] = p, pl->owner[y] = x;
+    return x;
+}
+
+/* Hangs the first clear node c of a hidden run from the node of the tube it left (in: a placed
+ * chain, or the parent's branch at h) nearest to where it comes from (last). */
+static void hang(const stems *s, placing *pl, uint32_t c, uint32_t last, uint32_t in, uint32_t h)
+{
     xyl__dvec3 from = pos_of(s, last);
     uint32_t at = in != UINT32_MAX ? nearest_on_chain(s, from, in)
-                                   : nearest_on_branch(s, parent_of, from, h);
-    parent_of[c] = (int32_t)at;
-    return true;
+                                   : nearest_on_branch(s, pl->parent_of, from, h);
+    pl->parent_of[c] = (int32_t)at;
+}
+
+/* Places lateral i of node p at fork h (p itself, or the meshed node p is hidden at): hides its
+ * nodes while they lie in the parent's tube or one placed before it, and hangs the first clear
+ * one from the nearest node of the tube it left. Returns whether i moved. */
+static bool place_lateral(const stems *s, uint32_t i, uint32_t p, uint32_t h, placing *pl)
+{
+    /* where it comes from: its fork, in the tube the fork is hidden in if it is */
+    uint32_t last = p, in = pl->link[p] != UINT32_MAX ? pl->tube[p] : UINT32_MAX;
+    uint32_t c = hide_run(s, pl, i, p, h, &last, &in);
+    if (c != UINT32_MAX) pl->placed[pl->nplaced++] = c;
+    if (c == i && h == p) return false; /* leaves its parent at once */
+    if (c != i) pl->parent_of[i] = -1;
+    if (c != UINT32_MAX) hang(s, pl, c, last, in, h);
+    return true; /* a lateral that never clears is not meshed */
+}
+
+/* Where a lateral's meshed chain (from its first meshed node c) runs into its parent's tube or
+ * a tube placed before it again, away from its joint, it is cut: the nodes inside are hidden
+ * and the rest grows out of that tube where it leaves it, as its start does. */
+static bool cut_crossings(const stems *s, uint32_t c, uint32_t p, uint32_t h, placing *pl)
+{
+    bool any = false;
+    for (uint32_t x = s->main[c], t; x != UINT32_MAX; x = s->main[x]) {
+        if (!inside(s, pl, x, h, &t)) continue;
+        uint32_t first = x, last = x, in = t;
+        x = hide_run(s, pl, x, p, h, &last, &in);
+        pl->parent_of[first] = -1;
+        any = true;
+        if (x == UINT32_MAX) break;
+        hang(s, pl, x, last, in, h);
+    }
+    return any;
 }
 
 /* The laterals of p in `before` order, so that a sibling is only ever hidden in a thicker one
@@ -264,7 +299,13 @@ static bool place_laterals_of(const stems *s, uint32_t p, placing *pl)
     for (uint32_t prev = UINT32_MAX;;) {
         uint32_t child = next_lateral(s, p, prev);
         if (child == UINT32_MAX) return any;
+        size_t placed = pl->nplaced;
         if (place_lateral(s, child, p, h, pl)) any = true;
+        if (pl->nplaced > placed) { /* meshed: its crossings, against the tubes before it */
+            uint32_t c = pl->placed[--pl->nplaced];
+            if (cut_crossings(s, c, p, h, pl)) any = true;
+            pl->placed[pl->nplaced++] = c;
+        }
         prev = child;
     }
 }
