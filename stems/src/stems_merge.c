@@ -103,9 +103,14 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     xyl__dvec3 half = xyl__d3_scale(xyl__d3_add(pos_of(s, fork), pos_of(s, n)), 0.5);
     if (n == child && overlaps_sibling(s, half, nodes[n].radius, fork, host) &&
         !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) {
-        /* clear of host at its first node: all of it hangs from host, but not from host's tip,
-         * which has no segment ahead to fork from */
-        uint32_t at = nearest_on_chain(s, pos_of(s, child), host);
+        /* clear of host at its first node: all of it hangs from host's node nearest to it if
+         * that is nearer than the fork, but not from host's tip, which has no segment ahead to
+         * fork from */
+        xyl__dvec3 p = pos_of(s, child);
+        uint32_t at = nearest_on_chain(s, p, host);
+        if (xyl__d3_len(xyl__d3_sub(pos_of(s, at), p)) >= xyl__d3_len(xyl__d3_sub(pos_of(s, fork), p)))
+            return false;
+
         parent_of[child] = s->main[at] != UINT32_MAX ? (int32_t)at : -1;
         return true;
     }
@@ -250,6 +255,12 @@ static void hang(const stems *s, placing *pl, uint32_t c, uint32_t last, uint32_
     xyl__dvec3 from = pos_of(s, last);
     uint32_t at = in != UINT32_MAX ? nearest_on_chain(s, from, in)
                                    : nearest_on_branch(s, pl->parent_of, from, h);
+    /* a placed chain's tube starts at the node it hangs from: that one may be nearer */
+    if (in != UINT32_MAX) {
+        uint32_t up = (uint32_t)pl->parent_of[in];
+        if (xyl__d3_len(xyl__d3_sub(pos_of(s, up), from)) < xyl__d3_len(xyl__d3_sub(pos_of(s, at), from)))
+            at = up;
+    }
     pl->parent_of[c] = (int32_t)at;
 }
 
