@@ -927,13 +927,20 @@ static xyl_result index_tree(stems *s)
         if (r) break;
         if (step == 0) { /* parent_of, then scratch */
             parent_of = xyl__alloc_array(&s->alloc, n ? 5 * n : 1, sizeof *parent_of);
-            if (!parent_of) r = oom(s);
-            else moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
+            s->tails = xyl__alloc_array(&s->alloc, n ? 4 * n : 1, sizeof *s->tails);
+            if (!parent_of || !s->tails) {
+                r = oom(s);
+                break;
+            }
+            xyl__stems_tail_spheres(s, s->tails);
+            moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
         } else if (step == 1) {
             moved = has_sibling_laterals(s) && xyl__stems_merge_siblings(s, parent_of);
         }
     }
     xyl__free(&s->alloc, parent_of);
+    xyl__free(&s->alloc, s->tails);
+    s->tails = NULL;
     return r;
 }
 

@@ -87,7 +87,13 @@ typedef struct stems {
 
     xyl__stems_cone *cones; /* the laterals placed so far at the fork being attached */
     size_t ncones, cone_cap;
+
+    double *tails; /* while indexing: per node, the sphere around its chain's tubes from it on */
 } stems;
+
+/* Fills tails (4 per node: centre, radius) with the bounding sphere of each node's ball and the
+ * tubes of its chain after it (stems_merge.c). Needs main. */
+void xyl__stems_tail_spheres(const stems *s, double *tails);
 
 /* Whether lateral a comes before lateral b where siblings are ordered: thicker first, then in
  * node order. */

@@ -26,7 +26,9 @@ static bool ball_meets_cone(xyl__dvec3 p, double r, xyl__dvec3 a, double ra, xyl
     xyl__dvec3 ab = xyl__d3_sub(b, a), ap = xyl__d3_sub(p, a);
     double l2 = xyl__d3_dot(ab, ab), t = l2 > XYL__EPS_NORMALIZE ? xyl__d3_dot(ap, ab) / l2 : 0.0;
     t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
-    return xyl__d3_len(xyl__d3_sub(ap, xyl__d3_scale(ab, t))) < r + ra + (rb - ra) * t;
+    xyl__dvec3 e = xyl__d3_sub(ap, xyl__d3_scale(ab, t));
+    double reach = r + ra + (rb - ra) * t; /* > 0: radii are */
+    return xyl__d3_dot(e, e) < reach * reach;
 }
 
 static xyl__dvec3 pos_of(const stems *s, uint32_t n)
@@ -34,18 +36,56 @@ static xyl__dvec3 pos_of(const stems *s, uint32_t n)
     return xyl__from_f3(s->sk->nodes[n].pos);
 }
 
+/* Whether a ball at p of radius r misses the bounding sphere of the tubes from node n to its
+ * chain's tip (s->tails, 4 per node: centre, radius), so no segment there can overlap it. */
+static bool misses_tail(const stems *s, xyl__dvec3 p, double r, uint32_t n)
+{
+    const double *b = s->tails + 4 * (size_t)n;
+    double dx = p.x - b[0], dy = p.y - b[1], dz = p.z - b[2], rr = r + b[3];
+    return dx * dx + dy * dy + dz * dz >= rr * rr;
+}
+
 /* Whether a ball at p of radius r overlaps the tube of the chain that leaves fork through its
- * child `host`: first_r at the fork, each node's own radius after it. */
+ * child `host`: first_r at the fork, each node's own radius after it. Each segment's tail
+ * sphere is tried first: near a fork only a few segments of a long chain need the exact
+ * test. */
 static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host,
                            double first_r)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     double ra = first_r;
     for (uint32_t a = fork, b = host; b != UINT32_MAX; a = b, b = s->main[b]) {
+        if (a != fork && misses_tail(s, p, r, a)) return false;
         if (ball_meets_cone(p, r, pos_of(s, a), ra, pos_of(s, b), nodes[b].radius)) return true;
         ra = nodes[b].radius;
     }
     return false;
+}
+
+/* The tail spheres of every node (s->tails): from the tips down, each node's ball merged with
+ * its main child's sphere. A segment's tube, tapered between its nodes' balls, is their convex
+ * hull, so it lies in any sphere holding both. */
+void xyl__stems_tail_spheres(const stems *s, double *tails)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    for (size_t i = s->sk->node_count; i-- > 0;) {
+        xyl__dvec3 c = pos_of(s, (uint32_t)i);
+        double r = nodes[i].radius, *t = tails + 4 * i;
+        uint32_t m = s->main[i];
+        if (m != UINT32_MAX) {
+            const double *b = tails + 4 * (size_t)m;
+            xyl__dvec3 cb = xyl__d3(b[0], b[1], b[2]);
+            double d = xyl__d3_len(xyl__d3_sub(cb, c));
+            if (d + r <= b[3]) c = cb, r = b[3];           /* the ball is inside the tail's */
+            else if (d + b[3] > r) {                        /* else the tail is inside the ball */
+                double R = 0.5 * (d + r + b[3]);
+                c = xyl__d3_add(c, xyl__d3_scale(xyl__d3_sub(cb, c), (R - r) / d));
+                r = R;
+            }
+        }
+        /* a little larger: rounding must not shrink it below what it has to hold */
+        t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = r * (1.0 + 1e-12) + 1e-300;
+    }
 }
 
 /* A sibling's tube starts at its own radius: the fork node's is the parent's. */
@@ -78,6 +118,10 @@ static bool overlaps_parent(const stems *s, const int32_t *parent_of, xyl__dvec3
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     int32_t before = parent_of[fork];
+    /* on one branch, the tail sphere of the node before holds all of it */
+    if (before >= 0 && s->main[before] == fork && misses_tail(s, p, r, (uint32_t)before))
+        return false;
+    if (before < 0 && misses_tail(s, p, r, fork)) return false;
     if (before >= 0 && ball_meets_cone(p, r, pos_of(s, (uint32_t)before), nodes[before].radius,
                                        pos_of(s, fork), nodes[fork].radius))
         return true;
