@@ -36,6 +36,11 @@ static xyl__dvec3 pos_of(const stems *s, uint32_t n)
     return xyl__from_f3(s->sk->nodes[n].pos);
 }
 
+static double distance_to(const stems *s, uint32_t n, xyl__dvec3 p)
+{
+    return xyl__d3_len(xyl__d3_sub(pos_of(s, n), p));
+}
+
 /* Whether a ball at p of radius r misses the bounding sphere of the tubes from node n to its
  * chain's tip (s->tails, 4 per node: centre, radius), so no segment there can overlap it. */
 static bool misses_tail(const stems *s, xyl__dvec3 p, double r, uint32_t n)
@@ -105,7 +110,7 @@ static uint32_t nearest_on_chain(const stems *s, xyl__dvec3 p, uint32_t host)
     uint32_t best = host;
     double best_d = INFINITY;
     for (uint32_t n = host; n != UINT32_MAX; n = s->main[n]) {
-        double d = xyl__d3_len(xyl__d3_sub(pos_of(s, n), p));
+        double d = distance_to(s, n, p);
         if (d < best_d) best_d = d, best = n;
     }
     return best;
@@ -152,8 +157,7 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
          * fork from */
         xyl__dvec3 p = pos_of(s, child);
         uint32_t at = nearest_on_chain(s, p, host);
-        if (xyl__d3_len(xyl__d3_sub(pos_of(s, at), p)) >= xyl__d3_len(xyl__d3_sub(pos_of(s, fork), p)))
-            return false;
+        if (distance_to(s, at, p) >= distance_to(s, fork, p)) return false;
 
         parent_of[child] = s->main[at] != UINT32_MAX ? (int32_t)at : -1;
         return true;
@@ -236,8 +240,7 @@ static uint32_t nearest_on_branch(const stems *s, const int32_t *parent_of, xyl_
     uint32_t best = nearest_on_chain(s, p, fork);
     int32_t before = parent_of[fork];
     if (before >= 0 && s->sk->nodes[before].branch == s->sk->nodes[fork].branch &&
-        xyl__d3_len(xyl__d3_sub(pos_of(s, (uint32_t)before), p)) <
-            xyl__d3_len(xyl__d3_sub(pos_of(s, best), p)))
+        distance_to(s, (uint32_t)before, p) < distance_to(s, best, p))
         best = (uint32_t)before;
     return best;
 }
@@ -302,8 +305,7 @@ static void hang(const stems *s, placing *pl, uint32_t c, uint32_t last, uint32_
     /* a placed chain's tube starts at the node it hangs from: that one may be nearer */
     if (in != UINT32_MAX) {
         uint32_t up = (uint32_t)pl->parent_of[in];
-        if (xyl__d3_len(xyl__d3_sub(pos_of(s, up), from)) < xyl__d3_len(xyl__d3_sub(pos_of(s, at), from)))
-            at = up;
+        if (distance_to(s, up, from) < distance_to(s, at, from)) at = up;
     }
     pl->parent_of[c] = (int32_t)at;
 }
