@@ -151,31 +151,39 @@ typedef struct isect_ctx {
     int clean, crossing; /* cases without intersections; cases whose only ones cross (above) */
 } isect_ctx;
 
-/* Every intersecting pair of a hard case's mesh must lie where its skeleton overlaps itself
- * (skel_overlap.h); anything at a joint fails. */
+/* The intersecting pairs of a mesh, sorted into those at joints and those where the skeleton
+ * overlaps itself (skel_overlap.h). */
+static so_tally joint_tally(const xyl_skeleton *sk, const xyl_mesh *m)
+{
+    size_t count = 0;
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    so_tally t = {0, 0, 0, {0, 0}, {0, 0}};
+    if (count == 0) return t;
+    uint32_t *pairs = malloc(2 * count * sizeof *pairs);
+    assert_non_null(pairs);
+    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
+    assert_true(so_classify(sk, m, pairs, count, &t));
+    free(pairs);
+    return t;
+}
+
+/* Every intersecting pair of a hard case's mesh must lie where its skeleton overlaps itself;
+ * anything at a joint fails. */
 static void check_intersections(const char *name, const xyl_skeleton *sk, void *ctx)
 {
     isect_ctx *c = ctx;
     xyl_mesh *m = build(sk, c->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
-    size_t count = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
-    if (count == 0) {
+    so_tally t = joint_tally(sk, m);
+    xyl_mesh_destroy(m);
+    if (t.pairs == 0) {
         ++c->clean;
-        xyl_mesh_destroy(m);
         return;
     }
-    uint32_t *pairs = malloc(2 * count * sizeof *pairs);
-    assert_non_null(pairs);
-    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
-    so_tally t;
-    assert_true(so_classify(sk, m, pairs, count, &t));
     if (t.joint)
         fail_msg("%s k = %u: %zu intersecting pairs, %zu at a joint, one on branches %u and %u",
-                 name, c->k, count, t.joint, t.joint_branches[0], t.joint_branches[1]);
-    print_overlap(name, c->k, count, sk, t.overlap_seg);
+                 name, c->k, t.pairs, t.joint, t.joint_branches[0], t.joint_branches[1]);
+    print_overlap(name, c->k, t.pairs, sk, t.overlap_seg);
     ++c->crossing;
-    free(pairs);
-    xyl_mesh_destroy(m);
 }
 
 static void assert_no_joint_intersects(uint32_t k)
@@ -221,6 +229,101 @@ static void no_hard_case_intersects_at_a_joint_k8(void **state)
 {
     (void)state;
     assert_no_joint_intersects(8);
+}
+
+/* The presets are not yet free of intersecting pairs at joints (docs/stems.md, "State"). Their
+ * counts for k = 3..8 may not rise above these, measured when laterals came to be hidden inside
+ * their parent, a thicker sibling or a tube they run into and grown out where they leave it
+ * (79 385 pairs at joints over all presets at k = 4 before, 1 381 after); where a count is 0,
+ * that preset and k are free of them. A change may lower a ceiling, never raise one, and every
+ * preset needs its row. */
+static const struct {
+    const char *name;
+    size_t at_most[6];
+} preset_joint_ceilings[] = {
+    {"abop-1.24a", {36, 5, 47, 28, 85, 56}},
+    {"abop-1.24b", {118, 129, 1252, 1144, 1040, 1513}},
+    {"abop-1.24c", {608, 791, 1211, 1404, 2482, 2719}},
+    {"abop-1.24d", {0, 0, 0, 0, 0, 0}},
+    {"abop-1.24e", {3, 0, 0, 0, 0, 0}},
+    {"abop-1.24f", {52, 85, 141, 67, 184, 26}},
+    {"abop-1.25-bush", {191, 40, 858, 1495, 1871, 1176}},
+    {"abop-1.28-stochastic", {14, 0, 17, 81, 85, 107}},
+    {"abop-1.31a", {76, 168, 447, 676, 511, 707}},
+    {"abop-2.6-monopodial", {15, 32, 24, 32, 42, 42}},
+    {"abop-2.7-sympodial", {334, 94, 186, 156, 464, 192}},
+    {"abop-2.8-ternary", {33, 0, 0, 0, 8, 0}},
+    {"faycal-leaves", {84, 37, 117, 160, 466, 279}},
+};
+
+static size_t preset_joint_ceiling(const char *name, uint32_t k)
+{
+    for (size_t i = 0; i < sizeof preset_joint_ceilings / sizeof preset_joint_ceilings[0]; ++i)
+        if (strcmp(preset_joint_ceilings[i].name, name) == 0)
+            return preset_joint_ceilings[i].at_most[k - 3];
+    fail_msg("preset %s has no row in preset_joint_ceilings", name);
+    return 0;
+}
+
+static void assert_presets_within_joint_ceilings(uint32_t k)
+{
+    size_t total = 0, clean = 0;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        so_tally t = joint_tally(sk, m);
+        size_t ceiling = preset_joint_ceiling(name, k);
+        if (t.joint > ceiling)
+            fail_msg("%s k = %u: %zu intersecting pairs at joints, more than %zu (one on branches "
+                     "%u and %u)",
+                     name, k, t.joint, ceiling, t.joint_branches[0], t.joint_branches[1]);
+        if (t.joint < ceiling)
+            print_message("  %s k = %u: %zu pairs at joints, below its ceiling %zu\n", name, k,
+                          t.joint, ceiling);
+        total += t.joint;
+        clean += t.joint == 0;
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+    print_message("k = %u: %zu presets free of intersections at joints, %zu pairs at joints in "
+                  "all\n", k, clean, total);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k3(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(3);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k4(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(4);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k5(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(5);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k6(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(6);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k7(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(7);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k8(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(8);
 }
 
 /* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
@@ -650,6 +753,12 @@ int main(void)
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k8),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k3),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k4),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k5),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k6),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k7),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k8),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
