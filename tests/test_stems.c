@@ -231,6 +231,21 @@ static void no_hard_case_intersects_at_a_joint_k8(void **state)
     assert_no_joint_intersects(8);
 }
 
+/* Many sides: spokes_8_thick (8 children as thick as their parent, 45 degrees apart) crossed
+ * at its joint for k = 16 and 32 until siblings still inside each other halfway along their
+ * first segments were merged (docs/stems.md, "Overlapping siblings"). */
+static void no_hard_case_intersects_at_a_joint_k16(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(16);
+}
+
+static void no_hard_case_intersects_at_a_joint_k32(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(32);
+}
+
 /* The presets are not yet free of intersecting pairs at joints (docs/stems.md, "State"). Their
  * counts for k = 3..8 may not rise above these, measured when laterals came to be hidden inside
  * their parent, a thicker sibling or a tube they run into and grown out where they leave it
@@ -753,6 +768,8 @@ int main(void)
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k8),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k16),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k32),
         cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k3),
         cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k4),
         cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k5),
