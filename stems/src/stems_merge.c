@@ -7,8 +7,9 @@
  * its fork (a thicker sibling's, or the meshed part of a chain the fork itself is hidden in),
  * and its first clear node grows out of the node of the tube it left nearest to where it comes
  * from. Laterals of hidden nodes are placed in turn, from the meshed node their fork is hidden
- * at. A lateral that never clears is not meshed at all: its axis stays within
- * (r_tube + r_own) of the tube's, which covers all of it but a rim thinner than its own radius.
+ * at. Where the lateral's chain runs into those tubes again further on, it is cut there the
+ * same way. A lateral that never clears is not meshed at all: its axis stays within
+ * (r_tube + r_own) of the tube's, which covers all of it but a rim thinner than its diameter.
  *
  * Laterals that come to hang from one node this way are siblings again, and are merged as
  * siblings are: the thinner one (of equal ones, the later in node order) into the thicker, if
@@ -158,7 +159,6 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
         xyl__dvec3 p = pos_of(s, child);
         uint32_t at = nearest_on_chain(s, p, host);
         if (distance_to(s, at, p) >= distance_to(s, fork, p)) return false;
-
         parent_of[child] = s->main[at] != UINT32_MAX ? (int32_t)at : -1;
         return true;
     }
@@ -229,8 +229,7 @@ bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
     return any;
 }
 
-
-/* ---- laterals that start inside their parent ------------------------------------------- */
+/* ---- laterals inside their parent -------------------------------------------------------- */
 
 /* The node of fork's branch, as meshed around it, nearest to p: fork's parent if it is on the
  * same branch, fork, and the chain after it. */
@@ -283,8 +282,7 @@ static bool inside(const stems *s, const placing *pl, uint32_t x, uint32_t h, ui
 
 /* Hides the nodes of a chain of fork p (placed at h) from x on while they lie inside a tube,
  * recording each one's tube; *last and *in become the last hidden node and its tube (unchanged
- * if none is hidden).
- * Returns the first node that is clear, or UINT32_MAX. */
+ * if none is hidden). Returns the first node that is clear, or UINT32_MAX. */
 static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, uint32_t h,
                          uint32_t *last, uint32_t *in)
 {
