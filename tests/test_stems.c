@@ -2,6 +2,7 @@
  * per root, self-intersection counts, per-branch normals, determinism, errors. */
 #include <math.h>
 
+#include "skel_overlap.h"
 #include "test_util.h"
 
 static xyl_mesh *build(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
@@ -129,85 +130,6 @@ static void every_preset_is_a_closed_manifold(void **state)
 
 /* ---- self-intersection --------------------------------------------------------------------- */
 
-/* Distance between segments p0-p1 and q0-q1, by sampling p0-p1 finely enough for the test:
- * the skeleton crossings it looks for are deep (a fraction of the radii). */
-static double segment_distance(xyl_vec3 p0, xyl_vec3 p1, xyl_vec3 q0, xyl_vec3 q1)
-{
-    double best = INFINITY, d[3] = {q1.x - q0.x, q1.y - q0.y, q1.z - q0.z};
-    double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    for (int i = 0; i <= 256; ++i) {
-        double f = i / 256.0, p[3] = {p0.x + (p1.x - p0.x) * f, p0.y + (p1.y - p0.y) * f,
-                                      p0.z + (p1.z - p0.z) * f};
-        double w[3] = {p[0] - q0.x, p[1] - q0.y, p[2] - q0.z};
-        double t = dd > 0 ? (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd : 0.0;
-        t = fmin(1.0, fmax(0.0, t));
-        double e[3] = {w[0] - t * d[0], w[1] - t * d[1], w[2] - t * d[2]};
-        best = fmin(best, sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]));
-    }
-    return best;
-}
-
-/* The skeleton node a branch starts from (its first node in node order). */
-static uint32_t branch_start(const xyl_skeleton *sk, uint32_t branch)
-{
-    for (uint32_t i = 0; i < sk->node_count; ++i)
-        if (sk->nodes[i].branch == branch) return i;
-    fail_msg("branch %u has no node", branch);
-    return 0;
-}
-
-/* Whether the far end f of one segment folds back onto the other, s-g (s the node they share):
- * f lies within r of s-g at a point more than r from s, so not just the joint's own overlap. */
-static bool folds_onto(xyl_vec3 f, xyl_vec3 s, xyl_vec3 g, double r)
-{
-    double d[3] = {g.x - s.x, g.y - s.y, g.z - s.z}, w[3] = {f.x - s.x, f.y - s.y, f.z - s.z};
-    double dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    double t = dd > 0 ? fmin(1.0, fmax(0.0, (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd)) : 0.0;
-    double e[3] = {w[0] - t * d[0], w[1] - t * d[1], w[2] - t * d[2]};
-    return sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) < r && t * sqrt(dd) > r;
-}
-
-/* Whether segments i and j (each given by its lower node, which has a parent) overlap in the
- * skeleton itself: closer than the sum of their radii where they share no node; where they share
- * one, when either folds back onto the other (a hairpin). */
-static bool segments_overlap(const xyl_skeleton *sk, uint32_t i, uint32_t j)
-{
-    const xyl_skel_node *n = sk->nodes;
-    uint32_t pi = (uint32_t)n[i].parent, pj = (uint32_t)n[j].parent;
-    if (i == j) return false;
-    double r = fmax(n[i].radius, n[pi].radius) + fmax(n[j].radius, n[pj].radius);
-    if (i != pj && pi != j && pi != pj)
-        return segment_distance(n[pi].pos, n[i].pos, n[pj].pos, n[j].pos) < r;
-    uint32_t sh = i == pj ? i : j == pi ? j : pi; /* the shared node */
-    uint32_t fi = sh == i ? pi : i, fj = sh == j ? pj : j;
-    return folds_onto(n[fi].pos, n[sh].pos, n[fj].pos, r) ||
-           folds_onto(n[fj].pos, n[sh].pos, n[fi].pos, r);
-}
-
-/* Whether the skeletons of branches a and b (a may be b) overlap themselves, in a way no
- * mesher can part without moving the skeleton: segments of a and b that overlap
- * (segments_overlap), where a and b are the same branch or unrelated (neither parent and child
- * nor children of one node: there the joint is the mesher's to build). */
-static bool skeletons_cross(const xyl_skeleton *sk, uint32_t a, uint32_t b, uint32_t seg[2])
-{
-    if (a != b) {
-        int32_t fa = sk->nodes[branch_start(sk, a)].parent, fb = sk->nodes[branch_start(sk, b)].parent;
-        if (fa == fb || (fa >= 0 && sk->nodes[fa].branch == b) ||
-            (fb >= 0 && sk->nodes[fb].branch == a))
-            return false;
-    }
-    const xyl_skel_node *n = sk->nodes;
-    for (uint32_t i = 0; i < sk->node_count; ++i) {
-        if (n[i].branch != a || n[i].parent < 0) continue;
-        for (uint32_t j = 0; j < sk->node_count; ++j)
-            if (n[j].branch == b && n[j].parent >= 0 && segments_overlap(sk, i, j)) {
-                seg[0] = i, seg[1] = j;
-                return true;
-            }
-    }
-    return false;
-}
-
 /* What a hard case's intersections rest on: the first pair of overlapping segments. */
 static void print_overlap(const char *name, uint32_t k, size_t count, const xyl_skeleton *sk,
                           const uint32_t seg[2])
@@ -221,13 +143,7 @@ static void print_overlap(const char *name, uint32_t k, size_t count, const xyl_
     else
         print_message("  %s k = %u: %zu pairs; segments %u-%u and %u-%u are %.4f apart, radii "
                       "%.4f\n", name, k, count, pi, i, pj, j,
-                      segment_distance(n[pi].pos, n[i].pos, n[pj].pos, n[j].pos), r);
-}
-
-static uint32_t tri_branch(const xyl_mesh *m, uint32_t t)
-{
-    size_t face = t < 2 * m->quad_count ? t / 2 : m->quad_count + (t - 2 * m->quad_count);
-    return m->face_branches[face];
+                      so_segment_distance(n[pi].pos, n[i].pos, n[pj].pos, n[j].pos), r);
 }
 
 typedef struct isect_ctx {
@@ -235,34 +151,39 @@ typedef struct isect_ctx {
     int clean, crossing; /* cases without intersections; cases whose only ones cross (above) */
 } isect_ctx;
 
-/* Every intersecting pair of a hard case's mesh must lie on two branches whose skeletons
- * cross; anything at a joint fails. */
+/* The intersecting pairs of a mesh, sorted into those at joints and those where the skeleton
+ * overlaps itself (skel_overlap.h). */
+static so_tally joint_tally(const xyl_skeleton *sk, const xyl_mesh *m)
+{
+    size_t count = 0;
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    so_tally t = {0, 0, 0, {0, 0}, {0, 0}};
+    if (count == 0) return t;
+    uint32_t *pairs = malloc(2 * count * sizeof *pairs);
+    assert_non_null(pairs);
+    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
+    assert_true(so_classify(sk, m, pairs, count, &t));
+    free(pairs);
+    return t;
+}
+
+/* Every intersecting pair of a hard case's mesh must lie where its skeleton overlaps itself;
+ * anything at a joint fails. */
 static void check_intersections(const char *name, const xyl_skeleton *sk, void *ctx)
 {
     isect_ctx *c = ctx;
     xyl_mesh *m = build(sk, c->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
-    size_t count = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
-    if (count == 0) {
+    so_tally t = joint_tally(sk, m);
+    xyl_mesh_destroy(m);
+    if (t.pairs == 0) {
         ++c->clean;
-        xyl_mesh_destroy(m);
         return;
     }
-    uint32_t *pairs = malloc(2 * count * sizeof *pairs);
-    assert_non_null(pairs);
-    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
-    uint32_t seg[2] = {0, 0}, first[2] = {0, 0};
-    for (size_t i = 0; i < count; ++i) {
-        uint32_t a = tri_branch(m, pairs[2 * i]), b = tri_branch(m, pairs[2 * i + 1]);
-        if (!skeletons_cross(sk, a, b, seg))
-            fail_msg("%s k = %u: %zu intersecting pairs, one on branches %u and %u at a joint",
-                     name, c->k, count, a, b);
-        if (i == 0) first[0] = seg[0], first[1] = seg[1];
-    }
-    print_overlap(name, c->k, count, sk, first);
+    if (t.joint)
+        fail_msg("%s k = %u: %zu intersecting pairs, %zu at a joint, one on branches %u and %u",
+                 name, c->k, t.pairs, t.joint, t.joint_branches[0], t.joint_branches[1]);
+    print_overlap(name, c->k, t.pairs, sk, t.overlap_seg);
     ++c->crossing;
-    free(pairs);
-    xyl_mesh_destroy(m);
 }
 
 static void assert_no_joint_intersects(uint32_t k)
@@ -308,6 +229,116 @@ static void no_hard_case_intersects_at_a_joint_k8(void **state)
 {
     (void)state;
     assert_no_joint_intersects(8);
+}
+
+/* Many sides: spokes_8_thick (8 children as thick as their parent, 45 degrees apart) crossed
+ * at its joint for k = 16 and 32 until siblings still inside each other halfway along their
+ * first segments were merged (docs/stems.md, "Overlapping siblings"). */
+static void no_hard_case_intersects_at_a_joint_k16(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(16);
+}
+
+static void no_hard_case_intersects_at_a_joint_k32(void **state)
+{
+    (void)state;
+    assert_no_joint_intersects(32);
+}
+
+/* The presets are not yet free of intersecting pairs at joints (docs/stems.md, "State"). Their
+ * counts for k = 3..8 may not rise above these, measured when laterals came to be hidden inside
+ * their parent, a thicker sibling or a tube they run into and grown out where they leave it
+ * (79 385 pairs at joints over all presets at k = 4 before, 1 381 after); where a count is 0,
+ * that preset and k are free of them. A change may lower a ceiling, never raise one, and every
+ * preset needs its row. */
+static const struct {
+    const char *name;
+    size_t at_most[6];
+} preset_joint_ceilings[] = {
+    {"abop-1.24a", {36, 5, 47, 28, 85, 56}},
+    {"abop-1.24b", {118, 129, 1252, 1144, 1040, 1513}},
+    {"abop-1.24c", {608, 791, 1211, 1404, 2482, 2719}},
+    {"abop-1.24d", {0, 0, 0, 0, 0, 0}},
+    {"abop-1.24e", {3, 0, 0, 0, 0, 0}},
+    {"abop-1.24f", {52, 85, 141, 67, 184, 26}},
+    {"abop-1.25-bush", {191, 40, 858, 1495, 1871, 1176}},
+    {"abop-1.28-stochastic", {14, 0, 17, 81, 85, 107}},
+    {"abop-1.31a", {76, 168, 447, 676, 511, 707}},
+    {"abop-2.6-monopodial", {15, 32, 24, 32, 42, 42}},
+    {"abop-2.7-sympodial", {334, 94, 186, 156, 464, 192}},
+    {"abop-2.8-ternary", {33, 0, 0, 0, 8, 0}},
+    {"faycal-leaves", {84, 37, 117, 160, 466, 279}},
+};
+
+static size_t preset_joint_ceiling(const char *name, uint32_t k)
+{
+    for (size_t i = 0; i < sizeof preset_joint_ceilings / sizeof preset_joint_ceilings[0]; ++i)
+        if (strcmp(preset_joint_ceilings[i].name, name) == 0)
+            return preset_joint_ceilings[i].at_most[k - 3];
+    fail_msg("preset %s has no row in preset_joint_ceilings", name);
+    return 0;
+}
+
+static void assert_presets_within_joint_ceilings(uint32_t k)
+{
+    size_t total = 0, clean = 0;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        so_tally t = joint_tally(sk, m);
+        size_t ceiling = preset_joint_ceiling(name, k);
+        if (t.joint > ceiling)
+            fail_msg("%s k = %u: %zu intersecting pairs at joints, more than %zu (one on branches "
+                     "%u and %u)",
+                     name, k, t.joint, ceiling, t.joint_branches[0], t.joint_branches[1]);
+        if (t.joint < ceiling)
+            print_message("  %s k = %u: %zu pairs at joints, below its ceiling %zu\n", name, k,
+                          t.joint, ceiling);
+        total += t.joint;
+        clean += t.joint == 0;
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+    print_message("k = %u: %zu presets free of intersections at joints, %zu pairs at joints in "
+                  "all\n", k, clean, total);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k3(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(3);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k4(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(4);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k5(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(5);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k6(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(6);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k7(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(7);
+}
+
+static void presets_intersect_at_joints_no_more_than_measured_k8(void **state)
+{
+    (void)state;
+    assert_presets_within_joint_ceilings(8);
 }
 
 /* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
@@ -737,6 +768,14 @@ int main(void)
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k6),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k7),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k8),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k16),
+        cmocka_unit_test(no_hard_case_intersects_at_a_joint_k32),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k3),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k4),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k5),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k6),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k7),
+        cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k8),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),

@@ -560,7 +560,10 @@ static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r
     double bulge = 0.0;
     for (uint32_t j = 0; j < 2 * strip + 2; ++j)
         bulge = fmax(bulge, xyl__d3_dot(xyl__d3_sub(xyl__from_f3(s->pos[g->loop[j]]), centroid), n));
-    double h = fmax(fmax(r, 0.25 * parent_r), bulge + r);
+    /* a quarter of the parent's radius keeps the bridge from lying flat on a thick parent,
+     * but not past the child's first node: that must stay a station, r ahead of the ring */
+    double room = xyl__d3_dot(xyl__d3_sub(node_pos(s, child), centroid), n) - 2.0 * r;
+    double h = fmax(fmin(fmax(r, 0.25 * parent_r), room), bulge + r);
     stems_ring *ring = &g->ring;
     memset(ring, 0, sizeof *ring);
     ring->centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
@@ -740,37 +743,50 @@ static xyl_result grow_taken(stems *s)
     return XYL_OK;
 }
 
-/* Attaches every lateral child of station i to a patch among rings lo .. hi. */
+/* Bridges lateral `child` of `node` (at station st) from the best patch among rings lo .. hi;
+ * more: siblings follow, which test their first segments against this one's. */
+static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, uint32_t child,
+                             size_t lo, size_t hi, bool more)
+{
+    xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
+    patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
+    if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
+        return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
+                         "internal: no free patch left at node %u", node);
+    if (more) {
+        if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
+            return oom(s);
+        bool reaches;
+        s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+    }
+    return bridge(s, p, child, st->r);
+}
+
+/* Attaches every lateral child of station i to a patch among rings lo .. hi, thickest first
+ * (xyl__lateral_before): a thin sibling then keeps clear of the thick one's first segment,
+ * which has less room to move. */
 static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
 {
     const stems_station *st = &s->stations[i];
     xyl_result r = grow_taken(s);
     if (r) return r;
     s->ncones = 0;
-    /* the siblings still to come test their first segments against those placed before
-     * (choose_patch); the last one's is never read */
     size_t left = st->first == UINT32_MAX ? 0 : lateral_count(s, st);
-    for (uint32_t c = st->first; c <= st->last && st->first != UINT32_MAX; ++c) {
-        uint32_t node = s->chain[c], main = main_child(s, node);
-        for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
-            uint32_t child = s->child_list[j];
-            if (child == main) continue;
-            xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
-            patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
-            if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
-                return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
-                                 "internal: no free patch left at node %u", node);
-            if (--left) {
-                if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
-                    return oom(s);
-                bool reaches;
-                s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+    for (uint32_t prev = UINT32_MAX; left && !r; --left) {
+        uint32_t child = UINT32_MAX, at = 0; /* the next lateral after prev */
+        for (uint32_t c = st->first; c <= st->last; ++c) {
+            uint32_t node = s->chain[c], main = main_child(s, node);
+            for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
+                uint32_t x = s->child_list[j];
+                if (x == main || (prev != UINT32_MAX && !xyl__lateral_before(s->sk, prev, x)))
+                    continue;
+                if (child == UINT32_MAX || xyl__lateral_before(s->sk, x, child)) child = x, at = node;
             }
-            r = bridge(s, p, child, st->r);
-            if (r) return r;
         }
+        r = attach_one(s, st, at, child, lo, hi, left > 1);
+        prev = child;
     }
-    return XYL_OK;
+    return r;
 }
 
 /* ---- branches ------------------------------------------------------------------------------ */
@@ -896,22 +912,35 @@ static bool has_sibling_laterals(const stems *s)
     return false;
 }
 
-/* Children of every node, indexed again after overlapping siblings were merged
- * (stems_merge.c), so that the rest of the mesher sees the merged tree. One call site of
- * index_children: inlined twice, GCC doubts its sizes. */
+/* Children of every node, indexed again after laterals inside their parent or a sibling were
+ * moved, and again after laterals that came to hang from one node were merged (stems_merge.c),
+ * so that the rest of the mesher sees the tree as meshed. One call site of index_children:
+ * inlined twice, GCC doubts its sizes. */
 static xyl_result index_tree(stems *s)
 {
+    size_t n = s->sk->node_count;
     int32_t *parent_of = NULL;
     xyl_result r = XYL_OK;
-    for (int pass = 0; pass < 2 && !r; ++pass) {
-        r = index_children(s, parent_of);
-        if (r || pass) break;
-        if (!has_sibling_laterals(s)) break; /* nothing to merge: no scratch array */
-        parent_of = xyl__alloc_array(&s->alloc, s->sk->node_count, sizeof *parent_of);
-        if (!parent_of) r = oom(s);
-        else if (!xyl__stems_merge_siblings(s, parent_of)) break;
+    bool moved = true;
+    for (int step = 0; step < 3 && !r; ++step) {
+        if (moved) r = index_children(s, parent_of);
+        if (r) break;
+        if (step == 0) { /* parent_of, then scratch */
+            parent_of = xyl__alloc_array(&s->alloc, n ? 5 * n : 1, sizeof *parent_of);
+            s->tails = xyl__alloc_array(&s->alloc, n ? 4 * n : 1, sizeof *s->tails);
+            if (!parent_of || !s->tails) {
+                r = oom(s);
+                break;
+            }
+            xyl__stems_tail_spheres(s, s->tails);
+            moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
+        } else if (step == 1) {
+            moved = has_sibling_laterals(s) && xyl__stems_merge_siblings(s, parent_of);
+        }
     }
     xyl__free(&s->alloc, parent_of);
+    xyl__free(&s->alloc, s->tails);
+    s->tails = NULL;
     return r;
 }
 

@@ -87,11 +87,35 @@ typedef struct stems {
 
     xyl__stems_cone *cones; /* the laterals placed so far at the fork being attached */
     size_t ncones, cone_cap;
+
+    double *tails; /* while indexing: per node, the sphere around its chain's tubes from it on */
 } stems;
 
-/* Overlapping siblings (stems_merge.c): fills parent_of (node_count entries) with each node's
- * parent as meshed: a lateral merged into a sibling is detached (-1) and the rest of it hangs
- * from the sibling. Needs child_start, child_list and main. Returns whether anything merged. */
+/* Fills tails (4 per node: centre, radius) with the bounding sphere of each node's ball and the
+ * tubes of its chain after it (stems_merge.c). Needs main. */
+void xyl__stems_tail_spheres(const stems *s, double *tails);
+
+/* Whether lateral a comes before lateral b where siblings are ordered: thicker first, then in
+ * node order. */
+static inline bool xyl__lateral_before(const xyl_skeleton *sk, uint32_t a, uint32_t b)
+{
+    float ra = sk->nodes[a].radius, rb = sk->nodes[b].radius;
+    return ra != rb ? ra > rb : a < b;
+}
+
+/* Which nodes are meshed, and from where (stems_merge.c): fills parent_of (node_count entries)
+ * with each node's parent as meshed. A lateral's nodes are hidden while they lie in its
+ * parent's tube or in one placed before it there (a thicker sibling's, or the meshed part of a
+ * chain its fork is hidden in); its first node is then detached (-1) and its first clear one
+ * hangs from the nearest node of the tube it left. Laterals of hidden nodes grow out of the
+ * meshed node their fork is hidden at. scratch: 4 node_count entries. Needs child_start,
+ * child_list and main of the skeleton's own tree. Returns whether any lateral moved. */
+bool xyl__stems_place_laterals(const stems *s, int32_t *parent_of, uint32_t *scratch);
+
+/* Overlapping laterals of one node of the tree as meshed (stems_merge.c): updates parent_of:
+ * a lateral merged into a sibling is detached (-1) and the rest of it hangs from the sibling.
+ * Needs child_start, child_list and main of the tree parent_of describes. Returns whether
+ * anything merged. */
 bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of);
 
 /* Whether two cones come closer than their radii at their axes' closest points: a cheap test

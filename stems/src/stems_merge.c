@@ -1,21 +1,35 @@
-/* Siblings that overlap along their length (docs/stems.md, "Overlapping siblings").
+/* Which skeleton nodes are meshed, and from where (docs/stems.md, "Laterals inside their
+ * parent", "Overlapping siblings").
  *
- * Two lateral children of one node whose axes stay closer than the sum of their radii cannot be
- * two separate tubes without their surfaces crossing. The thinner one (of equal ones, the later
- * in node order) is merged into the thicker: its nodes up to the first one that clears the
- * thicker sibling's tube are not meshed, and the rest of it grows out of the thicker sibling,
- * from that sibling's node nearest to where they part. A sibling that never clears is not meshed
- * at all: its axis stays within (r_host + r_own) of the host's, so the host's tube already covers
- * all of it but a rim thinner than its own radius. */
+ * A lateral that starts inside its parent's tube cannot leave it where it forks: its first
+ * ring would lie in the parent's surface, or its first segment run along inside it. Its nodes
+ * are hidden (not meshed) while they lie in the parent's tube or in a tube placed before it at
+ * its fork (a thicker sibling's, or the meshed part of a chain the fork itself is hidden in),
+ * and its first clear node grows out of the node of the tube it left nearest to where it comes
+ * from. Laterals of hidden nodes are placed in turn, from the meshed node their fork is hidden
+ * at. Where the lateral's chain runs into those tubes again further on, it is cut there the
+ * same way. A lateral that never clears is not meshed at all: its axis stays within
+ * (r_tube + r_own) of the tube's, which covers all of it but a rim thinner than its diameter.
+ *
+ * Laterals that come to hang from one node this way are siblings again, and are merged as
+ * siblings are: the thinner one (of equal ones, the later in node order) into the thicker, if
+ * they overlap where it leaves its parent, or if its first segment is still inside the
+ * thicker one halfway along. Its nodes up to the first one that clears the thicker sibling's
+ * tube are not meshed, and the rest of it grows out of the thicker sibling, from that
+ * sibling's node nearest to where they part. */
 #include "stems_internal.h"
 
-/* Distance from p to segment a-b. */
-static double point_segment_distance(xyl__dvec3 p, xyl__dvec3 a, xyl__dvec3 b)
+/* Whether a ball at p of radius r overlaps the tube from a (radius ra) to b (radius rb), as the
+ * mesher's rings taper it: p is within r of the axis' nearest point plus the radius there. */
+static bool ball_meets_cone(xyl__dvec3 p, double r, xyl__dvec3 a, double ra, xyl__dvec3 b,
+                            double rb)
 {
     xyl__dvec3 ab = xyl__d3_sub(b, a), ap = xyl__d3_sub(p, a);
     double l2 = xyl__d3_dot(ab, ab), t = l2 > XYL__EPS_NORMALIZE ? xyl__d3_dot(ap, ab) / l2 : 0.0;
     t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
-    return xyl__d3_len(xyl__d3_sub(ap, xyl__d3_scale(ab, t)));
+    xyl__dvec3 e = xyl__d3_sub(ap, xyl__d3_scale(ab, t));
+    double reach = r + ra + (rb - ra) * t; /* > 0: radii are */
+    return xyl__d3_dot(e, e) < reach * reach;
 }
 
 static xyl__dvec3 pos_of(const stems *s, uint32_t n)
@@ -23,19 +37,61 @@ static xyl__dvec3 pos_of(const stems *s, uint32_t n)
     return xyl__from_f3(s->sk->nodes[n].pos);
 }
 
+static double distance_to(const stems *s, uint32_t n, xyl__dvec3 p)
+{
+    return xyl__d3_len(xyl__d3_sub(pos_of(s, n), p));
+}
+
+/* Whether a ball at p of radius r misses the bounding sphere of the tubes from node n to its
+ * chain's tip (s->tails, 4 per node: centre, radius), so no segment there can overlap it. */
+static bool misses_tail(const stems *s, xyl__dvec3 p, double r, uint32_t n)
+{
+    const double *b = s->tails + 4 * (size_t)n;
+    double dx = p.x - b[0], dy = p.y - b[1], dz = p.z - b[2], rr = r + b[3];
+    return dx * dx + dy * dy + dz * dz >= rr * rr;
+}
+
 /* Whether a ball at p of radius r overlaps the tube of the chain that leaves fork through its
- * child `host`: its first segment with radius first_r, each later one with the larger radius of
- * its two nodes. */
+ * child `host`: first_r at the fork, each node's own radius after it. Each segment's tail
+ * sphere is tried first: near a fork only a few segments of a long chain need the exact
+ * test. */
 static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host,
                            double first_r)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
-    double seg_r = first_r;
+    double ra = first_r;
     for (uint32_t a = fork, b = host; b != UINT32_MAX; a = b, b = s->main[b]) {
-        if (point_segment_distance(p, pos_of(s, a), pos_of(s, b)) < r + seg_r) return true;
-        if (s->main[b] != UINT32_MAX) seg_r = fmax(nodes[b].radius, nodes[s->main[b]].radius);
+        if (a != fork && misses_tail(s, p, r, a)) return false;
+        if (ball_meets_cone(p, r, pos_of(s, a), ra, pos_of(s, b), nodes[b].radius)) return true;
+        ra = nodes[b].radius;
     }
     return false;
+}
+
+/* The tail spheres of every node (s->tails): from the tips down, each node's ball merged with
+ * its main child's sphere. A segment's tube, tapered between its nodes' balls, is their convex
+ * hull, so it lies in any sphere holding both. */
+void xyl__stems_tail_spheres(const stems *s, double *tails)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    for (size_t i = s->sk->node_count; i-- > 0;) {
+        xyl__dvec3 c = pos_of(s, (uint32_t)i);
+        double r = nodes[i].radius, *t = tails + 4 * i;
+        uint32_t m = s->main[i];
+        if (m != UINT32_MAX) {
+            const double *b = tails + 4 * (size_t)m;
+            xyl__dvec3 cb = xyl__d3(b[0], b[1], b[2]);
+            double d = xyl__d3_len(xyl__d3_sub(cb, c));
+            if (d + r <= b[3]) c = cb, r = b[3];           /* the ball is inside the tail's */
+            else if (d + b[3] > r) {                        /* else the tail is inside the ball */
+                double R = 0.5 * (d + r + b[3]);
+                c = xyl__d3_add(c, xyl__d3_scale(xyl__d3_sub(cb, c), (R - r) / d));
+                r = R;
+            }
+        }
+        /* a little larger: rounding must not shrink it below what it has to hold */
+        t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = r * (1.0 + 1e-12) + 1e-300;
+    }
 }
 
 /* A sibling's tube starts at its own radius: the fork node's is the parent's. */
@@ -55,42 +111,58 @@ static uint32_t nearest_on_chain(const stems *s, xyl__dvec3 p, uint32_t host)
     uint32_t best = host;
     double best_d = INFINITY;
     for (uint32_t n = host; n != UINT32_MAX; n = s->main[n]) {
-        double d = xyl__d3_len(xyl__d3_sub(pos_of(s, n), p));
+        double d = distance_to(s, n, p);
         if (d < best_d) best_d = d, best = n;
     }
     return best;
 }
 
 /* Whether a ball at p of radius r overlaps the tube of fork's own branch next to the fork: the
- * segment into the fork and the chain that continues it. */
-static bool overlaps_parent(const stems *s, xyl__dvec3 p, double r, uint32_t fork)
+ * segment into the fork (from its parent as meshed, parent_of) and the chain that continues it. */
+static bool overlaps_parent(const stems *s, const int32_t *parent_of, xyl__dvec3 p, double r,
+                            uint32_t fork)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
-    int32_t before = nodes[fork].parent;
-    if (before >= 0) {
-        double rr = r + fmax(nodes[before].radius, nodes[fork].radius);
-        if (point_segment_distance(p, pos_of(s, (uint32_t)before), pos_of(s, fork)) < rr) return true;
-    }
+    int32_t before = parent_of[fork];
+    /* on one branch, the tail sphere of the node before holds all of it */
+    if (before >= 0 && s->main[before] == fork && misses_tail(s, p, r, (uint32_t)before))
+        return false;
+    if (before < 0 && misses_tail(s, p, r, fork)) return false;
+    if (before >= 0 && ball_meets_cone(p, r, pos_of(s, (uint32_t)before), nodes[before].radius,
+                                       pos_of(s, fork), nodes[fork].radius))
+        return true;
     uint32_t main = s->main[fork];
-    return main != UINT32_MAX &&
-           overlaps_chain(s, p, r, fork, main, fmax(nodes[fork].radius, nodes[main].radius));
+    return main != UINT32_MAX && overlaps_chain(s, p, r, fork, main, nodes[fork].radius);
 }
 
 /* Merges lateral `child` of fork into sibling `host` if they overlap where the child leaves
- * its parent's tube (inside it, the parent's rules place the child's first ring): child's
- * first node is detached from fork, and its first node that clears host (or has children of
- * its own, which need its branch) is attached to host's nearest node. Returns whether it
- * merged. */
+ * its parent's tube (inside it, the parent's rules place the child's first ring), or if the
+ * child's first segment is still inside the sibling's tube halfway along: the patches of one
+ * fork part two tubes by about a radius, not along a whole segment. The child's nodes up to its
+ * first one that clears host (or has children of its own, which need its branch) are not
+ * meshed, and that one hangs from host's nearest node. Returns whether it merged. */
 static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t child,
                        int32_t *parent_of)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     uint32_t last = UINT32_MAX, n = child;
-    for (; n != UINT32_MAX && overlaps_parent(s, pos_of(s, n), nodes[n].radius, fork);
+    for (; n != UINT32_MAX && overlaps_parent(s, parent_of, pos_of(s, n), nodes[n].radius, fork);
          last = n, n = s->main[n])
         if (has_laterals(s, n)) return false;
-    if (n == UINT32_MAX || !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host))
-        return false;
+    if (n == UINT32_MAX) return false;
+    xyl__dvec3 half = xyl__d3_scale(xyl__d3_add(pos_of(s, fork), pos_of(s, n)), 0.5);
+    if (n == child && overlaps_sibling(s, half, nodes[n].radius, fork, host) &&
+        !overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) {
+        /* clear of host at its first node: all of it hangs from host's node nearest to it if
+         * that is nearer than the fork, but not from host's tip, which has no segment ahead to
+         * fork from */
+        xyl__dvec3 p = pos_of(s, child);
+        uint32_t at = nearest_on_chain(s, p, host);
+        if (distance_to(s, at, p) >= distance_to(s, fork, p)) return false;
+        parent_of[child] = s->main[at] != UINT32_MAX ? (int32_t)at : -1;
+        return true;
+    }
+    if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) return false;
     for (; n != UINT32_MAX; last = n, n = s->main[n]) {
         if (has_laterals(s, n)) break;
         if (!overlaps_sibling(s, pos_of(s, n), nodes[n].radius, fork, host)) break;
@@ -101,11 +173,27 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     return true;
 }
 
-/* Whether lateral a comes before lateral b: thicker first, then in node order. */
-static bool before(const stems *s, uint32_t a, uint32_t b)
+/* Whether lateral a of node p comes before lateral b: its own laterals (children of p in the
+ * skeleton) before those that came to hang from it, then xyl__lateral_before. A lateral that
+ * was moved here so gives way to one that forks here. */
+static bool before(const stems *s, uint32_t p, uint32_t a, uint32_t b)
 {
-    float ra = s->sk->nodes[a].radius, rb = s->sk->nodes[b].radius;
-    return ra != rb ? ra > rb : a < b;
+    bool own_a = s->sk->nodes[a].parent == (int32_t)p, own_b = s->sk->nodes[b].parent == (int32_t)p;
+    return own_a != own_b ? own_a : xyl__lateral_before(s->sk, a, b);
+}
+
+/* The lateral of node p that comes next after prev in `before` order (the first one after
+ * UINT32_MAX), or UINT32_MAX. */
+static uint32_t next_lateral(const stems *s, uint32_t p, uint32_t prev)
+{
+    uint32_t child = UINT32_MAX, main = s->main[p];
+    for (uint32_t j = s->child_start[p]; j < s->child_start[p + 1]; ++j) {
+        uint32_t c = s->child_list[j];
+        if (c != main && (prev == UINT32_MAX || before(s, p, prev, c)) &&
+            (child == UINT32_MAX || before(s, p, c, child)))
+            child = c;
+    }
+    return child;
 }
 
 /* The laterals of fork in `before` order, each tried against those before it that are still
@@ -115,17 +203,11 @@ static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
     uint32_t lo = s->child_start[fork], hi = s->child_start[fork + 1], main = s->main[fork];
     bool any = false;
     for (uint32_t prev = UINT32_MAX;;) {
-        uint32_t child = UINT32_MAX; /* the first lateral after prev */
-        for (uint32_t j = lo; j < hi; ++j) {
-            uint32_t c = s->child_list[j];
-            if (c != main && (prev == UINT32_MAX || before(s, prev, c)) &&
-                (child == UINT32_MAX || before(s, c, child)))
-                child = c;
-        }
+        uint32_t child = next_lateral(s, fork, prev);
         if (child == UINT32_MAX) return any;
         for (uint32_t i = lo; i < hi; ++i) {
             uint32_t host = s->child_list[i];
-            if (host == main || !before(s, host, child)) continue;
+            if (host == main || !before(s, fork, host, child)) continue;
             if (parent_of[host] != (int32_t)fork) continue; /* merged itself */
             if (merge_into(s, fork, host, child, parent_of)) {
                 any = true;
@@ -140,10 +222,162 @@ bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
 {
     size_t n = s->sk->node_count;
     bool any = false;
-    for (size_t i = 0; i < n; ++i) parent_of[i] = s->sk->nodes[i].parent;
     for (uint32_t f = 0; f < n; ++f) {
         uint32_t laterals = s->child_start[f + 1] - s->child_start[f] - (s->main[f] != UINT32_MAX);
         if (laterals >= 2 && merge_at(s, f, parent_of)) any = true;
+    }
+    return any;
+}
+
+/* ---- laterals inside their parent -------------------------------------------------------- */
+
+/* The node of fork's branch, as meshed around it, nearest to p: fork's parent if it is on the
+ * same branch, fork, and the chain after it. */
+static uint32_t nearest_on_branch(const stems *s, const int32_t *parent_of, xyl__dvec3 p,
+                                  uint32_t fork)
+{
+    uint32_t best = nearest_on_chain(s, p, fork);
+    int32_t before = parent_of[fork];
+    if (before >= 0 && s->sk->nodes[before].branch == s->sk->nodes[fork].branch &&
+        distance_to(s, (uint32_t)before, p) < distance_to(s, best, p))
+        best = (uint32_t)before;
+    return best;
+}
+
+/* Whether a ball at p of radius r overlaps one of the tubes placed before it around its fork:
+ * the tube from a chain's parent as meshed through its meshed nodes (placed: the chains' first
+ * nodes), at the chain's own radius from the start (the fork node's is the parent's). Returns
+ * that first node, or UINT32_MAX. */
+static uint32_t overlapping_placed(const stems *s, const int32_t *parent_of, xyl__dvec3 p,
+                                   double r, const uint32_t *placed, size_t nplaced)
+{
+    for (size_t j = 0; j < nplaced; ++j) {
+        uint32_t c = placed[j];
+        if (overlaps_chain(s, p, r, (uint32_t)parent_of[c], c, s->sk->nodes[c].radius)) return c;
+    }
+    return UINT32_MAX;
+}
+
+/* Per node: hidden ones record where their chain forks off (link: the parent of the chain's
+ * first node), the chain's first meshed node (owner, or UINT32_MAX if it has none) and the tube
+ * they lie in (tube: a placed chain's first node, or UINT32_MAX for the parent's branch);
+ * visible ones have link UINT32_MAX. placed: scratch. */
+typedef struct placing {
+    int32_t *parent_of;
+    uint32_t *link, *owner, *tube, *placed;
+    size_t nplaced;
+} placing;
+
+/* Whether node x lies in the parent's tube around fork h or in one placed before it; *tube: the
+ * placed chain's first node, or UINT32_MAX for the parent's. */
+static bool inside(const stems *s, const placing *pl, uint32_t x, uint32_t h, uint32_t *tube)
+{
+    xyl__dvec3 q = pos_of(s, x);
+    double r = s->sk->nodes[x].radius;
+    *tube = UINT32_MAX;
+    if (overlaps_parent(s, pl->parent_of, q, r, h)) return true;
+    *tube = overlapping_placed(s, pl->parent_of, q, r, pl->placed, pl->nplaced);
+    return *tube != UINT32_MAX;
+}
+
+/* Hides the nodes of a chain of fork p (placed at h) from x on while they lie inside a tube,
+ * recording each one's tube; *last and *in become the last hidden node and its tube (unchanged
+ * if none is hidden). Returns the first node that is clear, or UINT32_MAX. */
+static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, uint32_t h,
+                         uint32_t *last, uint32_t *in)
+{
+    uint32_t first = x, t;
+    for (; x != UINT32_MAX && inside(s, pl, x, h, &t); x = s->main[x])
+        *last = x, *in = t, pl->tube[x] = t;
+    for (uint32_t y = first; y != x; y = s->main[y]) pl->link[y] = p, pl->owner[y] = x;
+    return x;
+}
+
+/* Hangs the first clear node c of a hidden run from the node of the tube it left (in: a placed
+ * chain, or the parent's branch at h) nearest to where it comes from (last). */
+static void hang(const stems *s, placing *pl, uint32_t c, uint32_t last, uint32_t in, uint32_t h)
+{
+    xyl__dvec3 from = pos_of(s, last);
+    uint32_t at = in != UINT32_MAX ? nearest_on_chain(s, from, in)
+                                   : nearest_on_branch(s, pl->parent_of, from, h);
+    /* a placed chain's tube starts at the node it hangs from: that one may be nearer */
+    if (in != UINT32_MAX) {
+        uint32_t up = (uint32_t)pl->parent_of[in];
+        if (distance_to(s, up, from) < distance_to(s, at, from)) at = up;
+    }
+    pl->parent_of[c] = (int32_t)at;
+}
+
+/* Places lateral i of node p at fork h (p itself, or the meshed node p is hidden at): hides its
+ * nodes while they lie in the parent's tube or one placed before it, and hangs the first clear
+ * one from the nearest node of the tube it left. Returns whether i moved. */
+static bool place_lateral(const stems *s, uint32_t i, uint32_t p, uint32_t h, placing *pl)
+{
+    /* where it comes from: its fork, in the tube the fork is hidden in if it is */
+    uint32_t last = p, in = pl->link[p] != UINT32_MAX ? pl->tube[p] : UINT32_MAX;
+    uint32_t c = hide_run(s, pl, i, p, h, &last, &in);
+    if (c != UINT32_MAX) pl->placed[pl->nplaced++] = c;
+    if (c == i && h == p) return false; /* leaves its parent at once */
+    if (c != i) pl->parent_of[i] = -1;
+    if (c != UINT32_MAX) hang(s, pl, c, last, in, h);
+    return true; /* a lateral that never clears is not meshed */
+}
+
+/* Where a lateral's meshed chain (from its first meshed node c) runs into its parent's tube or
+ * a tube placed before it again, away from its joint, it is cut: the nodes inside are hidden
+ * and the rest grows out of that tube where it leaves it, as its start does. */
+static bool cut_crossings(const stems *s, uint32_t c, uint32_t p, uint32_t h, placing *pl)
+{
+    bool any = false;
+    for (uint32_t x = s->main[c], t; x != UINT32_MAX; x = s->main[x]) {
+        if (!inside(s, pl, x, h, &t)) continue;
+        uint32_t first = x, last = x, in = t;
+        x = hide_run(s, pl, x, p, h, &last, &in);
+        pl->parent_of[first] = -1;
+        any = true;
+        if (x == UINT32_MAX) break;
+        hang(s, pl, x, last, in, h);
+    }
+    return any;
+}
+
+/* The laterals of p in `before` order, so that a sibling is only ever hidden in a thicker one
+ * (or an equal one earlier in node order). If p is hidden, its laterals grow out of the meshed
+ * node it is hidden at and keep clear of the meshed parts of the chains p is hidden in. */
+static bool place_laterals_of(const stems *s, uint32_t p, placing *pl)
+{
+    uint32_t h = p;
+    pl->nplaced = 0;
+    for (; pl->link[h] != UINT32_MAX; h = pl->link[h])
+        if (pl->owner[h] != UINT32_MAX) pl->placed[pl->nplaced++] = pl->owner[h];
+    bool any = false;
+    for (uint32_t prev = UINT32_MAX;;) {
+        uint32_t child = next_lateral(s, p, prev);
+        if (child == UINT32_MAX) return any;
+        size_t placed = pl->nplaced;
+        if (place_lateral(s, child, p, h, pl)) any = true;
+        if (pl->nplaced > placed) { /* meshed: its crossings, against the tubes before it */
+            uint32_t c = pl->placed[--pl->nplaced];
+            if (cut_crossings(s, c, p, h, pl)) any = true;
+            pl->placed[pl->nplaced++] = c;
+        }
+        prev = child;
+    }
+}
+
+bool xyl__stems_place_laterals(const stems *s, int32_t *parent_of, uint32_t *scratch)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    uint32_t n = (uint32_t)s->sk->node_count;
+    placing pl = {parent_of, scratch, scratch + n, scratch + 2 * (size_t)n,
+                  scratch + 3 * (size_t)n, 0};
+    bool any = false;
+    for (uint32_t i = 0; i < n; ++i) parent_of[i] = nodes[i].parent, pl.link[i] = UINT32_MAX;
+    /* node order: a node's parent, and so where it is meshed, is settled before its laterals */
+    for (uint32_t p = 0; p < n; ++p) {
+        uint32_t children = s->child_start[p + 1] - s->child_start[p];
+        if (children > (uint32_t)(s->main[p] != UINT32_MAX) && place_laterals_of(s, p, &pl))
+            any = true;
     }
     return any;
 }
