@@ -488,15 +488,8 @@ int main(int argc, char **argv)
         if (o.quick && ks[ki] != 4) continue;
         for (uint32_t sdv = 0; sdv < 3; ++sdv) {
             xyl_mesh *am = mesh_of(arc, ks[ki], sdv), *tm = mesh_of(tree, ks[ki], sdv);
-            float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-            for (size_t v = 0; v < tm->vertex_count; ++v) {
-                xyl_vec3 q = tm->positions[v];
-                const float pv[3] = {q.x, q.y, q.z};
-                for (int c = 0; c < 3; ++c) {
-                    lo[c] = fminf(lo[c], pv[c]);
-                    hi[c] = fmaxf(hi[c], pv[c]);
-                }
-            }
+            float lo[3], hi[3];
+            xyl_mesh_bounds(tm, lo, hi);
             xyl_tess_camera cam;
             xyl_tess_camera_frame(lo, hi, 0.5f, 0.2f, 0.8f, 1.0f, &cam);
             for (uint32_t var = 0; var < 3; ++var)

@@ -245,15 +245,6 @@ static int open_window(viewer *v)
     return 0;
 }
 
-static void bounds(const xyl_mesh *m, float lo[3], float hi[3])
-{
-    for (int k = 0; k < 3; ++k) lo[k] = INFINITY, hi[k] = -INFINITY;
-    for (size_t i = 0; i < m->vertex_count; ++i) {
-        const float p[3] = {m->positions[i].x, m->positions[i].y, m->positions[i].z};
-        for (int k = 0; k < 3; ++k) lo[k] = fminf(lo[k], p[k]), hi[k] = fmaxf(hi[k], p[k]);
-    }
-}
-
 int xyl_view_run(const xyl_view_request *req)
 {
     viewer v;
@@ -266,7 +257,7 @@ int xyl_view_run(const xyl_view_request *req)
     v.azimuth = req->azimuth, v.elevation = req->elevation, v.zoom = 1.0f;
     v.wireframe = req->wireframe;
     v.dirty_patches = true;
-    bounds(req->mesh, v.lo, v.hi);
+    xyl_mesh_bounds(req->mesh, v.lo, v.hi);
     xyl_diag d = {0};
     int rc = open_window(&v);
     if (!rc) {

@@ -580,15 +580,8 @@ static void render_job_free(render_job *j)
 
 static void frame_camera(const options *o, render_job *j)
 {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t v = 0; v < j->mesh->vertex_count; ++v) {
-        xyl_vec3 q = j->mesh->positions[v];
-        const float p[3] = {q.x, q.y, q.z};
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = fminf(lo[k], p[k]);
-            hi[k] = fmaxf(hi[k], p[k]);
-        }
-    }
+    float lo[3], hi[3];
+    xyl_mesh_bounds(j->mesh, lo, hi);
     double deg = 3.14159265358979323846 / 180.0;
     double az = o->render.has_camera ? o->render.azimuth : 30.0;
     double el = o->render.has_camera ? o->render.elevation : 10.0;

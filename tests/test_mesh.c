@@ -1372,10 +1372,33 @@ static void a_bumpy_sphere_of_100k_triangles_is_closed_and_free_of_intersections
     builder_free(&b);
 }
 
+/* Bounds cover every position (a vertex no face uses too); NULL and empty meshes are zeros. */
+static void bounds_cover_every_position(void **state)
+{
+    (void)state;
+    builder b;
+    memset(&b, 0, sizeof b);
+    add_cube(&b, -1.5, 2.0, 0.25, 3.0);
+    add_vertex(&b, 0.0, -7.0, 1.0); /* used by no face */
+    xyl_mesh *m = make_mesh(&b);
+    float lo[3], hi[3];
+    xyl_mesh_bounds(m, lo, hi);
+    const float want_lo[3] = {-1.5f, -7.0f, 0.25f}, want_hi[3] = {1.5f, 5.0f, 3.25f};
+    for (int k = 0; k < 3; ++k) {
+        assert_true(lo[k] == want_lo[k]);
+        assert_true(hi[k] == want_hi[k]);
+    }
+    xyl_mesh_bounds(NULL, lo, hi);
+    for (int k = 0; k < 3; ++k) assert_true(lo[k] == 0.0f && hi[k] == 0.0f);
+    xyl_mesh_destroy(m);
+    builder_free(&b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(create_copies_arrays_and_builds_triangulated_view),
+        cmocka_unit_test(bounds_cover_every_position),
         cmocka_unit_test(create_fills_absent_optional_arrays_with_zeros),
         cmocka_unit_test(create_copies_given_optional_arrays),
         cmocka_unit_test(create_computes_unit_outward_normals_on_a_cube),

@@ -326,7 +326,7 @@ static size_t red_over_views(suite *s, const xyl_mesh *m, const xyl_tess_patches
     const float az[6] = {0.3f, 1.9f, 3.5f, 5.0f, 0.8f, 2.6f};
     const float el[6] = {0.25f, 0.1f, 0.35f, -0.1f, 1.35f, -1.35f};
     float lo[3], hi[3];
-    tu_mesh_bounds(m, lo, hi);
+    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_batches b = {0};
     size_t total = 0;
     for (int i = 0; i < 6; ++i) {
@@ -477,7 +477,7 @@ static void bad_input_gets_result_codes(void **state)
     xyl_mesh *m = tu_tree_mesh(0, 3, XYL_SUBDIVIDE_NONE);
     xyl_tess_patches *tp = patches_of(m);
     float lo[3], hi[3];
-    tu_mesh_bounds(m, lo, hi);
+    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_camera cam;
     xyl_tess_frame f;
     make_view(lo, hi, 0.5f, 0.2f, 1.0f, &cam, &f);
@@ -618,7 +618,7 @@ static void default_tree_renders_with_coverage_and_wireframe(void **state)
     xyl_tess_patches *tp = patches_of(m);
     assert_int_equal(xyl_tess_gl_set_patches(s->gl, tp, NULL), XYL_OK);
     float lo[3], hi[3];
-    tu_mesh_bounds(m, lo, hi);
+    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_camera cam;
     xyl_tess_frame f;
     make_view(lo, hi, 0.6f, 0.15f, 1.0f, &cam, &f);

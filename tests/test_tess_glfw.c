@@ -49,7 +49,7 @@ static void make_scene(suite *s)
     assert_int_equal(xyl_tess_patches_create(s->mesh, NULL, &s->patches, NULL), XYL_OK);
     assert_int_equal(xyl_tess_gl_set_patches(s->gl, s->patches, NULL), XYL_OK);
     float lo[3], hi[3];
-    tu_mesh_bounds(s->mesh, lo, hi);
+    xyl_mesh_bounds(s->mesh, lo, hi);
     xyl_tess_camera cam;
     xyl_tess_camera_frame(lo, hi, 0.5f, 0.2f, 0.8f, 1.0f, &cam);
     memset(&s->frame, 0, sizeof s->frame);

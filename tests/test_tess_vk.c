@@ -137,7 +137,7 @@ static void capture_matches_cpu_reference(void **state)
     for (size_t si = 0; si < 2; ++si) {
         xyl_mesh *m = tu_tree_mesh(0, sides[si], XYL_SUBDIVIDE_NONE);
         float lo[3], hi[3];
-        tu_mesh_bounds(m, lo, hi);
+        xyl_mesh_bounds(m, lo, hi);
         for (size_t vi = 0; vi < 3; ++vi) {
             xyl_tess_patches_desc pd = {0};
             pd.variant = variants[vi];
@@ -186,7 +186,7 @@ static void scene_open(scene *s, uint32_t sides, uint32_t depth)
 {
     memset(s, 0, sizeof *s);
     s->mesh = tu_tree_mesh(depth, sides, XYL_SUBDIVIDE_NONE);
-    tu_mesh_bounds(s->mesh, s->lo, s->hi);
+    xyl_mesh_bounds(s->mesh, s->lo, s->hi);
     assert_int_equal(xyl_tess_patterns_create(0, NULL, &s->patterns, NULL), XYL_OK);
     assert_int_equal(xyl_tess_patches_create(s->mesh, NULL, &s->patches, NULL), XYL_OK);
     s->vk = open_vk(s->patterns);

@@ -135,20 +135,4 @@ static inline xyl_mesh *tu_tree_mesh(uint32_t depth, uint32_t sides, xyl_subdivi
     return m;
 }
 
-/* Axis-aligned bounds of a mesh's positions. */
-static inline void tu_mesh_bounds(const xyl_mesh *m, float lo[3], float hi[3])
-{
-    for (int k = 0; k < 3; ++k) {
-        lo[k] = INFINITY;
-        hi[k] = -INFINITY;
-    }
-    for (size_t v = 0; v < m->vertex_count; ++v) {
-        const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = fminf(lo[k], p[k]);
-            hi[k] = fmaxf(hi[k], p[k]);
-        }
-    }
-}
-
 #endif

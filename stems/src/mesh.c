@@ -246,3 +246,18 @@ void xyl_mesh_destroy(xyl_mesh *mesh)
     xyl__free(&al, m->tri_view);
     xyl__free(&al, m);
 }
+
+void xyl_mesh_bounds(const xyl_mesh *mesh, float lo[3], float hi[3])
+{
+    for (int k = 0; k < 3; ++k) lo[k] = hi[k] = 0.0f;
+    if (!mesh || !mesh->vertex_count || !mesh->positions) return;
+    const xyl_vec3 p0 = mesh->positions[0];
+    lo[0] = hi[0] = p0.x, lo[1] = hi[1] = p0.y, lo[2] = hi[2] = p0.z;
+    for (size_t v = 1; v < mesh->vertex_count; ++v) {
+        const float p[3] = {mesh->positions[v].x, mesh->positions[v].y, mesh->positions[v].z};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = p[k] < lo[k] ? p[k] : lo[k];
+            hi[k] = p[k] > hi[k] ? p[k] : hi[k];
+        }
+    }
+}

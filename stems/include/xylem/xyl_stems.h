@@ -165,6 +165,10 @@ typedef struct xyl_mesh_desc {
 XYL_API xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag);
 XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
 
+/* Axis-aligned bounds of all positions (for framing a camera: xyl_tess_camera_frame). A NULL
+ * or empty mesh gives lo = hi = 0. */
+XYL_API void xyl_mesh_bounds(const xyl_mesh *mesh, float lo[3], float hi[3]);
+
 /* ---- subdivision (OpenSubdiv) -------------------------------------------------------------- */
 
 typedef enum xyl_subdivision {
