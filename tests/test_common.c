@@ -2,6 +2,7 @@
  * atomic file writes. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -56,6 +57,60 @@ static void grow_and_calloc_refuse_overflowing_sizes(void **state)
     assert_true(cap >= 100);
     ((char *)p)[799] = 1;
     xyl__free(NULL, p);
+}
+
+static bool all_bytes_are(const unsigned char *p, size_t n, unsigned char v)
+{
+    for (size_t i = 0; i < n; ++i)
+        if (p[i] != v) return false;
+    return true;
+}
+
+/* Blocks from XYL__LARGE_BLOCK on are mapped and, once freed, cached: calloc must still zero a
+ * reused (dirty) block, a request of about the same size gets the cached block back, the cache
+ * keeps at most XYL__CACHE_BYTES, and xyl_memory_trim empties it. Sanitizer builds use malloc
+ * for everything and keep no cache. */
+static void big_blocks_are_zeroed_reused_bounded_and_trimmed(void **state)
+{
+    (void)state;
+    xyl_memory_trim();
+    size_t big = 3 * XYL__LARGE_BLOCK;
+    unsigned char *p = xyl__calloc(NULL, big, 1);
+    assert_non_null(p);
+    assert_true(all_bytes_are(p, big, 0));
+    memset(p, 0xab, big);
+    xyl__free(NULL, p);
+    unsigned char *q = xyl__calloc(NULL, big - 4096, 1);
+    assert_non_null(q);
+    assert_true(all_bytes_are(q, big - 4096, 0));
+    memset(q, 0xcd, big - 4096);
+    xyl__free(NULL, q);
+    unsigned char *r = xyl__alloc(NULL, big);
+    assert_non_null(r);
+    r[big - 1] = 1;
+    xyl__free(NULL, r);
+#if defined(XYL__LARGE_BLOCKS)
+    assert_ptr_equal(q, p); /* the cached block came back */
+    assert_ptr_equal(r, p);
+    size_t kept = xyl_memory_trim();
+    assert_true(kept >= big && kept <= 2 * big);
+#endif
+    assert_int_equal(xyl_memory_trim(), 0);
+
+    /* more than the cache may keep: the oldest blocks go back to the system */
+    enum { N = 24 };
+    void *blocks[N];
+    for (int i = 0; i < N; ++i) assert_non_null(blocks[i] = xyl__alloc(NULL, 4 * XYL__LARGE_BLOCK));
+    for (int i = 0; i < N; ++i) xyl__free(NULL, blocks[i]);
+    size_t cached = xyl_memory_trim();
+    assert_true(cached <= XYL__CACHE_BYTES);
+#if defined(XYL__LARGE_BLOCKS)
+    assert_true(cached >= XYL__CACHE_BYTES / 2);
+#endif
+    /* small blocks never enter the cache */
+    void *s = xyl__alloc(NULL, 100);
+    xyl__free(NULL, s);
+    assert_int_equal(xyl_memory_trim(), 0);
 }
 
 static void normalising_a_zero_or_nan_vector_gives_the_fallback(void **state)
@@ -133,7 +188,7 @@ static void atomic_write_replaces_whole_files_and_reports_errors(void **state)
     assert_int_equal(xyl__read_file(path, 100, NULL, &buf, &n, &d), XYL_OK);
     assert_int_equal(n, 6);
     assert_string_equal(buf, "second");
-    free(buf);
+    xyl__free(NULL, buf);
     assert_int_equal(xyl__read_file(path, 3, NULL, &buf, &n, &d), XYL_ERR_LIMIT_EXCEEDED);
     char missing[300];
     snprintf(missing, sizeof missing, "%s/no/such/dir/out.txt", dir);
@@ -153,6 +208,7 @@ int main(void)
         cmocka_unit_test(every_result_has_a_distinct_name),
         cmocka_unit_test(diag_keeps_the_first_warning_and_counts_all),
         cmocka_unit_test(grow_and_calloc_refuse_overflowing_sizes),
+        cmocka_unit_test(big_blocks_are_zeroed_reused_bounded_and_trimmed),
         cmocka_unit_test(normalising_a_zero_or_nan_vector_gives_the_fallback),
         cmocka_unit_test(any_orthogonal_is_unit_and_orthogonal_everywhere),
         cmocka_unit_test(rotation_preserves_length_and_turns_by_the_angle),

@@ -33,37 +33,7 @@ const char *xyl_result_string(xyl_result r)
     return result_names[r];
 }
 
-/* ---- allocation ---------------------------------------------------------------------------- */
-
-/* A custom allocator needs both hooks; one with only one hook counts as zero-filled (malloc and
- * free), so a missing free can never leak. */
-static bool custom(const xyl_allocator *a)
-{
-    return a && a->alloc && a->free;
-}
-
-void *xyl__alloc(const xyl_allocator *a, size_t size)
-{
-    if (size == 0) size = 1;
-    if (custom(a)) return a->alloc(size, a->user);
-    return malloc(size);
-}
-
-void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size)
-{
-    size_t bytes;
-    if (!xyl__mul_ok(count, size, &bytes)) return NULL;
-    void *p = xyl__alloc(a, bytes);
-    if (p) memset(p, 0, bytes ? bytes : 1);
-    return p;
-}
-
-void xyl__free(const xyl_allocator *a, void *p)
-{
-    if (!p) return;
-    if (custom(a)) a->free(p, a->user);
-    else free(p);
-}
+/* ---- allocation: xyl__alloc, xyl__calloc and xyl__free are in alloc.c ------------------- */
 
 bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
                size_t elem)

@@ -20,6 +20,24 @@
 
 /* ---- allocation ---------------------------------------------------------------------------- */
 
+/* The default allocator (alloc.c) maps blocks of XYL__LARGE_BLOCK bytes and more (its header
+ * included) on their own, with transparent huge pages, and caches up to XYL__CACHE_SLOTS freed
+ * ones, XYL__CACHE_BYTES together; on Linux, outside sanitizer builds (XYL__LARGE_BLOCKS). */
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(memory_sanitizer)
+#define XYL__SANITIZED 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__)
+#define XYL__SANITIZED 1
+#endif
+#if defined(__linux__) && !defined(XYL__SANITIZED)
+#define XYL__LARGE_BLOCKS 1
+#endif
+#define XYL__LARGE_BLOCK ((size_t)1 << 20)
+#define XYL__CACHE_SLOTS 16
+#define XYL__CACHE_BYTES ((size_t)64 << 20)
+
 void *xyl__alloc(const xyl_allocator *a, size_t size);
 void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size); /* overflow-checked, zeroed */
 void xyl__free(const xyl_allocator *a, void *p);

@@ -71,13 +71,19 @@ typedef struct xyl_diag {
     char warning[XYL_DIAG_MESSAGE_SIZE];    /* the first warning's text */
 } xyl_diag;
 
-/* Allocation hooks. Zero-filled means the C library's malloc/free; so does a struct with only
- * one of the two hooks set. */
+/* Allocation hooks. Zero-filled means the default allocator; so does a struct with only one of
+ * the two hooks set. The default is malloc/free for small blocks; on Linux, blocks of 1 MiB and
+ * more get their own mapping with transparent huge pages, and up to 64 MiB of freed ones are
+ * kept for the next call that needs about as much (docs/memory.md). */
 typedef struct xyl_allocator {
     void *(*alloc)(size_t size, void *user);
     void (*free)(void *ptr, void *user);
     void *user;
 } xyl_allocator;
+
+/* Returns the default allocator's cache of freed big blocks to the system; the bytes released.
+ * Thread-safe; never needed for correctness. */
+XYL_API size_t xyl_memory_trim(void);
 
 typedef struct xyl_vec3 {
     float x, y, z;
