@@ -93,12 +93,12 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
 
 /* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
  * counter-clockwise seen from +t. Returns the first vertex index. */
-static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, double r, double v,
-                         uint32_t branch)
+static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3 t,
+                                              xyl__dvec3 u, double r, double v, uint32_t branch,
+                                              uint32_t k)
 {
-    /* locals: stores through the output pointers could otherwise alias s->k and force reloads */
+    /* locals: stores through the output pointers could otherwise alias s->nv and force reloads */
     size_t first = s->nv;
-    uint32_t k = s->k;
     xyl_vec3 *pos = s->pos + first;
     float *uv = s->uv + 2 * first, fv = (float)v;
     uint32_t *vb = s->vbranch + first;
@@ -112,18 +112,29 @@ static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, dou
         uv[2 * j + 1] = fv;
         vb[j] = branch;
     }
-    if (s->nrm) memset(s->nrm + first, 0, k * sizeof *s->nrm);
+    if (s->nrm) {
+        xyl_vec3 *n = s->nrm + first, zero = {0.0f, 0.0f, 0.0f};
+        for (uint32_t j = 0; j < k; ++j) n[j] = zero;
+    }
     s->nv = first + k;
     return (uint32_t)first;
+}
+
+static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, double r, double v,
+                         uint32_t branch)
+{
+    return put_ring_k(s, c, t, u, r, v, branch, s->k);
 }
 
 /* Adds the normals of the band quads q0 .. q0 + k - 1 (from ring a to ring b) to their vertices.
  * Vertex j of either ring is in quads j - 1 and j (vertex 0: quads 0 and k - 1) and gets their
  * normals in that, the quads', order, as two adds in registers. A ring's vertices share one
- * branch (put_ring), so one test per ring replaces the per-vertex ones. */
-static void sum_band_normals(stems *s, uint32_t a, uint32_t b, uint32_t branch, size_t q0)
+ * branch (put_ring), so one test per ring replaces the per-vertex ones. The *_k helpers are
+ * inlined into emit_rings with a constant k for the usual ring sides, so that their loops
+ * unroll: the same operations in the same order, so the same bits. */
+static XYL__ALWAYS_INLINE void sum_band_normals_k(stems *s, uint32_t a, uint32_t b,
+                                                  uint32_t branch, size_t q0, uint32_t k)
 {
-    uint32_t k = s->k;
     if (s->vbranch[a] != branch || s->vbranch[b] != branch) {
         for (uint32_t j = 0; j < k; ++j) sum_quad_normal(s, s->quads + 4 * (q0 + j), branch);
         return;
@@ -151,9 +162,10 @@ static void sum_band_normals(stems *s, uint32_t a, uint32_t b, uint32_t branch, 
 }
 
 /* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead. */
-static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
+static XYL__ALWAYS_INLINE void put_band_k(stems *s, uint32_t a, uint32_t b, uint32_t branch,
+                                          uint32_t k)
 {
-    uint32_t last = s->k - 1;
+    uint32_t last = k - 1;
     size_t n = s->nq;
     uint32_t *q = s->quads + 4 * n, *fb = s->fbranch + n;
     for (uint32_t j = 0; j < last; ++j, q += 4) {
@@ -169,7 +181,7 @@ static void put_band(stems *s, uint32_t a, uint32_t b, uint32_t branch)
     q[3] = b + last;
     fb[last] = branch;
     s->nq = n + last + 1;
-    if (s->nrm) sum_band_normals(s, a, b, branch, n);
+    if (s->nrm) sum_band_normals_k(s, a, b, branch, n, k);
 }
 
 /* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
@@ -371,19 +383,33 @@ static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
 }
 
 /* Vertices of the planned rings from .. nrings - 1 and the band from each ring to the next. */
-static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
+static XYL__ALWAYS_INLINE xyl_result emit_rings_k(stems *s, size_t from, uint32_t branch,
+                                                 uint32_t k)
 {
     for (size_t i = from; i < s->nrings; ++i) {
-        if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
+        if (!out_reserve(s, s->nv + k, s->nq + k)) return oom(s);
         stems_ring *ring = &s->rings[i];
-        ring->first = put_ring(s, ring->centre, ring->tangent, ring->u, ring->radius, ring->v, branch);
+        ring->first = put_ring_k(s, ring->centre, ring->tangent, ring->u, ring->radius, ring->v,
+                                 branch, k);
         if (i) {
             stems_ring *prev = ring - 1;
             prev->band = (uint32_t)s->nq;
-            put_band(s, prev->first, ring->first, branch);
+            put_band_k(s, prev->first, ring->first, branch, k);
         }
     }
     return XYL_OK;
+}
+
+/* emit_rings_k with a constant k for the usual ring sides, so that the per-vertex loops unroll:
+ * the same operations in the same order, so the same bits. */
+static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
+{
+    switch (s->k) {
+    case 4: return emit_rings_k(s, from, branch, 4);
+    case 6: return emit_rings_k(s, from, branch, 6);
+    case 8: return emit_rings_k(s, from, branch, 8);
+    default: return emit_rings_k(s, from, branch, s->k);
+    }
 }
 
 static size_t lateral_count(const stems *s, const stems_station *st)
@@ -1028,20 +1054,25 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
  * triangles) the triangulated view is written in the same pass, while each quad is at hand. */
 static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
 {
-    size_t w = 0;
-    for (size_t q = 0; q < s->nq; ++q) {
-        if (q < s->tcap && s->taken[q]) continue;
-        const uint32_t *src = s->quads + 4 * q;
+    /* taken quads are few (a patch per lateral): move the runs between them whole */
+    size_t w = 0, q = 0, nq = s->nq, ntaken = s->tcap < nq ? s->tcap : nq;
+    while (q < nq) {
+        const uint8_t *next = q < ntaken ? memchr(s->taken + q, 1, ntaken - q) : NULL;
+        size_t end = next ? (size_t)(next - s->taken) : nq, run = end - q;
+        if (w != q) { /* w < q: the run moves down */
+            memmove(s->quads + 4 * w, s->quads + 4 * q, run * 4 * sizeof *s->quads);
+            memmove(s->fbranch + w, s->fbranch + q, run * sizeof *s->fbranch);
+        }
         if (tv) {
+            const uint32_t *src = s->quads + 4 * w;
             uint32_t *t = tv + 6 * w;
-            t[0] = src[0], t[1] = src[1], t[2] = src[2];
-            t[3] = src[0], t[4] = src[2], t[5] = src[3];
+            for (size_t i = 0; i < run; ++i, src += 4, t += 6) {
+                t[0] = src[0], t[1] = src[1], t[2] = src[2];
+                t[3] = src[0], t[4] = src[2], t[5] = src[3];
+            }
         }
-        if (w != q) {
-            memcpy(s->quads + 4 * w, src, 4 * sizeof *s->quads); /* w < q: no overlap */
-            s->fbranch[w] = s->fbranch[q];
-        }
-        ++w;
+        w += run;
+        q = end + 1;
     }
     if (tv && s->nt) memcpy(tv + 6 * w, s->tris, 3 * s->nt * sizeof *s->tris);
     memset(a, 0, sizeof *a);

@@ -18,6 +18,13 @@
 
 #define XYL__PI 3.14159265358979323846
 
+/* For helpers written once for a run-time count and inlined where the count is a constant. */
+#if defined(__GNUC__)
+#define XYL__ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define XYL__ALWAYS_INLINE inline
+#endif
+
 /* ---- allocation ---------------------------------------------------------------------------- */
 
 /* The default allocator (alloc.c) maps blocks of XYL__LARGE_BLOCK bytes and more (its header
