@@ -97,16 +97,21 @@ static void big_blocks_are_zeroed_reused_bounded_and_trimmed(void **state)
 #endif
     assert_int_equal(xyl_memory_trim(), 0);
 
-    /* more than the cache may keep: the oldest blocks go back to the system */
-    enum { N = 24 };
+    /* more than the cache may keep, in bytes and in blocks: the oldest go back to the system */
+    enum { N = 2 * XYL__CACHE_SLOTS };
     void *blocks[N];
-    for (int i = 0; i < N; ++i) assert_non_null(blocks[i] = xyl__alloc(NULL, 4 * XYL__LARGE_BLOCK));
-    for (int i = 0; i < N; ++i) xyl__free(NULL, blocks[i]);
-    size_t cached = xyl_memory_trim();
-    assert_true(cached <= XYL__CACHE_BYTES);
+    size_t sizes[2] = {XYL__CACHE_BYTES / 8, XYL__LARGE_BLOCK};
+    for (int t = 0; t < 2; ++t) {
+        for (int i = 0; i < N; ++i) assert_non_null(blocks[i] = xyl__alloc(NULL, sizes[t]));
+        for (int i = 0; i < N; ++i) xyl__free(NULL, blocks[i]);
+        size_t cached = xyl_memory_trim();
+        assert_true(cached <= XYL__CACHE_BYTES);
+        if (t == 1) assert_true(cached <= XYL__CACHE_SLOTS * 2 * sizes[t]);
 #if defined(XYL__LARGE_BLOCKS)
-    assert_true(cached >= XYL__CACHE_BYTES / 2);
+        if (t == 0) assert_true(cached >= XYL__CACHE_BYTES / 2);
+        else assert_true(cached >= XYL__CACHE_SLOTS * sizes[t]);
 #endif
+    }
     /* small blocks never enter the cache */
     void *s = xyl__alloc(NULL, 100);
     xyl__free(NULL, s);

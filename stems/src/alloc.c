@@ -26,6 +26,7 @@
 
 #if defined(XYL__LARGE_BLOCKS)
 #include <pthread.h>
+#include <stdatomic.h>
 #include <sys/mman.h>
 #endif
 
@@ -44,6 +45,7 @@ typedef union block_head {
 #if defined(XYL__LARGE_BLOCKS)
 
 #define HUGE_PAGE ((size_t)2 << 20)
+#define SMALL_PAGE ((size_t)4096) /* or a multiple of the page size: mmap rounds up */
 #define LARGE_BLOCK XYL__LARGE_BLOCK
 #define CACHE_SLOTS XYL__CACHE_SLOTS
 #define CACHE_BYTES XYL__CACHE_BYTES
@@ -54,20 +56,26 @@ static struct {
     size_t count, bytes;
 } cache;
 static pthread_mutex_t cache_lock = PTHREAD_MUTEX_INITIALIZER;
+static atomic_size_t blocks_in_use; /* mapped blocks handed out and not freed: for the tests */
 
-/* A zero-filled, HUGE_PAGE-aligned mapping of len bytes (a multiple of HUGE_PAGE), or NULL. */
+/* A zero-filled mapping of len bytes (a multiple of SMALL_PAGE), or NULL. From one huge page
+ * on it is HUGE_PAGE-aligned and marked for huge pages. */
 static block_head *map_large(size_t len)
 {
-    size_t span = len + HUGE_PAGE;
+    bool huge = len >= HUGE_PAGE;
+    size_t span = huge ? len + HUGE_PAGE : len;
     char *p = mmap(NULL, span, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (p == MAP_FAILED) return NULL;
-    char *start = (char *)(((uintptr_t)p + HUGE_PAGE - 1) & ~(uintptr_t)(HUGE_PAGE - 1));
-    size_t head = (size_t)(start - p), tail = span - head - len;
-    if (head) munmap(p, head);
-    if (tail) munmap(start + len, tail);
+    char *start = p;
+    if (huge) {
+        start = (char *)(((uintptr_t)p + HUGE_PAGE - 1) & ~(uintptr_t)(HUGE_PAGE - 1));
+        size_t head = (size_t)(start - p), tail = span - head - len;
+        if (head) munmap(p, head);
+        if (tail) munmap(start + len, tail);
 #if defined(MADV_HUGEPAGE)
-    (void)madvise(start, len, MADV_HUGEPAGE); /* a hint: without it the pages are small */
+        (void)madvise(start, len, MADV_HUGEPAGE); /* a hint: without it the pages are small */
 #endif
+    }
     block_head *h = (block_head *)(void *)start;
     h->mapped = len;
     return h;
@@ -121,6 +129,15 @@ static void cache_put(block_head *h)
 
 #endif /* XYL__LARGE_BLOCKS */
 
+size_t xyl__alloc_blocks_in_use(void)
+{
+#if defined(XYL__LARGE_BLOCKS)
+    return atomic_load(&blocks_in_use);
+#else
+    return 0;
+#endif
+}
+
 size_t xyl_memory_trim(void)
 {
     size_t released = 0;
@@ -147,10 +164,13 @@ static void *alloc_default(size_t size, bool *zeroed)
     block_head *h = NULL;
 #if defined(XYL__LARGE_BLOCKS)
     if (bytes >= LARGE_BLOCK) {
-        size_t len = (bytes + HUGE_PAGE - 1) & ~(HUGE_PAGE - 1);
-        if ((h = cache_take(len))) return h + 1;
-        if ((h = map_large(len))) {
-            *zeroed = true;
+        /* whole huge pages from half a huge page on; below, small pages (a huge page is
+         * zeroed whole on first touch) */
+        size_t page = bytes >= HUGE_PAGE / 2 ? HUGE_PAGE : SMALL_PAGE;
+        size_t len = (bytes + page - 1) & ~(page - 1);
+        if (!(h = cache_take(len)) && (h = map_large(len))) *zeroed = true;
+        if (h) {
+            atomic_fetch_add(&blocks_in_use, 1);
             return h + 1;
         }
         /* no mapping (address space or map-count limits): malloc may still have room */
@@ -190,6 +210,7 @@ void xyl__free(const xyl_allocator *a, void *p)
     block_head *h = (block_head *)p - 1;
 #if defined(XYL__LARGE_BLOCKS)
     if (h->mapped) {
+        atomic_fetch_sub(&blocks_in_use, 1);
         cache_put(h);
         return;
     }

@@ -41,10 +41,13 @@
 #if defined(__linux__) && !defined(XYL__SANITIZED)
 #define XYL__LARGE_BLOCKS 1
 #endif
-#define XYL__LARGE_BLOCK ((size_t)1 << 20)
-#define XYL__CACHE_SLOTS 16
+#define XYL__LARGE_BLOCK ((size_t)64 << 10)
+#define XYL__CACHE_SLOTS 32
 #define XYL__CACHE_BYTES ((size_t)64 << 20)
 
+/* Mapped blocks handed out and not yet freed (0 without XYL__LARGE_BLOCKS): a leak check for
+ * the blocks the sanitizers do not see. */
+size_t xyl__alloc_blocks_in_use(void);
 void *xyl__alloc(const xyl_allocator *a, size_t size);
 void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size); /* overflow-checked, zeroed */
 void xyl__free(const xyl_allocator *a, void *p);
