@@ -19,7 +19,10 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
 {
     if (verts <= s->vcap && quads <= s->qcap) return true; /* the usual case: reserved up front */
     const xyl_allocator *a = &s->alloc;
-    size_t c0 = s->vcap, c1 = s->vcap, c2 = s->vcap, c3 = s->vcap, q0 = s->qcap, q1 = s->qcap;
+    /* the first reservation (from the bound in build_all) is exact, not rounded up to a power
+     * of two: a smaller footprint leaves more of the allocator's cache for the next build */
+    size_t c0 = s->vcap ? s->vcap : verts, c1 = c0, c2 = c0, c3 = c0;
+    size_t q0 = s->qcap ? s->qcap : quads, q1 = q0;
     if (verts > s->vcap) {
         if (!xyl__grow(a, (void **)&s->pos, &c0, s->nv, verts, sizeof *s->pos) ||
             !xyl__grow(a, (void **)&s->uv, &c1, s->nv, verts, 2 * sizeof *s->uv) ||
