@@ -43,7 +43,7 @@
 #endif
 #define XYL__LARGE_BLOCK ((size_t)64 << 10)
 #define XYL__CACHE_SLOTS 32
-#define XYL__CACHE_BYTES ((size_t)64 << 20)
+#define XYL__CACHE_BYTES ((size_t)128 << 20)
 
 /* Mapped blocks handed out and not yet freed (0 without XYL__LARGE_BLOCKS): a leak check for
  * the blocks the sanitizers do not see. */
