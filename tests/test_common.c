@@ -2,6 +2,7 @@
  * atomic file writes. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <pthread.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -118,6 +119,46 @@ static void big_blocks_are_zeroed_reused_bounded_and_trimmed(void **state)
     assert_int_equal(xyl_memory_trim(), 0);
 }
 
+/* Threads allocating and freeing big blocks at once: every block keeps what its thread wrote,
+ * so the cache never hands one block to two owners. */
+static void *churn(void *arg)
+{
+    uint64_t seed = (uint64_t)(uintptr_t)arg;
+    unsigned char *held[4] = {0}, fill[4] = {0};
+    size_t sizes[4] = {0};
+    bool ok = true;
+    for (int i = 0; i < 400 && ok; ++i) {
+        int slot = i % 4;
+        if (held[slot]) {
+            ok = all_bytes_are(held[slot], sizes[slot], fill[slot]);
+            xyl__free(NULL, held[slot]);
+        }
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        sizes[slot] = XYL__LARGE_BLOCK / 2 + (size_t)(seed >> 40) % (4 * XYL__LARGE_BLOCK);
+        fill[slot] = (unsigned char)(seed >> 56);
+        if (!(held[slot] = xyl__alloc(NULL, sizes[slot]))) return NULL;
+        memset(held[slot], fill[slot], sizes[slot]);
+    }
+    for (int j = 0; j < 4; ++j) xyl__free(NULL, held[j]);
+    return ok ? arg : NULL;
+}
+
+static void big_blocks_survive_threads(void **state)
+{
+    (void)state;
+    enum { T = 4 };
+    pthread_t t[T];
+    for (uintptr_t i = 0; i < T; ++i)
+        assert_int_equal(pthread_create(&t[i], NULL, churn, (void *)(i + 1)), 0);
+    for (int i = 0; i < T; ++i) {
+        void *r = NULL;
+        assert_int_equal(pthread_join(t[i], &r), 0);
+        assert_ptr_equal(r, (void *)(uintptr_t)(i + 1));
+    }
+    assert_int_equal(xyl__alloc_blocks_in_use(), 0);
+    xyl_memory_trim();
+}
+
 static void normalising_a_zero_or_nan_vector_gives_the_fallback(void **state)
 {
     (void)state;
@@ -214,6 +255,7 @@ int main(void)
         cmocka_unit_test(diag_keeps_the_first_warning_and_counts_all),
         cmocka_unit_test(grow_and_calloc_refuse_overflowing_sizes),
         cmocka_unit_test(big_blocks_are_zeroed_reused_bounded_and_trimmed),
+        cmocka_unit_test(big_blocks_survive_threads),
         cmocka_unit_test(normalising_a_zero_or_nan_vector_gives_the_fallback),
         cmocka_unit_test(any_orthogonal_is_unit_and_orthogonal_everywhere),
         cmocka_unit_test(rotation_preserves_length_and_turns_by_the_angle),
