@@ -16,7 +16,8 @@
  * they overlap where it leaves its parent, or if its first segment is still inside the
  * thicker one halfway along. Its nodes up to the first one that clears the thicker sibling's
  * tube are not meshed, and the rest of it grows out of the thicker sibling, from that
- * sibling's node nearest to where they part. */
+ * sibling's node nearest to where they part. A lateral that, where it now hangs, lies in its
+ * fork's own tube all along is not meshed either. */
 #include "stems_internal.h"
 
 /* Whether a ball at p of radius r overlaps the tube from a (radius ra) to b (radius rb), as the
