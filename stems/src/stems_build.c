@@ -880,6 +880,42 @@ static void unit_branch_normals(stems *s)
     }
 }
 
+/* Whether the band from ring a (centre ca, unit tangent ta, radius ra) to ring b ahead of it
+ * folds: a vertex of one lies on the wrong side of the other's plane. */
+static bool band_folds(xyl__dvec3 ca, xyl__dvec3 ta, double ra, xyl__dvec3 cb, xyl__dvec3 tb,
+                       double rb)
+{
+    double tilt = xyl__d3_len(xyl__d3_cross(ta, tb)); /* the sine of the angle between the planes */
+    return xyl__d3_dot(xyl__d3_sub(cb, ca), ta) <= rb * tilt ||
+           xyl__d3_dot(xyl__d3_sub(ca, cb), tb) >= -ra * tilt;
+}
+
+/* Whether a lateral's first band, from its bridge ring to the ring of its first station, folds
+ * when the tube comes into that station along t_in (the station's ring is turned halfway from
+ * t_in to the next segment, as branch_rings turns it). */
+static bool first_band_folds(const stems *s, const stems_ring *bridge, xyl__dvec3 t_in)
+{
+    const stems_station *st = s->stations;
+    xyl__dvec3 t_out = dir_between(st[0].p, st[1].p, t_in);
+    xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
+    double f = s->inflate;
+    return band_folds(bridge->centre, bridge->tangent, f * bridge->radius, st[0].p, t0,
+                      f * st[0].r);
+}
+
+/* The direction a lateral's tube comes into its first station along: the bridge ring's normal,
+ * so that the first band's rings face each other. Where the bridge's patch faces away from the
+ * child, the station's ring, turned halfway to the next segment, can cross the bridge ring; if
+ * it does not with the direction from the bridge ring's centre to the station, that one. Not at
+ * a station with laterals, where the ring's frame also places their patches. */
+static xyl__dvec3 first_direction(const stems *s, const stems_ring *bridge)
+{
+    if (lateral_count(s, &s->stations[0]) || !first_band_folds(s, bridge, bridge->tangent))
+        return bridge->tangent;
+    xyl__dvec3 seg = dir_between(bridge->centre, s->stations[0].p, bridge->tangent);
+    return first_band_folds(s, bridge, seg) ? bridge->tangent : seg;
+}
+
 static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 {
     uint32_t branch = s->sk->nodes[start].branch;
@@ -891,6 +927,7 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
         dir = dir_between(node_pos(s, s->chain[0]), node_pos(s, s->chain[s->nchain - 1]), dir);
     r = ensure_two_stations(s, dir);
     if (r) return r;
+    if (from) dir = first_direction(s, from);
     s->nrings = 0;
     if (from) { /* the bridge ring is this branch's first ring */
         if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings))

@@ -16,7 +16,8 @@
  * they overlap where it leaves its parent, or if its first segment is still inside the
  * thicker one halfway along. Its nodes up to the first one that clears the thicker sibling's
  * tube are not meshed, and the rest of it grows out of the thicker sibling, from that
- * sibling's node nearest to where they part. */
+ * sibling's node nearest to where they part. A lateral that, where it now hangs, lies in its
+ * fork's own tube all along is not meshed either. */
 #include "stems_internal.h"
 
 /* Whether a ball at p of radius r overlaps the tube from a (radius ra) to b (radius rb), as the
@@ -173,6 +174,18 @@ static bool merge_into(const stems *s, uint32_t fork, uint32_t host, uint32_t ch
     return true;
 }
 
+/* Whether every node of lateral `child` of fork lies in the tube of fork's branch around it: the
+ * placement moved it here from a tube it cleared, but it has not cleared this one. */
+static bool inside_parent_throughout(const stems *s, const int32_t *parent_of, uint32_t fork,
+                                     uint32_t child)
+{
+    for (uint32_t n = child; n != UINT32_MAX; n = s->main[n])
+        if (has_laterals(s, n) ||
+            !overlaps_parent(s, parent_of, pos_of(s, n), s->sk->nodes[n].radius, fork))
+            return false;
+    return true;
+}
+
 /* Whether lateral a of node p comes before lateral b: its own laterals (children of p in the
  * skeleton) before those that came to hang from it, then xyl__lateral_before. A lateral that
  * was moved here so gives way to one that forks here. */
@@ -197,14 +210,19 @@ static uint32_t next_lateral(const stems *s, uint32_t p, uint32_t prev)
 }
 
 /* The laterals of fork in `before` order, each tried against those before it that are still
- * meshed from the fork: so a host is never merged away after a thinner sibling joined it. */
+ * meshed from the fork: so a host is never merged away after a thinner sibling joined it. A
+ * lateral that lies in fork's own tube all along is not meshed at all. */
 static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
 {
     uint32_t lo = s->child_start[fork], hi = s->child_start[fork + 1], main = s->main[fork];
     bool any = false;
-    for (uint32_t prev = UINT32_MAX;;) {
-        uint32_t child = next_lateral(s, fork, prev);
-        if (child == UINT32_MAX) return any;
+    for (uint32_t child = next_lateral(s, fork, UINT32_MAX); child != UINT32_MAX;
+         child = next_lateral(s, fork, child)) {
+        if (inside_parent_throughout(s, parent_of, fork, child)) {
+            parent_of[child] = -1;
+            any = true;
+            continue;
+        }
         for (uint32_t i = lo; i < hi; ++i) {
             uint32_t host = s->child_list[i];
             if (host == main || !before(s, fork, host, child)) continue;
@@ -214,8 +232,8 @@ static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
                 break;
             }
         }
-        prev = child;
     }
+    return any;
 }
 
 bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
