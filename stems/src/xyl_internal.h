@@ -41,8 +41,8 @@
 #if defined(__linux__) && !defined(XYL__SANITIZED)
 #define XYL__LARGE_BLOCKS 1
 #endif
-#define XYL__LARGE_BLOCK ((size_t)64 << 10)
-#define XYL__CACHE_SLOTS 32
+#define XYL__LARGE_BLOCK ((size_t)16 << 10)
+#define XYL__CACHE_SLOTS 64
 #define XYL__CACHE_BYTES ((size_t)128 << 20)
 
 /* Mapped blocks handed out and not yet freed (0 without XYL__LARGE_BLOCKS): a leak check for

@@ -72,7 +72,7 @@ typedef struct xyl_diag {
 } xyl_diag;
 
 /* Allocation hooks. Zero-filled means the default allocator; so does a struct with only one of
- * the two hooks set. The default is malloc/free for small blocks; on Linux, blocks of 64 KiB
+ * the two hooks set. The default is malloc/free for small blocks; on Linux, blocks of 16 KiB
  * and more get their own mapping (transparent huge pages from 1 MiB on), and up to 128 MiB of
  * freed ones are kept for the next call that needs about as much (docs/memory.md). */
 typedef struct xyl_allocator {
