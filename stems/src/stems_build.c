@@ -326,6 +326,18 @@ static xyl_result collect_chain(stems *s, uint32_t start)
     return XYL_OK;
 }
 
+/* Lateral children of the nodes merged into station st. */
+static size_t lateral_count(const stems *s, const stems_station *st)
+{
+    size_t n = 0;
+    for (uint32_t i = st->first; i <= st->last; ++i) {
+        uint32_t node = s->chain[i];
+        n += s->child_start[node + 1] - s->child_start[node];
+        n -= main_child(s, node) != UINT32_MAX;
+    }
+    return n;
+}
+
 /* Stations along the chain: coincident nodes share one; nodes not clearly ahead of a child's
  * bridge ring are merged into the first station that is (docs/stems.md). */
 static xyl_result make_stations(stems *s, const stems_ring *bridge)
@@ -350,6 +362,11 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
         if (!room_for_one(s, (void **)&s->stations, &s->scap, s->nstations, sizeof *s->stations))
             return oom(s);
         stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
+        /* a stub stands for none of the child's nodes, so it need not have their radius: at it,
+         * a knob wider than the bridge ring (whose radius the patch limits) stood out beside
+         * the fork, across its siblings' tubes. It keeps the bridge ring's radius, unless
+         * laterals of the nodes it absorbed hang from it: their patches need the width */
+        if (behind && !lateral_count(s, &st)) st.r = bridge->radius;
         s->stations[s->nstations++] = st;
         first = i + 1;
     }
@@ -413,17 +430,6 @@ static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
     case 8: return emit_rings_k(s, from, branch, 8);
     default: return emit_rings_k(s, from, branch, s->k);
     }
-}
-
-static size_t lateral_count(const stems *s, const stems_station *st)
-{
-    size_t n = 0;
-    for (uint32_t i = st->first; i <= st->last; ++i) {
-        uint32_t node = s->chain[i];
-        n += s->child_start[node + 1] - s->child_start[node];
-        n -= main_child(s, node) != UINT32_MAX;
-    }
-    return n;
 }
 
 static xyl__dvec3 dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
