@@ -826,8 +826,9 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
 
 /* ---- branches ------------------------------------------------------------------------------ */
 
-/* A chain that collapsed to one station still gets a tube: a second, node-less station one
- * diameter further on. */
+/* A root chain that collapsed to one station still gets a tube: a second, node-less station
+ * one diameter further on; so does a lateral's one station with laterals, whose fork rings
+ * need a segment ahead. */
 static xyl_result ensure_two_stations(stems *s, xyl__dvec3 dir)
 {
     if (s->nstations >= 2) return XYL_OK;
@@ -898,11 +899,11 @@ static bool band_folds(xyl__dvec3 ca, xyl__dvec3 ta, double ra, xyl__dvec3 cb, x
 
 /* Whether a lateral's first band, from its bridge ring to the ring of its first station, folds
  * when the tube comes into that station along t_in (the station's ring is turned halfway from
- * t_in to the next segment, as branch_rings turns it). */
+ * t_in to the next segment, if there is one, as branch_rings turns it). */
 static bool first_band_folds(const stems *s, const stems_ring *bridge, xyl__dvec3 t_in)
 {
     const stems_station *st = s->stations;
-    xyl__dvec3 t_out = dir_between(st[0].p, st[1].p, t_in);
+    xyl__dvec3 t_out = s->nstations > 1 ? dir_between(st[0].p, st[1].p, t_in) : t_in;
     xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
     double f = s->inflate;
     return band_folds(bridge->centre, bridge->tangent, f * bridge->radius, st[0].p, t0,
@@ -931,7 +932,10 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     xyl__dvec3 dir = from ? from->tangent : xyl__d3(0, 1, 0);
     if (!from && s->nchain > 1)
         dir = dir_between(node_pos(s, s->chain[0]), node_pos(s, s->chain[s->nchain - 1]), dir);
-    r = ensure_two_stations(s, dir);
+    /* a lateral's tube already has a ring, its bridge ring: one station without laterals is
+     * its tip, and a node-less station beyond it would only stick out past the child's end */
+    if (!from || s->nstations > 1 || lateral_count(s, &s->stations[0]))
+        r = ensure_two_stations(s, dir);
     if (r) return r;
     if (from) dir = first_direction(s, from);
     s->nrings = 0;
