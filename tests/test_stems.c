@@ -380,6 +380,44 @@ static void a_child_that_curls_back_keeps_its_tip(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* A lateral of one segment ends at its tip: its tube is its bridge ring and the tip's ring,
+ * with no node-less station running on past the tip along the patch's normal (docs/stems.md,
+ * "Where short laterals end"). No vertex of it lies farther from the fork than the tip's ball
+ * reaches. */
+static void a_twig_of_one_segment_ends_at_its_tip(void **state)
+{
+    (void)state;
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0},
+        {{0, 1, 0}, 0.1f, 0, 0, 0},
+        {{0, 2, 0}, 0.1f, 1, 0, 0},
+        {{0.6f, 1.3f, 0}, 0.05f, 1, 0, 0},
+    };
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = 4;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    uint32_t twig = sk->nodes[3].branch;
+    assert_int_not_equal(twig, sk->nodes[0].branch);
+    double reach = sqrt(0.6 * 0.6 + 0.3 * 0.3) + 0.05;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        assert_closed(m, sk, "twig");
+        double far = 0.0;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            if (m->branch_ids[v] != twig) continue;
+            xyl_vec3 p = m->positions[v];
+            double dx = p.x, dy = p.y - 1.0, dz = p.z;
+            far = fmax(far, sqrt(dx * dx + dy * dy + dz * dz));
+        }
+        if (!(far <= reach * 1.0001))
+            fail_msg("k = %u: the twig reaches %g from its fork, its tip's ball %g", k, far, reach);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
 static xyl_skeleton *read_hard_case(const char *name)
 {
     char path[1024];
@@ -806,6 +844,7 @@ int main(void)
         cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k7),
         cmocka_unit_test(presets_intersect_at_joints_no_more_than_measured_k8),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
+        cmocka_unit_test(a_twig_of_one_segment_ends_at_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
         cmocka_unit_test(a_fork_whose_stations_round_together_still_meshes),
