@@ -326,6 +326,18 @@ static xyl_result collect_chain(stems *s, uint32_t start)
     return XYL_OK;
 }
 
+/* Lateral children of the nodes merged into station st. */
+static size_t lateral_count(const stems *s, const stems_station *st)
+{
+    size_t n = 0;
+    for (uint32_t i = st->first; i <= st->last; ++i) {
+        uint32_t node = s->chain[i];
+        n += s->child_start[node + 1] - s->child_start[node];
+        n -= main_child(s, node) != UINT32_MAX;
+    }
+    return n;
+}
+
 /* Stations along the chain: coincident nodes share one; nodes not clearly ahead of a child's
  * bridge ring are merged into the first station that is (docs/stems.md). */
 static xyl_result make_stations(stems *s, const stems_ring *bridge)
@@ -350,6 +362,11 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
         if (!room_for_one(s, (void **)&s->stations, &s->scap, s->nstations, sizeof *s->stations))
             return oom(s);
         stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
+        /* a stub stands for none of the child's nodes, so it need not have their radius: at it,
+         * a knob wider than the bridge ring (whose radius the patch limits) stood out beside
+         * the fork, across its siblings' tubes. It keeps the bridge ring's radius, unless
+         * laterals of the nodes it absorbed hang from it: their patches need the width */
+        if (behind && !lateral_count(s, &st)) st.r = bridge->radius;
         s->stations[s->nstations++] = st;
         first = i + 1;
     }
@@ -413,17 +430,6 @@ static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
     case 8: return emit_rings_k(s, from, branch, 8);
     default: return emit_rings_k(s, from, branch, s->k);
     }
-}
-
-static size_t lateral_count(const stems *s, const stems_station *st)
-{
-    size_t n = 0;
-    for (uint32_t i = st->first; i <= st->last; ++i) {
-        uint32_t node = s->chain[i];
-        n += s->child_start[node + 1] - s->child_start[node];
-        n -= main_child(s, node) != UINT32_MAX;
-    }
-    return n;
 }
 
 static xyl__dvec3 dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
@@ -820,8 +826,9 @@ static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
 
 /* ---- branches ------------------------------------------------------------------------------ */
 
-/* A chain that collapsed to one station still gets a tube: a second, node-less station one
- * diameter further on. */
+/* A root chain that collapsed to one station still gets a tube: a second, node-less station
+ * one diameter further on; so does a lateral's one station with laterals, whose fork rings
+ * need a segment ahead. */
 static xyl_result ensure_two_stations(stems *s, xyl__dvec3 dir)
 {
     if (s->nstations >= 2) return XYL_OK;
@@ -892,11 +899,11 @@ static bool band_folds(xyl__dvec3 ca, xyl__dvec3 ta, double ra, xyl__dvec3 cb, x
 
 /* Whether a lateral's first band, from its bridge ring to the ring of its first station, folds
  * when the tube comes into that station along t_in (the station's ring is turned halfway from
- * t_in to the next segment, as branch_rings turns it). */
+ * t_in to the next segment, if there is one, as branch_rings turns it). */
 static bool first_band_folds(const stems *s, const stems_ring *bridge, xyl__dvec3 t_in)
 {
     const stems_station *st = s->stations;
-    xyl__dvec3 t_out = dir_between(st[0].p, st[1].p, t_in);
+    xyl__dvec3 t_out = s->nstations > 1 ? dir_between(st[0].p, st[1].p, t_in) : t_in;
     xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
     double f = s->inflate;
     return band_folds(bridge->centre, bridge->tangent, f * bridge->radius, st[0].p, t0,
@@ -925,7 +932,10 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     xyl__dvec3 dir = from ? from->tangent : xyl__d3(0, 1, 0);
     if (!from && s->nchain > 1)
         dir = dir_between(node_pos(s, s->chain[0]), node_pos(s, s->chain[s->nchain - 1]), dir);
-    r = ensure_two_stations(s, dir);
+    /* a lateral's tube already has a ring, its bridge ring: one station without laterals is
+     * its tip, and a node-less station beyond it would only stick out past the child's end */
+    if (!from || s->nstations > 1 || lateral_count(s, &s->stations[0]))
+        r = ensure_two_stations(s, dir);
     if (r) return r;
     if (from) dir = first_direction(s, from);
     s->nrings = 0;
