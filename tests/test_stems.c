@@ -93,6 +93,17 @@ static void every_hard_case_stays_closed_after_subdivision(void **state)
     tu_for_each_hard_case(check_topology, &loop);
 }
 
+/* A skeleton of the given nodes, which must be valid. */
+static xyl_skeleton *skeleton_of(const xyl_skel_node *nodes, size_t count)
+{
+    xyl_skeleton_desc d = {0};
+    d.nodes = nodes;
+    d.node_count = count;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    return sk;
+}
+
 static xyl_skeleton *grow_preset(const char *name)
 {
     xyl_grammar *g = tu_parse(xyl_lsystem_preset_source(name));
@@ -356,11 +367,7 @@ static void a_child_that_curls_back_keeps_its_tip(void **state)
         {{0, 0, 0}, 0.1f, -1, 0, 0},  {{0, 1, 0}, 0.1f, 0, 0, 0},     {{0, 2, 0}, 0.1f, 1, 0, 0},
         {{1, 1, 0}, 0.05f, 1, 0, 0},  {{1, 3, 0}, 0.05f, 3, 0, 0},    {{-1, 3, 0}, 0.05f, 4, 0, 0},
     };
-    xyl_skeleton_desc d = {0};
-    d.nodes = nodes;
-    d.node_count = 6;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_skeleton *sk = skeleton_of(nodes, 6);
     uint32_t child = sk->nodes[5].branch;
     assert_int_not_equal(child, sk->nodes[0].branch);
     xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
@@ -393,11 +400,7 @@ static void a_twig_of_one_segment_ends_at_its_tip(void **state)
         {{0, 2, 0}, 0.1f, 1, 0, 0},
         {{0.6f, 1.3f, 0}, 0.05f, 1, 0, 0},
     };
-    xyl_skeleton_desc d = {0};
-    d.nodes = nodes;
-    d.node_count = 4;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_skeleton *sk = skeleton_of(nodes, 4);
     uint32_t twig = sk->nodes[3].branch;
     assert_int_not_equal(twig, sk->nodes[0].branch);
     double reach = sqrt(0.6 * 0.6 + 0.3 * 0.3) + 0.05;
@@ -467,11 +470,7 @@ static void siblings_that_part_later_grow_out_of_each_other(void **state)
         {{bx, by, 0}, 0.05f, 1, 0, 0},
         {{bx + (float)(0.6 * s100), by + (float)(0.6 * c100), 0}, 0.05f, 5, 0, 0},
     };
-    xyl_skeleton_desc d = {0};
-    d.nodes = nodes;
-    d.node_count = sizeof nodes / sizeof nodes[0];
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_skeleton *sk = skeleton_of(nodes, sizeof nodes / sizeof nodes[0]);
     uint32_t thin = sk->nodes[6].branch;
     xyl_vec3 tip = nodes[6].pos;
     for (uint32_t k = 3; k <= 8; ++k) {
@@ -511,11 +510,7 @@ static void thin_spokes_stay_separate_branches(void **state)
         nodes[2 + 2 * i] = (xyl_skel_node){{(float)(0.5 * sx), 1.25f, (float)(0.5 * sz)}, 1e-4f, 1, 0, 0};
         nodes[3 + 2 * i] = (xyl_skel_node){{(float)sx, 1.5f, (float)sz}, 1e-4f, 2 + 2 * i, 0, 0};
     }
-    xyl_skeleton_desc d = {0};
-    d.nodes = nodes;
-    d.node_count = 2 + 2 * spokes;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_skeleton *sk = skeleton_of(nodes, 2 + 2 * spokes);
     xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
     assert_closed(m, sk, "thin spokes");
     /* each spoke grows out of the fork, not out of a neighbour further out */
@@ -585,11 +580,7 @@ static void branch_normals_keep_the_parent_cylindrical_at_a_joint(void **state)
         {{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0}, {{0, 2, 0}, 0.1f, 1, 0, 0},
         {{0, 3, 0}, 0.1f, 2, 0, 0},  {{1, 1, 0}, 0.05f, 1, 0, 0}, {{2, 1, 0}, 0.05f, 4, 0, 0},
     };
-    xyl_skeleton_desc d = {0};
-    d.nodes = nodes;
-    d.node_count = 6;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_skeleton *sk = skeleton_of(nodes, 6);
     xyl_mesh *branch = build(sk, 8, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
     xyl_mesh *smooth = build(sk, 8, XYL_SUBDIVIDE_NONE, XYL_NORMALS_SMOOTH);
     uint32_t parent = sk->nodes[0].branch;
@@ -627,11 +618,7 @@ static xyl_skeleton *straight_stem(void)
     xyl_skel_node nodes[] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0},
                              {{0, 2, 0}, 0.1f, 1, 0, 0},  {{0, 3, 0}, 0.1f, 2, 0, 0},
                              {{0, 4, 0}, 0.1f, 3, 0, 0}};
-    xyl_skeleton_desc d = {0};
-    d.nodes = nodes;
-    d.node_count = 5;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&d, &sk, NULL), XYL_OK);
+    xyl_skeleton *sk = skeleton_of(nodes, 5);
     return sk;
 }
 
