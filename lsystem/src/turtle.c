@@ -35,14 +35,15 @@ typedef struct turtle {
     size_t leaf_count, leaf_cap;
     int32_t *anchors;   /* root node of each anchor, -1 until an F makes it */
     size_t anchor_count, anchor_cap;
+    double turn_angle, turn_cos, turn_sin; /* the last turn's angle: grammars repeat a few */
 } turtle;
 
 /* ---- frame rotations ----------------------------------------------------------------------- */
 
-/* Right-handed rotation by angle in the plane (a, b) about a x b: a turns towards b. */
-static void rotate_pair(xyl__dvec3 *a, xyl__dvec3 *b, double angle)
+/* Right-handed rotation by an angle of cosine c and sine s in the plane (a, b) about a x b:
+ * a turns towards b. */
+static void rotate_pair(xyl__dvec3 *a, xyl__dvec3 *b, double c, double s)
 {
-    double c = cos(angle), s = sin(angle);
     xyl__dvec3 na = xyl__d3_add(xyl__d3_scale(*a, c), xyl__d3_scale(*b, s));
     xyl__dvec3 nb = xyl__d3_sub(xyl__d3_scale(*b, c), xyl__d3_scale(*a, s));
     *a = na;
@@ -59,15 +60,17 @@ static void roll_horizontal(xyl__frame *f)
     f->l = xyl__d3_scale(l, 1.0 / sqrt(l2));
 }
 
-bool lsys_turtle_rotate(xyl__frame *f, char symbol, double angle)
+/* lsys_turtle_rotate with the angle's cosine and sine given: sin(-a) = -sin(a) exactly, and
+ * cos(-a) = cos(a), so the negative turns need no second evaluation. */
+static bool rotate_cs(xyl__frame *f, char symbol, double c, double s)
 {
     switch (symbol) {
-    case '+': rotate_pair(&f->h, &f->l, angle); break;   /* R_U(+a): H towards L */
-    case '-': rotate_pair(&f->h, &f->l, -angle); break;
-    case '&': rotate_pair(&f->h, &f->u, -angle); break;  /* R_L(+a): H towards -U */
-    case '^': rotate_pair(&f->h, &f->u, angle); break;
-    case '\\': rotate_pair(&f->l, &f->u, angle); break;  /* R_H(+a): L towards U */
-    case '/': rotate_pair(&f->l, &f->u, -angle); break;
+    case '+': rotate_pair(&f->h, &f->l, c, s); break;   /* R_U(+a): H towards L */
+    case '-': rotate_pair(&f->h, &f->l, c, -s); break;
+    case '&': rotate_pair(&f->h, &f->u, c, -s); break;  /* R_L(+a): H towards -U */
+    case '^': rotate_pair(&f->h, &f->u, c, s); break;
+    case '\\': rotate_pair(&f->l, &f->u, c, s); break;  /* R_H(+a): L towards U */
+    case '/': rotate_pair(&f->l, &f->u, c, -s); break;
     case '|':
         f->h = xyl__d3_scale(f->h, -1.0);
         f->l = xyl__d3_scale(f->l, -1.0);
@@ -77,6 +80,11 @@ bool lsys_turtle_rotate(xyl__frame *f, char symbol, double angle)
     }
     xyl__frame_orthonormalize(f);
     return true;
+}
+
+bool lsys_turtle_rotate(xyl__frame *f, char symbol, double angle)
+{
+    return rotate_cs(f, symbol, cos(angle), sin(angle));
 }
 
 /* ---- options ------------------------------------------------------------------------------- */
@@ -239,8 +247,9 @@ static void bend(turtle *t)
     double s = xyl__d3_len(axis);
     if (!(s > XYL__EPS_REL * xyl__d3_len(tropism))) return;
     axis = xyl__d3_scale(axis, 1.0 / s);
-    f->h = xyl__d3_rotate(f->h, axis, e * s);
-    f->l = xyl__d3_rotate(f->l, axis, e * s);
+    double c = cos(e * s), sn = sin(e * s);
+    f->h = xyl__d3_rotate_cs(f->h, axis, c, sn);
+    f->l = xyl__d3_rotate_cs(f->l, axis, c, sn);
     xyl__frame_orthonormalize(f);
 }
 
@@ -371,7 +380,12 @@ static xyl_result turn(turtle *t, size_t i)
         if (r != XYL_OK) return r;
         a *= DEG_TO_RAD;
     }
-    lsys_turtle_rotate(&t->st.frame, (char)t->s->sym[i], a);
+    if (!(a == t->turn_angle) || signbit(a) != signbit(t->turn_angle)) { /* NaN at first */
+        t->turn_angle = a;
+        t->turn_cos = cos(a);
+        t->turn_sin = sin(a);
+    }
+    rotate_cs(&t->st.frame, (char)t->s->sym[i], t->turn_cos, t->turn_sin);
     return XYL_OK;
 }
 
@@ -553,6 +567,7 @@ xyl_result xyl_lsystem_interpret(const xyl_grammar *grammar, const xyl_lstring *
     t.s = string;
     t.o = &o;
     t.diag = diag;
+    t.turn_angle = NAN;
     start(&t);
     r = walk(&t);
     if (r == XYL_OK) r = finish(&t, out);

@@ -107,7 +107,11 @@ xyl__dvec3 xyl__d3_any_orthogonal(xyl__dvec3 n)
 
 xyl__dvec3 xyl__d3_rotate(xyl__dvec3 v, xyl__dvec3 axis, double angle)
 {
-    double c = cos(angle), s = sin(angle);
+    return xyl__d3_rotate_cs(v, axis, cos(angle), sin(angle));
+}
+
+xyl__dvec3 xyl__d3_rotate_cs(xyl__dvec3 v, xyl__dvec3 axis, double c, double s)
+{
     xyl__dvec3 kxv = xyl__d3_cross(axis, v);
     double kdv = xyl__d3_dot(axis, v);
     return xyl__d3_add(xyl__d3_add(xyl__d3_scale(v, c), xyl__d3_scale(kxv, s)),

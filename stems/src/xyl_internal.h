@@ -150,6 +150,8 @@ static inline bool xyl__d3_normalize_ok(xyl__dvec3 a, xyl__dvec3 *out)
 xyl__dvec3 xyl__d3_any_orthogonal(xyl__dvec3 n);
 /* Rotates v about unit axis by angle (Rodrigues). */
 xyl__dvec3 xyl__d3_rotate(xyl__dvec3 v, xyl__dvec3 axis, double angle);
+/* The same with the angle's cosine c and sine s given (to turn several vectors by one angle). */
+xyl__dvec3 xyl__d3_rotate_cs(xyl__dvec3 v, xyl__dvec3 axis, double c, double s);
 
 /* A right-handed orthonormal frame: heading, left, up = heading x left. */
 typedef struct xyl__frame {
