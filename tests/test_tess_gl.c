@@ -94,11 +94,13 @@ static xyl_tess_patches *patches_of(const xyl_mesh *m)
     return tp;
 }
 
-/* A camera framing the box from (azimuth, elevation), moved towards its centre by `zoom`
- * (1: the whole box in view), and the frame uniforms that go with it. */
-static void make_view(const float lo[3], const float hi[3], float azimuth, float elevation,
-                      float zoom, xyl_tess_camera *cam, xyl_tess_frame *frame)
+/* A camera framing the mesh's bounds from (azimuth, elevation), moved towards their centre by
+ * `zoom` (1: the whole box in view), and the frame uniforms that go with it. */
+static void make_view(const xyl_mesh *m, float azimuth, float elevation, float zoom,
+                      xyl_tess_camera *cam, xyl_tess_frame *frame)
 {
+    float lo[3], hi[3];
+    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_camera_frame(lo, hi, azimuth, elevation, 0.8f, 1.0f, cam);
     for (int k = 0; k < 3; ++k)
         cam->eye[k] = cam->target[k] + zoom * (cam->eye[k] - cam->target[k]);
@@ -325,14 +327,12 @@ static size_t red_over_views(suite *s, const xyl_mesh *m, const xyl_tess_patches
 {
     const float az[6] = {0.3f, 1.9f, 3.5f, 5.0f, 0.8f, 2.6f};
     const float el[6] = {0.25f, 0.1f, 0.35f, -0.1f, 1.35f, -1.35f};
-    float lo[3], hi[3];
-    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_batches b = {0};
     size_t total = 0;
     for (int i = 0; i < 6; ++i) {
         xyl_tess_camera cam;
         xyl_tess_frame frame;
-        make_view(lo, hi, az[i], el[i], 0.45f, &cam, &frame);
+        make_view(m, az[i], el[i], 0.45f, &cam, &frame);
         frame.flags = XYL_TESS_FLAG_BACKFACES;
         xyl_tess_view view = {0};
         memcpy(view.eye, cam.eye, sizeof view.eye);
@@ -476,11 +476,9 @@ static void bad_input_gets_result_codes(void **state)
 
     xyl_mesh *m = tu_tree_mesh(0, 3, XYL_SUBDIVIDE_NONE);
     xyl_tess_patches *tp = patches_of(m);
-    float lo[3], hi[3];
-    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_camera cam;
     xyl_tess_frame f;
-    make_view(lo, hi, 0.5f, 0.2f, 1.0f, &cam, &f);
+    make_view(m, 0.5f, 0.2f, 1.0f, &cam, &f);
     xyl_tess_view view = {0};
     view.fixed_level = 2;
     xyl_tess_batches b = {0};
@@ -617,11 +615,9 @@ static void default_tree_renders_with_coverage_and_wireframe(void **state)
     xyl_mesh *m = tu_tree_mesh(0, 4, XYL_SUBDIVIDE_NONE);
     xyl_tess_patches *tp = patches_of(m);
     assert_int_equal(xyl_tess_gl_set_patches(s->gl, tp, NULL), XYL_OK);
-    float lo[3], hi[3];
-    xyl_mesh_bounds(m, lo, hi);
     xyl_tess_camera cam;
     xyl_tess_frame f;
-    make_view(lo, hi, 0.6f, 0.15f, 1.0f, &cam, &f);
+    make_view(m, 0.6f, 0.15f, 1.0f, &cam, &f);
     xyl_tess_view view = {0};
     memcpy(view.eye, cam.eye, sizeof view.eye);
     view.viewport_height = SIDE;
