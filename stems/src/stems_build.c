@@ -1011,7 +1011,9 @@ static xyl_result index_tree(stems *s)
             xyl__stems_tail_spheres(s, s->tails);
             moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
         } else if (step == 1) {
-            moved = has_sibling_laterals(s) && xyl__stems_merge_siblings(s, parent_of);
+            /* here moved says whether the placement moved laterals: one it moved may lie in
+             * its new fork's tube, siblings or not */
+            moved = (moved || has_sibling_laterals(s)) && xyl__stems_merge_siblings(s, parent_of);
         }
     }
     xyl__free(&s->alloc, parent_of);

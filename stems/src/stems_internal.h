@@ -113,7 +113,8 @@ static inline bool xyl__lateral_before(const xyl_skeleton *sk, uint32_t a, uint3
 bool xyl__stems_place_laterals(const stems *s, int32_t *parent_of, uint32_t *scratch);
 
 /* Overlapping laterals of one node of the tree as meshed (stems_merge.c): updates parent_of:
- * a lateral merged into a sibling is detached (-1) and the rest of it hangs from the sibling.
+ * a lateral merged into a sibling is detached (-1) and the rest of it hangs from the sibling;
+ * a lateral the placement moved that lies in its new fork's tube all along is detached too.
  * Needs child_start, child_list and main of the tree parent_of describes. Returns whether
  * anything merged. */
 bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of);

@@ -211,14 +211,16 @@ static uint32_t next_lateral(const stems *s, uint32_t p, uint32_t prev)
 
 /* The laterals of fork in `before` order, each tried against those before it that are still
  * meshed from the fork: so a host is never merged away after a thinner sibling joined it. A
- * lateral that lies in fork's own tube all along is not meshed at all. */
+ * lateral the placement moved here that lies in fork's own tube all along is not meshed at all
+ * (one it did not move left that tube at once, or would have been hidden). */
 static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
 {
     uint32_t lo = s->child_start[fork], hi = s->child_start[fork + 1], main = s->main[fork];
     bool any = false;
     for (uint32_t child = next_lateral(s, fork, UINT32_MAX); child != UINT32_MAX;
          child = next_lateral(s, fork, child)) {
-        if (inside_parent_throughout(s, parent_of, fork, child)) {
+        bool moved_here = parent_of[child] != s->sk->nodes[child].parent;
+        if (moved_here && inside_parent_throughout(s, parent_of, fork, child)) {
             parent_of[child] = -1;
             any = true;
             continue;
@@ -236,13 +238,26 @@ static bool merge_at(const stems *s, uint32_t fork, int32_t *parent_of)
     return any;
 }
 
+/* Whether a lateral of fork is one the placement moved there (merge_at's only case for a fork
+ * without siblings). */
+static bool has_moved_lateral(const stems *s, uint32_t fork, const int32_t *parent_of)
+{
+    for (uint32_t j = s->child_start[fork]; j < s->child_start[fork + 1]; ++j) {
+        uint32_t c = s->child_list[j];
+        if (c != s->main[fork] && parent_of[c] != s->sk->nodes[c].parent) return true;
+    }
+    return false;
+}
+
 bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of)
 {
     size_t n = s->sk->node_count;
     bool any = false;
     for (uint32_t f = 0; f < n; ++f) {
         uint32_t laterals = s->child_start[f + 1] - s->child_start[f] - (s->main[f] != UINT32_MAX);
-        if (laterals >= 2 && merge_at(s, f, parent_of)) any = true;
+        if ((laterals >= 2 || (laterals == 1 && has_moved_lateral(s, f, parent_of))) &&
+            merge_at(s, f, parent_of))
+            any = true;
     }
     return any;
 }
