@@ -1,17 +1,17 @@
 /* The library's allocation entry points: the caller's xyl_allocator, or the default one.
  *
- * The default allocator is malloc/free for small blocks. Big blocks (from LARGE_BLOCK on: the
- * output arrays of a mesh of 10^4 segments and more, 4-17 MB each at 10^5 segments) get their
- * own 2 MiB-aligned mapping marked for transparent huge pages. Fresh memory was the largest
- * single cost of meshing big trees: its first touch faults once per 4 KiB page, and a huge
- * page takes one fault per 2 MiB (docs/BENCHMARKS.md, "Fresh memory"). The mappings come from
- * mmap, not from malloc's heap: 2 MiB-aligned blocks inside the heap fragment it (measured:
- * posix_memalign plus madvise made 4-32 MiB arrays slower).
+ * The default allocator is malloc/free for small blocks. Blocks from XYL__LARGE_BLOCK (16 KiB)
+ * on get their own mapping: whole 4 KiB pages, and from 1 MiB on whole 2 MiB pages, aligned and
+ * marked for transparent huge pages. Fresh memory was the largest single cost of meshing big
+ * trees: its first touch faults once per 4 KiB page, a huge page once per 2 MiB, and glibc gave
+ * big blocks back after every build (docs/memory.md). The mappings come from mmap, not from
+ * malloc's heap: 2 MiB-aligned blocks inside the heap fragment it (measured: posix_memalign
+ * plus madvise made 4-32 MiB arrays slower).
  *
- * Freed big blocks are kept in a small cache (at most CACHE_BYTES, CACHE_SLOTS blocks) and
- * handed out again to a request of about their size: building the same tree again (a viewer
- * tuning parameters, a benchmark) then writes memory that is already mapped and possibly still
- * in cache, as it would with malloc's heap. xyl_memory_trim returns the cache to the system.
+ * Freed mapped blocks are kept in a small cache (XYL__CACHE_SLOTS blocks, XYL__CACHE_BYTES in
+ * all) and handed out again to a request of about their size: building the same tree again (a
+ * viewer tuning parameters, a benchmark) then writes memory that is already mapped and possibly
+ * still in cache. xyl_memory_trim returns the cache to the system.
  *
  * Every default block starts with a header that says which of the two it is. Sanitizer builds
  * keep malloc for every block, so each has redzones and leak checks. */
@@ -46,13 +46,10 @@ typedef union block_head {
 
 #define HUGE_PAGE ((size_t)2 << 20)
 #define SMALL_PAGE ((size_t)4096) /* or a multiple of the page size: mmap rounds up */
-#define LARGE_BLOCK XYL__LARGE_BLOCK
-#define CACHE_SLOTS XYL__CACHE_SLOTS
-#define CACHE_BYTES XYL__CACHE_BYTES
 
 /* Freed mappings, oldest first. */
 static struct {
-    block_head *block[CACHE_SLOTS];
+    block_head *block[XYL__CACHE_SLOTS];
     size_t count, bytes;
 } cache;
 static pthread_mutex_t cache_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -106,15 +103,15 @@ static block_head *cache_take(size_t len)
 /* Keeps h for reuse, evicting the oldest blocks to make room; unmaps whatever does not fit. */
 static void cache_put(block_head *h)
 {
-    block_head *evicted[CACHE_SLOTS + 1];
+    block_head *evicted[XYL__CACHE_SLOTS + 1];
     size_t n = 0;
-    if (h->mapped > CACHE_BYTES) {
+    if (h->mapped > XYL__CACHE_BYTES) {
         evicted[n++] = h;
     } else {
         pthread_mutex_lock(&cache_lock);
         size_t drop = 0;
-        while (drop < cache.count &&
-               (cache.count - drop == CACHE_SLOTS || cache.bytes + h->mapped > CACHE_BYTES)) {
+        while (drop < cache.count && (cache.count - drop == XYL__CACHE_SLOTS ||
+                                      cache.bytes + h->mapped > XYL__CACHE_BYTES)) {
             cache.bytes -= cache.block[drop]->mapped;
             evicted[n++] = cache.block[drop++];
         }
@@ -142,7 +139,7 @@ size_t xyl_memory_trim(void)
 {
     size_t released = 0;
 #if defined(XYL__LARGE_BLOCKS)
-    block_head *all[CACHE_SLOTS];
+    block_head *all[XYL__CACHE_SLOTS];
     pthread_mutex_lock(&cache_lock);
     size_t n = cache.count;
     memcpy(all, cache.block, n * sizeof all[0]);
@@ -163,7 +160,7 @@ static void *alloc_default(size_t size, bool *zeroed)
     size_t bytes = size + sizeof(block_head);
     block_head *h = NULL;
 #if defined(XYL__LARGE_BLOCKS)
-    if (bytes >= LARGE_BLOCK) {
+    if (bytes >= XYL__LARGE_BLOCK) {
         /* whole huge pages from half a huge page on; below, small pages (a huge page is
          * zeroed whole on first touch) */
         size_t page = bytes >= HUGE_PAGE / 2 ? HUGE_PAGE : SMALL_PAGE;
