@@ -671,8 +671,9 @@ static void create_takes_every_array_from_the_allocator(void **state)
     d.alloc = (xyl_allocator){count_alloc, count_free, &c};
     xyl_mesh *m = NULL;
     assert_int_equal(xyl_mesh_create(&d, &m, NULL), XYL_OK);
-    const void *arrays[] = {m,        m->positions, m->normals,       m->uvs,     m->branch_ids,
-                            m->quads, m->triangles, m->face_branches, m->tri_view};
+    const void *arrays[] = {m,           m->positions,     m->normals,  m->uvs,
+                            m->branch_ids, m->quads,       m->triangles, m->face_branches,
+                            m->tri_view, m->uv_wraps};
     for (size_t i = 0; i < sizeof arrays / sizeof *arrays; ++i) assert_true(tracked(&c, arrays[i]));
     /* Scratch (the normal sums) is already back; exactly the mesh's own blocks are live. */
     assert_int_equal(c.allocs - c.frees, sizeof arrays / sizeof *arrays);

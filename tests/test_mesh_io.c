@@ -701,6 +701,7 @@ typedef struct view_store {
     xyl_vec3 pos[8], nrm[8];
     float uv[16];
     uint32_t ids[8], quads[24], fb[6], tri[36];
+    uint8_t wraps[6];
 } view_store;
 
 static xyl_mesh cube_view(view_store *st)
@@ -713,6 +714,7 @@ static xyl_mesh cube_view(view_store *st)
     memcpy(st->quads, c->quads, sizeof st->quads);
     memcpy(st->fb, c->face_branches, sizeof st->fb);
     memcpy(st->tri, c->tri_view, sizeof st->tri);
+    memcpy(st->wraps, c->uv_wraps, sizeof st->wraps);
     xyl_mesh v = *c;
     xyl_mesh_destroy(c);
     v.positions = st->pos;
@@ -722,6 +724,7 @@ static xyl_mesh cube_view(view_store *st)
     v.quads = st->quads;
     v.face_branches = st->fb;
     v.tri_view = st->tri;
+    v.uv_wraps = st->wraps;
     return v;
 }
 

@@ -694,6 +694,311 @@ static void subdivided_vertices_sit_on_the_limit_surface(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* ---- UV seams ------------------------------------------------------------------------------ */
+
+/* Face f's corners (quads first) and their number. */
+static int face_of(const xyl_mesh *m, size_t f, const uint32_t **idx)
+{
+    if (f < m->quad_count) {
+        *idx = m->quads + 4 * f;
+        return 4;
+    }
+    *idx = m->triangles + 3 * (f - m->quad_count);
+    return 3;
+}
+
+/* The u of corner c of face f as a texture sees it: its vertex's u, + 1 where the face wraps. */
+static double corner_u(const xyl_mesh *m, size_t f, const uint32_t *idx, int c)
+{
+    return m->uvs[2 * idx[c]] + (double)(m->uv_wraps[f] >> c & 1u);
+}
+
+/* The span of face f's corner u's, with its wraps or without. */
+static double u_span(const xyl_mesh *m, size_t f, bool wraps)
+{
+    const uint32_t *idx;
+    int n = face_of(m, f, &idx);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int c = 0; c < n; ++c) {
+        double u = wraps ? corner_u(m, f, idx, c) : m->uvs[2 * idx[c]];
+        lo = fmin(lo, u), hi = fmax(hi, u);
+    }
+    return hi - lo;
+}
+
+/* Whether quad f is a band quad: its vertices are its branch's, two on one ring (one v) and two
+ * on another, at the same two neighbouring ring positions j/k and (j + 1)/k (mod k). */
+static bool band_quad(const xyl_mesh *m, size_t f, uint32_t k)
+{
+    const uint32_t *q = m->quads + 4 * f;
+    for (int c = 0; c < 4; ++c)
+        if (m->branch_ids[q[c]] != m->face_branches[f]) return false;
+    float u[4], v[4];
+    for (int c = 0; c < 4; ++c) u[c] = m->uvs[2 * q[c]], v[c] = m->uvs[2 * q[c] + 1];
+    /* the other corner on corner 0's ring */
+    int mate = v[1] == v[0] ? 1 : v[3] == v[0] ? 3 : -1;
+    if (mate < 0 || v[2] == v[0]) return false;
+    int far0 = mate == 1 ? 3 : 1, far1 = 2; /* corners of the other ring: far0 pairs with 0 */
+    if (v[far0] != v[far1] || u[far0] != u[0] || u[far1] != u[mate]) return false;
+    long j0 = lround(u[0] * (double)k), j1 = lround(u[mate] * (double)k);
+    if (fabs(u[0] * (double)k - (double)j0) > 1e-4 || fabs(u[mate] * (double)k - (double)j1) > 1e-4)
+        return false;
+    return (j0 + 1) % (long)k == j1 % (long)k || (j1 + 1) % (long)k == j0 % (long)k;
+}
+
+/* Every band quad of every preset spans one ring side in u, 1/k, as a texture sees it: the quad
+ * that closes a ring takes u = 1 at its wrapped corners instead of running back from (k - 1)/k to
+ * 0 across the whole texture, which its vertices' own u's would do. */
+static void band_quads_span_one_side_across_the_seam(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        for (uint32_t k = 3; k <= 8; ++k) {
+            xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+            size_t bands = 0, seams = 0;
+            for (size_t f = 0; f < m->quad_count; ++f) {
+                if (!band_quad(m, f, k)) continue;
+                ++bands;
+                double with = u_span(m, f, true), without = u_span(m, f, false);
+                if (fabs(with - 1.0 / k) > 1e-6)
+                    fail_msg("%s k = %u: band quad %zu spans %.6f in u with its wraps", name, k, f,
+                             with);
+                seams += without > 0.5;
+            }
+            /* most quads are band quads, and the seams were there to mend */
+            assert_true(bands > m->quad_count / 2);
+            assert_true(seams > 0);
+            xyl_mesh_destroy(m);
+        }
+        xyl_skeleton_destroy(sk);
+    }
+}
+
+/* The split mesh keeps every face corner where it was and gives it the UV the face meant. */
+static void assert_split_matches(const xyl_mesh *m, const xyl_mesh *s)
+{
+    size_t both = 0, faces = m->quad_count + m->triangle_count;
+    uint8_t *use = calloc(m->vertex_count ? m->vertex_count : 1, 1);
+    assert_non_null(use);
+    for (size_t f = 0; f < faces; ++f) {
+        const uint32_t *idx;
+        int n = face_of(m, f, &idx);
+        for (int c = 0; c < n; ++c) use[idx[c]] |= (m->uv_wraps[f] >> c & 1u) ? 2 : 1;
+    }
+    for (size_t v = 0; v < m->vertex_count; ++v) both += use[v] == 3;
+    free(use);
+    assert_int_equal(s->vertex_count, m->vertex_count + both);
+    assert_int_equal(s->quad_count, m->quad_count);
+    assert_int_equal(s->triangle_count, m->triangle_count);
+    for (size_t f = 0; f < faces; ++f) {
+        const uint32_t *a, *b;
+        int n = face_of(m, f, &a);
+        face_of(s, f, &b);
+        assert_int_equal(s->face_branches[f], m->face_branches[f]);
+        assert_int_equal(s->uv_wraps[f], 0);
+        for (int c = 0; c < n; ++c) {
+            assert_memory_equal(&s->positions[b[c]], &m->positions[a[c]], sizeof(xyl_vec3));
+            assert_memory_equal(&s->normals[b[c]], &m->normals[a[c]], sizeof(xyl_vec3));
+            assert_int_equal(s->branch_ids[b[c]], m->branch_ids[a[c]]);
+            float u = (m->uv_wraps[f] >> c & 1u) ? m->uvs[2 * a[c]] + 1.0f : m->uvs[2 * a[c]];
+            assert_true(s->uvs[2 * b[c]] == u && s->uvs[2 * b[c] + 1] == m->uvs[2 * a[c] + 1]);
+        }
+    }
+}
+
+static void split_seams_give_every_corner_its_uv(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset("abop-1.24a");
+    const struct {
+        uint32_t k;
+        xyl_subdivision sub;
+    } cases[] = {{3, XYL_SUBDIVIDE_NONE}, {4, XYL_SUBDIVIDE_NONE}, {7, XYL_SUBDIVIDE_NONE},
+                 {4, XYL_SUBDIVIDE_CATMARK}, {5, XYL_SUBDIVIDE_LOOP}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        xyl_mesh *m = build(sk, cases[i].k, cases[i].sub, XYL_NORMALS_BRANCH), *s = NULL;
+        assert_int_equal(xyl_mesh_split_seams(m, NULL, &s, NULL), XYL_OK);
+        assert_true(s->vertex_count > m->vertex_count);
+        assert_split_matches(m, s);
+        /* open by index along the seams, still closed by position (the mesh it came from) */
+        xyl_mesh_report rep;
+        assert_int_equal(xyl_mesh_check(s, &rep, NULL), XYL_OK);
+        assert_true(rep.boundary_edges > 0 && rep.unused_vertices == 0);
+        xyl_mesh_destroy(s);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
+static void split_seams_reject_bad_views(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset("abop-1.24a");
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH), *s = NULL;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_mesh_split_seams(NULL, NULL, &s, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_mesh_split_seams(m, NULL, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    size_t faces = m->quad_count + m->triangle_count;
+    uint8_t *wraps = malloc(faces);
+    assert_non_null(wraps);
+    memcpy(wraps, m->uv_wraps, faces);
+    wraps[5] = 0x10; /* a quad has corners 0..3 */
+    xyl_mesh view = *m;
+    view.uv_wraps = wraps;
+    assert_int_equal(xyl_mesh_split_seams(&view, NULL, &s, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(diag.index, 5);
+    assert_null(s);
+    /* a view without wraps is split into a plain copy; so is one of NULL wraps */
+    memset(wraps, 0, faces);
+    for (int pass = 0; pass < 2; ++pass) {
+        view.uv_wraps = pass ? NULL : wraps;
+        assert_int_equal(xyl_mesh_split_seams(&view, NULL, &s, &diag), XYL_OK);
+        assert_int_equal(s->vertex_count, m->vertex_count);
+        assert_memory_equal(s->uvs, m->uvs, 2 * m->vertex_count * sizeof *m->uvs);
+        assert_memory_equal(s->quads, m->quads, 4 * m->quad_count * sizeof *m->quads);
+        xyl_mesh_destroy(s);
+        s = NULL;
+    }
+    /* xyl_mesh_create checks the bits too */
+    wraps[5] = 0x10;
+    xyl_mesh_desc d = {0};
+    d.positions = m->positions;
+    d.vertex_count = m->vertex_count;
+    d.quads = m->quads;
+    d.quad_count = m->quad_count;
+    d.uv_wraps = wraps;
+    assert_int_equal(xyl_mesh_create(&d, &s, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(diag.index, 5);
+    wraps[5] = 0x08;
+    assert_int_equal(xyl_mesh_create(&d, &s, &diag), XYL_OK);
+    assert_int_equal(s->uv_wraps[5], 0x08);
+    xyl_mesh_destroy(s);
+    free(wraps);
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
+/* m written to memory in format (NUL-terminated), its size without the NUL in *size. */
+static char *written(const xyl_mesh *m, xyl_mesh_format format, size_t *size)
+{
+    assert_int_equal(xyl_mesh_write_memory(m, format, NULL, 0, size), XYL_OK);
+    char *bytes = calloc(*size + 1, 1);
+    assert_non_null(bytes);
+    assert_int_equal(xyl_mesh_write_memory(m, format, bytes, *size + 1, NULL), XYL_OK);
+    return bytes;
+}
+
+/* The OBJ shares v and vn between the two sides of a seam (importers keep the mesh closed) and
+ * gives each corner its own vt: every corner's vt is the u its face meant. */
+static void obj_corners_carry_their_wrapped_uv(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset("abop-1.24a");
+    xyl_mesh *m = build(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH), *s = NULL;
+    assert_int_equal(xyl_mesh_split_seams(m, NULL, &s, NULL), XYL_OK);
+    size_t need = 0;
+    char *text = written(m, XYL_MESH_FORMAT_OBJ, &need);
+    float *vt = malloc(2 * s->vertex_count * sizeof *vt);
+    assert_non_null(vt);
+    size_t nv = 0, nvt = 0, face = 0, wrapped = 0;
+    for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
+        if (strncmp(line, "v ", 2) == 0) ++nv;
+        if (strncmp(line, "vt ", 3) == 0) {
+            assert_true(nvt < s->vertex_count);
+            assert_int_equal(sscanf(line + 3, "%f %f", &vt[2 * nvt], &vt[2 * nvt + 1]), 2);
+            ++nvt;
+        }
+        if (strncmp(line, "f ", 2) != 0) continue;
+        const uint32_t *idx;
+        int n = face_of(m, face, &idx), used = 0;
+        char *at = line + 1;
+        for (int c = 0; c < n; ++c) {
+            unsigned long a, b, nn;
+            assert_int_equal(sscanf(at, " %lu/%lu/%lu%n", &a, &b, &nn, &used), 3);
+            at += used;
+            assert_int_equal(a, idx[c] + 1);
+            assert_int_equal(nn, idx[c] + 1);
+            assert_true(b >= 1 && b <= nvt);
+            assert_float_equal(vt[2 * (b - 1)], corner_u(m, face, idx, c), 1e-6);
+            assert_float_equal(vt[2 * (b - 1) + 1], m->uvs[2 * idx[c] + 1], 1e-5);
+            wrapped += b != a;
+        }
+        ++face;
+    }
+    assert_int_equal(nv, m->vertex_count);
+    assert_int_equal(nvt, s->vertex_count);
+    assert_int_equal(face, m->quad_count + m->triangle_count);
+    assert_true(wrapped > 0);
+    free(vt);
+    free(text);
+    xyl_mesh_destroy(s);
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
+/* The GLB holds the split mesh: its POSITION accessor counts the seam copies. */
+static void glb_holds_the_split_mesh(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = grow_preset("abop-1.24a");
+    xyl_mesh *m = build(sk, 5, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH), *s = NULL;
+    assert_int_equal(xyl_mesh_split_seams(m, NULL, &s, NULL), XYL_OK);
+    size_t need = 0, need_split = 0;
+    unsigned char *glb = (unsigned char *)written(m, XYL_MESH_FORMAT_GLB, &need);
+    uint32_t json_len = (uint32_t)glb[12] | (uint32_t)glb[13] << 8 | (uint32_t)glb[14] << 16 |
+                        (uint32_t)glb[15] << 24;
+    char *json = calloc(json_len + 1, 1);
+    assert_non_null(json);
+    memcpy(json, glb + 20, json_len);
+    const char *count = strstr(json, "\"count\":"); /* the first accessor: POSITION */
+    assert_non_null(count);
+    assert_int_equal(strtoull(count + 8, NULL, 10), s->vertex_count);
+    /* the same file as the split mesh written directly */
+    char *direct = written(s, XYL_MESH_FORMAT_GLB, &need_split);
+    assert_int_equal(need_split, need);
+    assert_memory_equal(direct, glb, need);
+    free(direct);
+    free(json);
+    free(glb);
+    xyl_mesh_destroy(s);
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
+/* One level of Catmull-Clark or Loop keeps the seams: the children of a band quad span half a
+ * ring side in u, those of the quad that closed the ring too (their u's are interpolated in
+ * the parent's frame, so the seam's new points get u = 1, not the 0.5 a plain average across
+ * the seam would give). Caps (one v) are left out. */
+static void subdivision_keeps_the_seams(void **state)
+{
+    (void)state;
+    xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0}, {{0, 2, 0}, 0.1f, 1, 0, 0}};
+    xyl_skeleton *sk = skeleton_of(nodes, 3);
+    const uint32_t k = 4;
+    for (int scheme = XYL_SUBDIVIDE_CATMARK; scheme <= XYL_SUBDIVIDE_LOOP; ++scheme) {
+        xyl_mesh *m = build(sk, k, (xyl_subdivision)scheme, XYL_NORMALS_BRANCH);
+        size_t band = 0, wrapped = 0;
+        for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
+            const uint32_t *idx;
+            int n = face_of(m, f, &idx);
+            bool cap = true;
+            for (int c = 1; c < n; ++c) cap = cap && m->uvs[2 * idx[c] + 1] == m->uvs[2 * idx[0] + 1];
+            if (cap) continue;
+            ++band;
+            wrapped += m->uv_wraps[f] != 0;
+            double span = u_span(m, f, true);
+            if (span > 0.5 / k + 1e-6)
+                fail_msg("scheme %d: face %zu spans %.6f in u", scheme, f, span);
+        }
+        assert_true(band > 0 && wrapped > 0);
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
+}
+
 /* ---- determinism, errors ------------------------------------------------------------------- */
 
 static void identical_input_gives_identical_meshes(void **state)
@@ -840,6 +1145,12 @@ int main(void)
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(subdivision_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(subdivided_vertices_sit_on_the_limit_surface),
+        cmocka_unit_test(band_quads_span_one_side_across_the_seam),
+        cmocka_unit_test(split_seams_give_every_corner_its_uv),
+        cmocka_unit_test(split_seams_reject_bad_views),
+        cmocka_unit_test(obj_corners_carry_their_wrapped_uv),
+        cmocka_unit_test(glb_holds_the_split_mesh),
+        cmocka_unit_test(subdivision_keeps_the_seams),
         cmocka_unit_test(identical_input_gives_identical_meshes),
         cmocka_unit_test(bad_options_and_limits_return_their_codes),
         cmocka_unit_test(build_survives_every_allocation_failure),

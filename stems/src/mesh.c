@@ -12,6 +12,7 @@ void xyl__mesh_arrays_free(xyl__mesh_arrays *a, const xyl_allocator *alloc)
     xyl__free(alloc, a->quads);
     xyl__free(alloc, a->triangles);
     xyl__free(alloc, a->face_branches);
+    xyl__free(alloc, a->uv_wraps);
     memset(a, 0, sizeof *a);
 }
 
@@ -93,6 +94,17 @@ static xyl_result check_face(const uint32_t *f, int n, size_t vertex_count, size
     return XYL_OK;
 }
 
+/* A face's wrap bits name only its own corners. */
+static xyl_result check_wraps(const uint8_t *wraps, size_t quads, size_t triangles, xyl_diag *diag)
+{
+    for (size_t f = 0; wraps && f < quads + triangles; ++f)
+        if (wraps[f] & (uint8_t)~XYL__WRAP_BITS(f < quads ? 4 : 3))
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)f,
+                             "face %zu has uv wrap bits 0x%x beyond its %d corners", f,
+                             (unsigned)wraps[f], f < quads ? 4 : 3);
+    return XYL_OK;
+}
+
 static bool finite3(xyl_vec3 v)
 {
     return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
@@ -126,17 +138,24 @@ static xyl_result validate(const xyl_mesh_desc *d, xyl_diag *diag)
         xyl_result r = check_face(d->triangles + 3 * f, 3, d->vertex_count, d->quad_count + f, diag);
         if (r) return r;
     }
-    return XYL_OK;
+    return check_wraps(d->uv_wraps, d->quad_count, d->triangle_count, diag);
 }
 
-/* Copies count * size bytes of src (or zeroes when src is NULL) into a new array. */
-static void *dup_or_zero(const xyl_allocator *a, const void *src, size_t count, size_t size,
-                         bool *ok)
+/* Copies count * size bytes of src (or zeroes when src is NULL) into a new zeroed array of room
+ * >= count elements. */
+static void *dup_with_room(const xyl_allocator *a, const void *src, size_t count, size_t room,
+                           size_t size, bool *ok)
 {
-    void *p = xyl__calloc(a, count ? count : 1, size);
+    void *p = xyl__calloc(a, room ? room : 1, size);
     if (!p) *ok = false;
     else if (src && count) memcpy(p, src, count * size);
     return p;
+}
+
+static void *dup_or_zero(const xyl_allocator *a, const void *src, size_t count, size_t size,
+                         bool *ok)
+{
+    return dup_with_room(a, src, count, count, size, ok);
 }
 
 xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag)
@@ -160,6 +179,8 @@ xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *
     a.triangles = dup_or_zero(al, desc->triangles, a.triangle_count, 3 * sizeof *a.triangles, &ok);
     a.face_branches = dup_or_zero(al, desc->face_branches, a.quad_count + a.triangle_count,
                                   sizeof *a.face_branches, &ok);
+    a.uv_wraps = dup_or_zero(al, desc->uv_wraps, a.quad_count + a.triangle_count,
+                             sizeof *a.uv_wraps, &ok);
     if (!ok) {
         xyl__mesh_arrays_free(&a, al);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the mesh");
@@ -204,6 +225,11 @@ xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
         a->face_branches = xyl__calloc(alloc, faces ? faces : 1, sizeof *a->face_branches);
         ok = a->face_branches != NULL;
     }
+    if (ok && !a->uv_wraps) {
+        size_t faces = a->quad_count + a->triangle_count;
+        a->uv_wraps = xyl__calloc(alloc, faces ? faces : 1, sizeof *a->uv_wraps);
+        ok = a->uv_wraps != NULL;
+    }
     if (ok && !a->normals) {
         /* xyl__mesh_normals zeroes it first */
         a->normals = xyl__alloc_array(alloc, a->vertex_count, sizeof *a->normals);
@@ -231,6 +257,7 @@ xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
     p->face_branches = a->face_branches;
     p->tri_view = tv;
     p->tri_view_count = 2 * a->quad_count + a->triangle_count;
+    p->uv_wraps = a->uv_wraps;
     memset(a, 0, sizeof *a);
     *out = p;
     xyl__diag_ok(diag);
@@ -245,6 +272,123 @@ void xyl_mesh_destroy(xyl_mesh *mesh)
     xyl__mesh_arrays_free(&m->a, &al);
     xyl__free(&al, m->tri_view);
     xyl__free(&al, m);
+}
+
+/* ---- seams split ---------------------------------------------------------------------------- */
+
+enum { USED_PLAIN = 1, USED_WRAPPED = 2 };
+
+/* The corners of a view, checked: indices in range, wrap bits within each face's corners. */
+static xyl_result check_view(const xyl_mesh *m, xyl_diag *diag)
+{
+    size_t faces = m->quad_count + m->triangle_count;
+    if ((m->vertex_count && (!m->positions || !m->normals || !m->uvs || !m->branch_ids)) ||
+        (m->quad_count && !m->quads) || (m->triangle_count && !m->triangles) ||
+        (faces && !m->face_branches))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a mesh array is NULL but its count is not 0");
+    for (size_t f = 0; f < faces; ++f) {
+        int n = f < m->quad_count ? 4 : 3;
+        const uint32_t *c = n == 4 ? m->quads + 4 * f : m->triangles + 3 * (f - m->quad_count);
+        for (int k = 0; k < n; ++k)
+            if (c[k] >= m->vertex_count)
+                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)f,
+                                 "face %zu uses vertex %u of %zu", f, c[k], m->vertex_count);
+    }
+    return check_wraps(m->uv_wraps, m->quad_count, m->triangle_count, diag);
+}
+
+/* How each vertex is used: USED_PLAIN and/or USED_WRAPPED, from every face corner. */
+static void mark_uses(const xyl_mesh *m, uint8_t *use)
+{
+    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
+        int n = f < m->quad_count ? 4 : 3;
+        const uint32_t *c = n == 4 ? m->quads + 4 * f : m->triangles + 3 * (f - m->quad_count);
+        uint8_t w = m->uv_wraps ? m->uv_wraps[f] : 0;
+        for (int k = 0; k < n; ++k) use[c[k]] |= (w >> k & 1u) ? USED_WRAPPED : USED_PLAIN;
+    }
+}
+
+/* Faces with every wrapped corner sent to its vertex's copy (where the vertex has one). */
+static void remap_faces(const uint32_t *src, size_t count, int n, const uint8_t *wraps,
+                        const uint32_t *copy, uint32_t *dst)
+{
+    for (size_t f = 0; f < count; ++f)
+        for (int k = 0; k < n; ++k) {
+            uint32_t v = src[(size_t)n * f + (size_t)k];
+            bool wrapped = wraps && (wraps[f] >> k & 1u);
+            dst[(size_t)n * f + (size_t)k] = wrapped && copy[v] != UINT32_MAX ? copy[v] : v;
+        }
+}
+
+xyl_result xyl_mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, xyl_mesh **out,
+                                xyl_diag *diag)
+{
+    if (!m || !out)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "mesh and out must not be NULL");
+    xyl_result r = check_view(m, diag);
+    if (r) return r;
+    size_t nv = m->vertex_count, nf = m->quad_count + m->triangle_count, copies = 0;
+    uint8_t *use = xyl__calloc(alloc, nv ? nv : 1, 1);
+    uint32_t *copy = xyl__alloc_array(alloc, nv ? nv : 1, sizeof *copy);
+    if (!use || !copy) {
+        xyl__free(alloc, use);
+        xyl__free(alloc, copy);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the seams");
+    }
+    mark_uses(m, use);
+    for (size_t v = 0; v < nv; ++v) copies += use[v] == (USED_PLAIN | USED_WRAPPED);
+    if (nv + copies > UINT32_MAX) {
+        xyl__free(alloc, use);
+        xyl__free(alloc, copy);
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "splitting the seams gives %zu vertices, more than 32-bit indices hold",
+                         nv + copies);
+    }
+    size_t total = nv + copies;
+    bool ok = true;
+    xyl__mesh_arrays a;
+    memset(&a, 0, sizeof a);
+    a.vertex_count = total;
+    a.quad_count = m->quad_count;
+    a.triangle_count = m->triangle_count;
+    a.positions = dup_with_room(alloc, m->positions, nv, total, sizeof *a.positions, &ok);
+    a.normals = dup_with_room(alloc, m->normals, nv, total, sizeof *a.normals, &ok);
+    a.uvs = dup_with_room(alloc, m->uvs, nv, total, 2 * sizeof *a.uvs, &ok);
+    a.branch_ids = dup_with_room(alloc, m->branch_ids, nv, total, sizeof *a.branch_ids, &ok);
+    a.quads = xyl__alloc_array(alloc, m->quad_count ? m->quad_count : 1, 4 * sizeof *a.quads);
+    a.triangles = xyl__alloc_array(alloc, m->triangle_count ? m->triangle_count : 1,
+                                   3 * sizeof *a.triangles);
+    a.face_branches = dup_or_zero(alloc, m->face_branches, nf, sizeof *a.face_branches, &ok);
+    a.uv_wraps = xyl__calloc(alloc, nf ? nf : 1, sizeof *a.uv_wraps);
+    ok = ok && a.quads && a.triangles && a.uv_wraps;
+    if (!ok) {
+        xyl__free(alloc, use);
+        xyl__free(alloc, copy);
+        xyl__mesh_arrays_free(&a, alloc);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the mesh");
+    }
+    size_t next = nv;
+    for (size_t v = 0; v < nv; ++v) {
+        copy[v] = UINT32_MAX;
+        if (use[v] == USED_WRAPPED) {
+            a.uvs[2 * v] += 1.0f; /* only ever used wrapped: no copy needed */
+        } else if (use[v] == (USED_PLAIN | USED_WRAPPED)) {
+            copy[v] = (uint32_t)next;
+            a.positions[next] = m->positions[v];
+            a.normals[next] = m->normals[v];
+            a.uvs[2 * next] = m->uvs[2 * v] + 1.0f;
+            a.uvs[2 * next + 1] = m->uvs[2 * v + 1];
+            a.branch_ids[next] = m->branch_ids[v];
+            ++next;
+        }
+    }
+    remap_faces(m->quads, m->quad_count, 4, m->uv_wraps, copy, a.quads);
+    remap_faces(m->triangles, m->triangle_count, 3, m->uv_wraps ? m->uv_wraps + m->quad_count : NULL,
+                copy, a.triangles);
+    xyl__free(alloc, use);
+    xyl__free(alloc, copy);
+    return xyl__mesh_adopt(&a, alloc, out, diag);
 }
 
 void xyl_mesh_bounds(const xyl_mesh *mesh, float lo[3], float hi[3])

@@ -2,6 +2,8 @@
 #ifndef XYL_MESH_INTERNAL_H
 #define XYL_MESH_INTERNAL_H
 
+#include <math.h>
+
 #include "xyl_internal.h"
 #include "xylem/xyl_stems.h"
 
@@ -20,6 +22,7 @@ typedef struct xyl__mesh_arrays {
     uint32_t *triangles;
     size_t triangle_count;
     uint32_t *face_branches; /* one per face, quads first */
+    uint8_t *uv_wraps;       /* one per face, quads first; NULL: adopt makes them 0 */
 } xyl__mesh_arrays;
 
 /* The public view comes first so a xyl_mesh* is a xyl__mesh*. */
@@ -41,6 +44,39 @@ xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_
  * {0, 1, 2, 0, 2, 3}, then the triangles), from alloc; taken over (freed on failure too). */
 xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
                                 const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag);
+
+/* Bit c of a face's uv_wraps set: corner c's u is its vertex's u + 1. The bits a face of n
+ * corners may use. */
+#define XYL__WRAP_BITS(n) ((uint8_t)((1u << (n)) - 1u))
+
+/* The wrap bits of a face of n <= 4 corners whose u's lie on a circle of circumference 1 (a
+ * cylindrical map): the cut at the widest gap, which leaves the corners the shortest span,
+ * corners below the cut moved by 1. No bits where the wrap-around gap is the widest (ties keep
+ * the face as it is; between inner gaps, the lowest cut wins). */
+static inline uint8_t xyl__uv_wraps_of(const float *u, int n)
+{
+    /* u sorted by a network of min/max pairs (n = 3 or 4: the missing fourth is +inf) */
+    float v0 = u[0], v1 = u[1], v2 = u[2], v3 = n == 4 ? u[3] : INFINITY, t;
+#define XYL__SORT2(a, b) (t = (a) < (b) ? (a) : (b), (b) = (a) < (b) ? (b) : (a), (a) = t)
+    XYL__SORT2(v0, v1);
+    XYL__SORT2(v2, v3);
+    XYL__SORT2(v0, v2);
+    XYL__SORT2(v1, v3);
+    XYL__SORT2(v1, v2);
+#undef XYL__SORT2
+    float top = n == 4 ? v3 : v2;
+    /* the widest gap between neighbours, against the wrap-around gap; ties: the lowest cut */
+    double best = 1.0 - ((double)top - v0), g;
+    float cut = 0.0f;
+    bool wrap = false;
+    if ((g = (double)v1 - v0) > best) best = g, cut = v0, wrap = true;
+    if ((g = (double)v2 - v1) > best) best = g, cut = v1, wrap = true;
+    if (n == 4 && (g = (double)v3 - v2) > best) best = g, cut = v2, wrap = true;
+    uint8_t bits = 0;
+    for (int c = 0; wrap && c < n; ++c)
+        if (u[c] <= cut) bits |= (uint8_t)(1u << c);
+    return bits;
+}
 
 /* Twice the area-weighted normal of a quad (the cross of its diagonals) and of a triangle (of
  * two edges), in double and rounded once to float: every normal sum in stems/ adds these, so a

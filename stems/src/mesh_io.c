@@ -200,21 +200,25 @@ static void obj_vec(sink *s, const char *tag, const float *c, int n)
     put_str(s, "\n");
 }
 
-static void obj_vertices(const xyl_mesh *m, sink *s)
+/* Positions and normals of m; UVs of uvm, m with its seams split (or m itself), whose first
+ * vertices are m's. */
+static void obj_vertices(const xyl_mesh *m, const xyl_mesh *uvm, sink *s)
 {
     for (size_t v = 0; v < m->vertex_count && !s->overflow; ++v) {
         const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
         obj_vec(s, "v", p, 3);
     }
-    for (size_t v = 0; v < m->vertex_count && !s->overflow; ++v) obj_vec(s, "vt", m->uvs + 2 * v, 2);
+    for (size_t v = 0; v < uvm->vertex_count && !s->overflow; ++v)
+        obj_vec(s, "vt", uvm->uvs + 2 * v, 2);
     for (size_t v = 0; v < m->vertex_count && !s->overflow; ++v) {
         const float n[3] = {m->normals[v].x, m->normals[v].y, m->normals[v].z};
         obj_vec(s, "vn", n, 3);
     }
 }
 
-/* Position, UV and normal share the vertex index: "f a/a/a b/b/b c/c/c", 1-based. */
-static void obj_face(sink *s, const uint32_t *f, int n)
+/* Position and normal share the vertex index, the UV is the split mesh's corner: "f a/a'/a",
+ * 1-based, where a' = a except at a seam. */
+static void obj_face(sink *s, const uint32_t *f, const uint32_t *ft, int n)
 {
     put_str(s, "f");
     for (int k = 0; k < n; ++k) {
@@ -222,7 +226,7 @@ static void obj_face(sink *s, const uint32_t *f, int n)
         put_str(s, " ");
         put_uint(s, i);
         put_str(s, "/");
-        put_uint(s, i);
+        put_uint(s, (uint64_t)ft[k] + 1);
         put_str(s, "/");
         put_uint(s, i);
     }
@@ -231,8 +235,8 @@ static void obj_face(sink *s, const uint32_t *f, int n)
 
 /* A "g branch_<id>" line wherever the face branch changes, so each branch can be picked in a
  * modeller; a branch whose faces are not contiguous gets the same name again, which readers
- * merge into one group. */
-static void obj_faces(const xyl_mesh *m, sink *s)
+ * merge into one group. uvm: as obj_vertices (same faces in the same order). */
+static void obj_faces(const xyl_mesh *m, const xyl_mesh *uvm, sink *s)
 {
     size_t faces = m->quad_count + m->triangle_count;
     for (size_t f = 0; f < faces && !s->overflow; ++f) {
@@ -241,12 +245,16 @@ static void obj_faces(const xyl_mesh *m, sink *s)
             put_uint(s, m->face_branches[f]);
             put_str(s, "\n");
         }
-        if (f < m->quad_count) obj_face(s, m->quads + 4 * f, 4);
-        else obj_face(s, m->triangles + 3 * (f - m->quad_count), 3);
+        if (f < m->quad_count) {
+            obj_face(s, m->quads + 4 * f, uvm->quads + 4 * f, 4);
+        } else {
+            size_t t = 3 * (f - m->quad_count);
+            obj_face(s, m->triangles + t, uvm->triangles + t, 3);
+        }
     }
 }
 
-static void render_obj(const xyl_mesh *m, sink *s)
+static void render_obj(const xyl_mesh *m, const xyl_mesh *uvm, sink *s)
 {
     put_str(s, "# xylem mesh: ");
     put_uint(s, m->vertex_count);
@@ -255,8 +263,8 @@ static void render_obj(const xyl_mesh *m, sink *s)
     put_str(s, " quads, ");
     put_uint(s, m->triangle_count);
     put_str(s, " triangles\n");
-    obj_vertices(m, s);
-    obj_faces(m, s);
+    obj_vertices(m, uvm, s);
+    obj_faces(m, uvm, s);
 }
 
 /* ==== GLB ==================================================================================== */
@@ -480,32 +488,59 @@ typedef struct plan {
     xyl_mesh_format format;
     size_t size; /* bytes, without the NUL an OBJ text gets in memory */
     glb_layout glb;
+    xyl_mesh *split; /* the mesh with its UV seams split, where it has any (plan_free) */
 } plan;
+
+static void plan_free(plan *p)
+{
+    xyl_mesh_destroy(p->split);
+    p->split = NULL;
+}
+
+static bool has_wraps(const xyl_mesh *m)
+{
+    for (size_t f = 0; m->uv_wraps && f < m->quad_count + m->triangle_count; ++f)
+        if (m->uv_wraps[f]) return true;
+    return false;
+}
+
+/* The mesh whose vertices carry the UVs the file writes: the split one, else m. */
+static const xyl_mesh *uv_mesh(const xyl_mesh *m, const plan *p)
+{
+    return p->split ? p->split : m;
+}
 
 static bool format_ok(xyl_mesh_format format)
 {
     return format == XYL_MESH_FORMAT_OBJ || format == XYL_MESH_FORMAT_GLB;
 }
 
+/* On success the plan may hold the split mesh (plan_free); on failure it holds nothing. */
 static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xyl_diag *diag)
 {
     p->format = format;
+    p->split = NULL;
     xyl_result r = check_arrays(m, diag);
+    /* a GLB's size is checked before any array is read (plan_glb); the split only adds to it */
+    if (r == XYL_OK && format == XYL_MESH_FORMAT_GLB) r = plan_glb(m, &p->glb, diag);
+    if (r == XYL_OK && format == XYL_MESH_FORMAT_OBJ) r = check_faces(m, diag);
+    if (r == XYL_OK && format == XYL_MESH_FORMAT_OBJ) r = check_vertices(m, false, diag);
+    /* the view may be the caller's own, so the C library's allocator is used, not the mesh's */
+    if (r == XYL_OK && has_wraps(m)) r = xyl_mesh_split_seams(m, NULL, &p->split, diag);
     if (r != XYL_OK) return r;
     if (format == XYL_MESH_FORMAT_GLB) {
-        r = plan_glb(m, &p->glb, diag);
+        if (p->split) r = plan_glb(p->split, &p->glb, diag);
         p->size = (size_t)p->glb.total;
-        return r;
+    } else {
+        sink count = {NULL, 0, false};
+        render_obj(m, uv_mesh(m, p), &count);
+        if (count.overflow)
+            r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
+                          "the OBJ text would not fit in memory");
+        p->size = count.len;
     }
-    r = check_faces(m, diag);
-    if (r == XYL_OK) r = check_vertices(m, false, diag);
-    if (r != XYL_OK) return r;
-    sink count = {NULL, 0, false};
-    render_obj(m, &count);
-    if (count.overflow)
-        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "the OBJ text would not fit in memory");
-    p->size = count.len;
-    return XYL_OK;
+    if (r != XYL_OK) plan_free(p);
+    return r;
 }
 
 /* Writes exactly p->size bytes (and a NUL after OBJ text, whose room the caller checked). */
@@ -513,9 +548,9 @@ static void emit(const xyl_mesh *m, const plan *p, unsigned char *out)
 {
     sink fill = {out, 0, false};
     if (p->format == XYL_MESH_FORMAT_GLB) {
-        emit_glb(m, &p->glb, &fill);
+        emit_glb(uv_mesh(m, p), &p->glb, &fill);
     } else {
-        render_obj(m, &fill);
+        render_obj(m, uv_mesh(m, p), &fill);
         out[fill.len] = '\0';
     }
     assert(!fill.overflow && fill.len == p->size);
@@ -529,12 +564,12 @@ xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, v
     xyl_result r = prepare(mesh, format, &p, NULL);
     if (r != XYL_OK) return r;
     if (needed) *needed = p.size;
-    if (!buffer) return XYL_OK;
     /* OBJ is text and gets a terminating NUL, as xyl_skeleton_write_text; GLB is bytes. */
     size_t room = format == XYL_MESH_FORMAT_OBJ ? p.size + 1 : p.size;
-    if (capacity < room) return XYL_ERR_INVALID_ARGUMENT;
-    emit(mesh, &p, buffer);
-    return XYL_OK;
+    if (buffer && capacity < room) r = XYL_ERR_INVALID_ARGUMENT;
+    else if (buffer) emit(mesh, &p, buffer);
+    plan_free(&p);
+    return r;
 }
 
 xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_format format,
@@ -548,10 +583,13 @@ xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_
     if (r != XYL_OK) return r;
     /* The view may be the caller's own, so the C library's allocator is used, not the mesh's. */
     unsigned char *bytes = xyl__alloc(NULL, p.size + 1);
-    if (!bytes)
+    if (!bytes) {
+        plan_free(&p);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for %zu bytes",
                          p.size + 1);
+    }
     emit(mesh, &p, bytes);
+    plan_free(&p);
     r = xyl__write_file_atomic(path, bytes, p.size, diag);
     xyl__free(NULL, bytes);
     if (r == XYL_OK) xyl__diag_ok(diag);

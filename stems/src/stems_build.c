@@ -22,7 +22,7 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
     /* the first reservation (from the bound in build_all) is exact, not rounded up to a power
      * of two: a smaller footprint leaves more of the allocator's cache for the next build */
     size_t c0 = s->vcap ? s->vcap : verts, c1 = c0, c2 = c0, c3 = c0;
-    size_t q0 = s->qcap ? s->qcap : quads, q1 = q0;
+    size_t q0 = s->qcap ? s->qcap : quads, q1 = q0, q2 = q0;
     if (verts > s->vcap) {
         if (!xyl__grow(a, (void **)&s->pos, &c0, s->nv, verts, sizeof *s->pos) ||
             !xyl__grow(a, (void **)&s->uv, &c1, s->nv, verts, 2 * sizeof *s->uv) ||
@@ -33,7 +33,8 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
     }
     if (quads > s->qcap) {
         if (!xyl__grow(a, (void **)&s->quads, &q0, s->nq, quads, 4 * sizeof *s->quads) ||
-            !xyl__grow(a, (void **)&s->fbranch, &q1, s->nq, quads, sizeof *s->fbranch))
+            !xyl__grow(a, (void **)&s->fbranch, &q1, s->nq, quads, sizeof *s->fbranch) ||
+            !xyl__grow(a, (void **)&s->qwrap, &q2, s->nq, quads, sizeof *s->qwrap))
             return false;
         s->qcap = q0;
     }
@@ -61,6 +62,15 @@ static inline void sum_quad_normal(stems *s, const uint32_t *q, uint32_t branch)
         if (s->vbranch[q[k]] == branch) xyl__add_f3(&s->nrm[q[k]], fn);
 }
 
+/* The uv_wraps bits of a face of n corners (idx), by the rule of xyl__uv_wraps_of. Band quads
+ * do not come here (put_band_k knows theirs); caps and bridge faces do. */
+static inline uint8_t face_wraps(const stems *s, const uint32_t *idx, int n)
+{
+    float u[4];
+    for (int c = 0; c < n; ++c) u[c] = s->uv[2 * idx[c]];
+    return xyl__uv_wraps_of(u, n);
+}
+
 /* Appends a quad; its branch is the branch being built. */
 static inline void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
                             uint32_t branch)
@@ -72,6 +82,7 @@ static inline void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32
     q[2] = c;
     q[3] = d;
     s->fbranch[n] = branch;
+    s->qwrap[n] = face_wraps(s, q, 4);
     s->nq = n + 1;
     if (s->nrm) sum_quad_normal(s, q, branch);
 }
@@ -79,15 +90,17 @@ static inline void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32
 /* Appends a triangle (odd k: caps and bridges have one). */
 static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t branch)
 {
-    size_t c0 = s->tcap3, c1 = s->tcap3;
+    size_t c0 = s->tcap3, c1 = s->tcap3, c2 = s->tcap3;
     if (!xyl__grow(&s->alloc, (void **)&s->tris, &c0, s->nt, s->nt + 1, 3 * sizeof *s->tris) ||
-        !xyl__grow(&s->alloc, (void **)&s->tbranch, &c1, s->nt, s->nt + 1, sizeof *s->tbranch))
+        !xyl__grow(&s->alloc, (void **)&s->tbranch, &c1, s->nt, s->nt + 1, sizeof *s->tbranch) ||
+        !xyl__grow(&s->alloc, (void **)&s->twrap, &c2, s->nt, s->nt + 1, sizeof *s->twrap))
         return oom(s);
     s->tcap3 = c0;
     uint32_t *t = s->tris + 3 * s->nt;
     t[0] = a;
     t[1] = b;
     t[2] = c;
+    s->twrap[s->nt] = face_wraps(s, t, 3);
     s->tbranch[s->nt++] = branch;
     return XYL_OK;
 }
@@ -164,25 +177,31 @@ static XYL__ALWAYS_INLINE void sum_band_normals_k(stems *s, uint32_t a, uint32_t
     }
 }
 
-/* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead. */
+/* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead.
+ * Ring vertex j has u = j/k (put_ring_k), so quad j spans 1/k in u, and the last, which closes
+ * the ring from (k - 1)/k back to 0, wraps its corners 1 and 2 (vertex 0 of both rings): what
+ * face_wraps would find, without the search. */
 static XYL__ALWAYS_INLINE void put_band_k(stems *s, uint32_t a, uint32_t b, uint32_t branch,
                                           uint32_t k)
 {
     uint32_t last = k - 1;
     size_t n = s->nq;
     uint32_t *q = s->quads + 4 * n, *fb = s->fbranch + n;
+    uint8_t *wr = s->qwrap + n;
     for (uint32_t j = 0; j < last; ++j, q += 4) {
         q[0] = a + j;
         q[1] = a + j + 1;
         q[2] = b + j + 1;
         q[3] = b + j;
         fb[j] = branch;
+        wr[j] = 0;
     }
     q[0] = a + last;
     q[1] = a;
     q[2] = b;
     q[3] = b + last;
     fb[last] = branch;
+    wr[last] = 1u << 1 | 1u << 2;
     s->nq = n + last + 1;
     if (s->nrm) sum_band_normals_k(s, a, b, branch, n, k);
 }
@@ -1114,6 +1133,7 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
         if (w != q) { /* w < q: the run moves down */
             memmove(s->quads + 4 * w, s->quads + 4 * q, run * 4 * sizeof *s->quads);
             memmove(s->fbranch + w, s->fbranch + q, run * sizeof *s->fbranch);
+            memmove(s->qwrap + w, s->qwrap + q, run * sizeof *s->qwrap);
         }
         if (tv) {
             const uint32_t *src = s->quads + 4 * w;
@@ -1135,8 +1155,10 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
     a->quads = s->quads;
     a->quad_count = w;
     a->face_branches = s->fbranch;
-    if (s->nt) { /* face branches: quads first, then triangles */
+    a->uv_wraps = s->qwrap;
+    if (s->nt) { /* face branches and wraps: quads first, then triangles */
         memcpy(s->fbranch + w, s->tbranch, s->nt * sizeof *s->tbranch);
+        memcpy(s->qwrap + w, s->twrap, s->nt * sizeof *s->twrap);
         a->triangles = s->tris;
         a->triangle_count = s->nt;
         s->tris = NULL;
@@ -1146,12 +1168,13 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
     s->vbranch = NULL;
     s->quads = NULL;
     s->fbranch = NULL;
+    s->qwrap = NULL;
 }
 
 static void free_state(stems *s)
 {
     void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->nrm,
-                      s->quads, s->fbranch, s->tris, s->tbranch, s->taken, s->chain, s->stations,
+                      s->quads, s->fbranch, s->qwrap, s->tris, s->tbranch, s->twrap, s->taken, s->chain, s->stations,
                       s->rings, s->spans, s->pending, s->cones};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
@@ -1244,10 +1267,12 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
 static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
 {
     xyl_vec3 *normals = NULL;
-    /* face branches run over quads, then triangles: room for both */
-    size_t fcap = s->qcap;
-    if (s->nt && !xyl__grow(&s->alloc, (void **)&s->fbranch, &fcap, s->nq, s->nq + s->nt,
-                            sizeof *s->fbranch))
+    /* face branches and wraps run over quads, then triangles: room for both */
+    size_t fcap = s->qcap, wcap = s->qcap;
+    if (s->nt && (!xyl__grow(&s->alloc, (void **)&s->fbranch, &fcap, s->nq, s->nq + s->nt,
+                             sizeof *s->fbranch) ||
+                  !xyl__grow(&s->alloc, (void **)&s->qwrap, &wcap, s->nq, s->nq + s->nt,
+                             sizeof *s->qwrap)))
         return oom(s);
     if (s->sum_normals) {
         xyl_result r = normals_with_patches(s, &normals);

@@ -65,8 +65,10 @@ typedef struct stems {
                            UINT32_MAX (k < 5, no root cap) */
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
+    uint8_t *qwrap; /* per quad: its uv_wraps bits, set as it is made */
     size_t nq, qcap;
     uint32_t *tris, *tbranch; /* odd k only: one triangle per cap and per bridge */
+    uint8_t *twrap;
     size_t nt, tcap3;
     uint8_t *taken; /* per quad: replaced by a child's bridge */
     size_t tcap;

@@ -125,6 +125,10 @@ xyl_result validate_input(const xyl__mesh_arrays *a, xyl_diag *diag)
     for (size_t f = 0; f < face_count(a); ++f) {
         int n = 0;
         const uint32_t *idx = face_vertices(a, f, &n);
+        if (a->uv_wraps && (a->uv_wraps[f] >> n) != 0)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, static_cast<int64_t>(f),
+                             "face %zu has uv wrap bits 0x%x beyond its %d corners", f,
+                             unsigned(a->uv_wraps[f]), n);
         for (int k = 0; k < n; ++k) {
             bool repeated = false;
             for (int j = 0; j < k; ++j) repeated = repeated || idx[j] == idx[k];
@@ -187,8 +191,9 @@ xyl_result copy_mesh(const xyl__mesh_arrays *in, bool keep_normals, const xyl_al
     a.quads = copy_or_zero(alloc, in->quads, 4 * in->quad_count);
     a.triangles = copy_or_zero(alloc, in->triangles, 3 * in->triangle_count);
     a.face_branches = copy_or_zero(alloc, in->face_branches, nf);
+    a.uv_wraps = copy_or_zero(alloc, in->uv_wraps, nf);
     if (!a.positions || (keep_normals && in->normals && !a.normals) || !a.uvs || !a.branch_ids ||
-        !a.quads || !a.triangles || !a.face_branches) {
+        !a.quads || !a.triangles || !a.face_branches || !a.uv_wraps) {
         xyl__mesh_arrays_free(&a, alloc);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory copying the mesh");
     }
@@ -202,24 +207,33 @@ struct Control {
     Buffer<int> counts;
     Buffer<int> indices;
     Buffer<uint32_t> branches;
+    Buffer<uint8_t> wraps; /* the uv wrap bits of each Far face's corners */
     int faces;
 
     Control(const xyl_allocator *alloc, size_t faces_, size_t corners)
         : counts(alloc, faces_), indices(alloc, corners), branches(alloc, faces_),
-          faces(static_cast<int>(faces_))
+          wraps(alloc, faces_), faces(static_cast<int>(faces_))
     {
     }
-    bool ok() const { return counts.get() && indices.get() && branches.get(); }
+    bool ok() const { return counts.get() && indices.get() && branches.get() && wraps.get(); }
 };
+
+/* Bit `from` of bits as bit `to`. */
+uint8_t wrap_bit(uint8_t bits, int from, int to)
+{
+    return static_cast<uint8_t>((bits >> from & 1u) << to);
+}
 
 void fill_control(const xyl__mesh_arrays *in, bool loop, Control *c)
 {
     int *count = c->counts.get(), *idx = c->indices.get();
     uint32_t *branch = c->branches.get();
+    uint8_t *wrap = c->wraps.get();
     for (size_t f = 0; f < face_count(in); ++f) {
         int n = 0;
         const uint32_t *fv = face_vertices(in, f, &n);
         uint32_t b = in->face_branches ? in->face_branches[f] : 0;
+        uint8_t w = in->uv_wraps ? in->uv_wraps[f] : 0;
         if (loop && n == 4) {
             const uint32_t split[6] = {fv[0], fv[1], fv[2], fv[0], fv[2], fv[3]};
             for (uint32_t s : split) *idx++ = static_cast<int>(s);
@@ -227,11 +241,14 @@ void fill_control(const xyl__mesh_arrays *in, bool loop, Control *c)
             *count++ = 3;
             *branch++ = b;
             *branch++ = b;
+            *wrap++ = static_cast<uint8_t>(w & 7u);
+            *wrap++ = static_cast<uint8_t>(wrap_bit(w, 0, 0) | wrap_bit(w, 2, 1) | wrap_bit(w, 3, 2));
             continue;
         }
         for (int k = 0; k < n; ++k) *idx++ = static_cast<int>(fv[k]);
         *count++ = n;
         *branch++ = b;
+        *wrap++ = w;
     }
 }
 
@@ -291,18 +308,19 @@ struct Refined {
     Buffer<uint32_t> branch_ids;
     Buffer<uint32_t> faces;
     Buffer<uint32_t> face_branches;
+    Buffer<uint8_t> wraps;
 
     Refined(const xyl_allocator *alloc, size_t vertices, size_t faces_, int corners, bool limit)
         : positions(alloc, vertices), normals(alloc), uvs(alloc, 2 * vertices),
           branch_ids(alloc, vertices), faces(alloc, faces_ * static_cast<size_t>(corners)),
-          face_branches(alloc, faces_)
+          face_branches(alloc, faces_), wraps(alloc, faces_)
     {
         if (limit) normals.allocate(vertices);
     }
     bool ok(bool limit) const
     {
         return positions.get() && (!limit || normals.get()) && uvs.get() && branch_ids.get() &&
-               faces.get() && face_branches.get();
+               faces.get() && face_branches.get() && wraps.get();
     }
 };
 
@@ -372,37 +390,145 @@ bool project_to_limit(const Refiner &r, const xyl_allocator *alloc, Point3 *pd, 
     return true;
 }
 
-/* Positions through the vertex rules, UVs through the varying (linear) rules, both in double;
- * with out->normals, positions are then moved to the limit surface and the limit normals
- * written. */
-bool interpolate_primvars(const Refiner &r, const xyl__mesh_arrays *in, const xyl_allocator *alloc,
-                          Refined *out)
+/* What a level-1 vertex is born of: a base vertex, edge or face (the index of which). */
+struct Origin {
+    enum Kind : uint8_t { VERTEX, EDGE, FACE } kind;
+    int index;
+};
+
+void find_origins(const Far::TopologyLevel &base, bool face_points, Origin *out)
+{
+    for (int v = 0; v < base.GetNumVertices(); ++v)
+        out[base.GetVertexChildVertex(v)] = Origin{Origin::VERTEX, v};
+    for (int e = 0; e < base.GetNumEdges(); ++e)
+        out[base.GetEdgeChildVertex(e)] = Origin{Origin::EDGE, e};
+    if (!face_points) return;
+    for (int f = 0; f < base.GetNumFaces(); ++f)
+        out[base.GetFaceChildVertex(f)] = Origin{Origin::FACE, f};
+}
+
+/* The UV that base face f gives a level-1 vertex of one of its child faces, in f's own frame
+ * (its corners with their wraps): linear, as OpenSubdiv's varying rules (a vertex keeps its UV,
+ * an edge point averages its ends, a face point the face's corners). */
+Point2 corner_uv(const Far::TopologyLevel &base, int f, uint8_t wraps, const Origin &o,
+                 const float *uvs)
+{
+    Far::ConstIndexArray fv = base.GetFaceVertices(f);
+    auto at = [&](int c) {
+        Point2 p = {uvs ? uvs[2 * fv[c]] : 0.0, uvs ? uvs[2 * fv[c] + 1] : 0.0};
+        if (wraps >> c & 1u) p.u += 1.0;
+        return p;
+    };
+    Point2 sum = {0.0, 0.0};
+    if (o.kind == Origin::FACE) {
+        const double w = 1.0 / fv.size();
+        for (int c = 0; c < fv.size(); ++c) sum.AddWithWeight(at(c), w);
+        return sum;
+    }
+    if (o.kind == Origin::VERTEX) {
+        for (int c = 0; c < fv.size(); ++c)
+            if (fv[c] == o.index) return at(c);
+        return sum; /* not reached: a child face's vertex child is its parent's corner */
+    }
+    Far::ConstIndexArray ends = base.GetEdgeVertices(o.index);
+    for (int c = 0; c < fv.size(); ++c)
+        if (fv[c] == ends[0] || fv[c] == ends[1]) sum.AddWithWeight(at(c), 0.5);
+    return sum;
+}
+
+/* The u span of base face f's corners, with its wraps. */
+double parent_span(const Far::TopologyLevel &base, int f, uint8_t wraps, const float *uvs)
+{
+    Far::ConstIndexArray fv = base.GetFaceVertices(f);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int c = 0; c < fv.size(); ++c) {
+        double u = (uvs ? uvs[2 * fv[c]] : 0.0) + (wraps >> c & 1u);
+        lo = u < lo ? u : lo;
+        hi = u > hi ? u : hi;
+    }
+    return hi - lo;
+}
+
+/* UVs of level 1 with their seams: each child face's corners take their UV in the parent face's
+ * frame, so a face that closed a ring (u from (k - 1)/k to 1) has children that do too. Where
+ * the frames of a vertex's faces differ by a whole turn, its UV is the smallest and the others
+ * wrap; where they differ otherwise (a cap, whose corners go all around, next to a band; faces
+ * at a joint that mix two branches' u), the vertex takes the UV of its narrowest parent face
+ * (the smallest of those) and a corner at least half a turn above it wraps, so band faces stay
+ * exact. Where no face wraps this is exactly the varying interpolation. */
+bool interpolate_uvs(const Refiner &r, const xyl__mesh_arrays *in, const Control &control,
+                     bool face_points, const xyl_allocator *alloc, Refined *out)
+{
+    const Far::TopologyLevel &base = r.GetLevel(0), &fine = r.GetLevel(1);
+    const size_t n1 = static_cast<size_t>(fine.GetNumVertices());
+    Buffer<Origin> origin(alloc, n1);
+    Buffer<Point2> uv(alloc, n1), corner(alloc, static_cast<size_t>(fine.GetNumFaceVertices()));
+    Buffer<int> first(alloc, static_cast<size_t>(fine.GetNumFaces()) + 1);
+    Buffer<double> narrowest(alloc, n1); /* the span of the parent face uv[] came from */
+    Buffer<uint8_t> seen(alloc, n1);
+    if (!origin.get() || !uv.get() || !corner.get() || !first.get() || !narrowest.get() ||
+        !seen.get())
+        return false;
+    find_origins(base, face_points, origin.get());
+    const uint8_t *parent_wraps = control.wraps.get();
+    /* corners are stored fine face by fine face; first[] finds a face's */
+    for (int f = 0, at = 0; f < fine.GetNumFaces(); ++f) {
+        first.get()[f] = at;
+        at += fine.GetFaceVertices(f).size();
+    }
+    for (int f = 0; f < base.GetNumFaces(); ++f) {
+        Far::ConstIndexArray kids = base.GetFaceChildFaces(f);
+        const double span = parent_span(base, f, parent_wraps[f], in->uvs);
+        for (int i = 0; i < kids.size(); ++i) {
+            Far::ConstIndexArray fv = fine.GetFaceVertices(kids[i]);
+            Point2 *c = corner.get() + first.get()[kids[i]];
+            for (int j = 0; j < fv.size(); ++j) {
+                c[j] = corner_uv(base, f, parent_wraps[f], origin.get()[fv[j]], in->uvs);
+                Point2 &own = uv.get()[fv[j]];
+                double &best = narrowest.get()[fv[j]];
+                bool take = !seen.get()[fv[j]] || span < best || (span == best && c[j].u < own.u);
+                if (take) own = c[j], best = span;
+                seen.get()[fv[j]] = 1;
+            }
+        }
+    }
+    for (size_t v = 0; v < n1; ++v) {
+        out->uvs.get()[2 * v] = static_cast<float>(uv.get()[v].u);
+        out->uvs.get()[2 * v + 1] = static_cast<float>(uv.get()[v].v);
+    }
+    for (int f = 0; f < fine.GetNumFaces(); ++f) {
+        Far::ConstIndexArray fv = fine.GetFaceVertices(f);
+        const Point2 *c = corner.get() + first.get()[f];
+        uint8_t bits = 0;
+        for (int j = 0; j < fv.size(); ++j)
+            if (c[j].u - uv.get()[fv[j]].u >= 0.5) bits = static_cast<uint8_t>(bits | 1u << j);
+        out->wraps.get()[f] = bits;
+    }
+    return true;
+}
+
+/* Positions through the vertex rules in double; with out->normals, they are then moved to the
+ * limit surface and the limit normals written. */
+bool interpolate_positions(const Refiner &r, const xyl__mesh_arrays *in,
+                           const xyl_allocator *alloc, Refined *out)
 {
     const size_t n0 = in->vertex_count;
     const size_t n1 = static_cast<size_t>(r.GetLevel(1).GetNumVertices());
     Buffer<Point3> p0(alloc, n0), p1(alloc, n1);
-    Buffer<Point2> t0(alloc, n0), t1(alloc, n1);
-    if (!p0.get() || !p1.get() || !t0.get() || !t1.get()) return false;
+    if (!p0.get() || !p1.get()) return false;
     for (size_t v = 0; v < n0; ++v) {
         const xyl_vec3 p = in->positions[v];
         p0.get()[v] = Point3{p.x, p.y, p.z};
-        if (in->uvs) t0.get()[v] = Point2{in->uvs[2 * v], in->uvs[2 * v + 1]};
     }
     DoubleRefiner primvar(r);
     const Point3 *ps = p0.get();
     Point3 *pd = p1.get();
     primvar.Interpolate(1, ps, pd);
-    const Point2 *ts = t0.get();
-    Point2 *td = t1.get();
-    primvar.InterpolateVarying(1, ts, td);
     if (out->normals.get() && !project_to_limit(r, alloc, pd, out->normals.get())) return false;
-    for (size_t v = 0; v < n1; ++v) {
+    for (size_t v = 0; v < n1; ++v)
         out->positions.get()[v] = xyl_vec3{static_cast<float>(pd[v].x),
                                            static_cast<float>(pd[v].y),
                                            static_cast<float>(pd[v].z)};
-        out->uvs.get()[2 * v] = static_cast<float>(td[v].u);
-        out->uvs.get()[2 * v + 1] = static_cast<float>(td[v].v);
-    }
     return true;
 }
 
@@ -458,7 +584,8 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit
                          "OpenSubdiv refined to unexpected counts (non-manifold input?)");
     const int corners1 = loop ? 3 : 4;
     Refined fine(alloc, static_cast<size_t>(v1), static_cast<size_t>(f1), corners1, limit);
-    if (!fine.ok(limit) || !interpolate_primvars(*r, in, alloc, &fine))
+    if (!fine.ok(limit) || !interpolate_positions(*r, in, alloc, &fine) ||
+        !interpolate_uvs(*r, in, control, !loop, alloc, &fine))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the refined mesh");
     const uint32_t *parent_branch = control.branches.get();
@@ -478,6 +605,7 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit
     out->uvs = fine.uvs.release();
     out->branch_ids = fine.branch_ids.release();
     out->face_branches = fine.face_branches.release();
+    out->uv_wraps = fine.wraps.release();
     if (loop) {
         out->triangle_count = static_cast<size_t>(f1);
         out->triangles = fine.faces.release();
@@ -808,6 +936,7 @@ extern "C" xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivi
     view.triangles = const_cast<uint32_t *>(mesh->triangles);
     view.triangle_count = mesh->triangle_count;
     view.face_branches = const_cast<uint32_t *>(mesh->face_branches);
+    view.uv_wraps = const_cast<uint8_t *>(mesh->uv_wraps);
     xyl__mesh_arrays refined;
     xyl_result r = xyl__subdivide(&view, scheme, !d->keep_control_points, &d->limits, &d->alloc,
                                   &refined, diag);

@@ -121,7 +121,13 @@ XYL_API xyl_result xyl_skeleton_write_file(const xyl_skeleton *skeleton, const c
  * A polygon mesh of quads and triangles (stems are quads; Loop subdivision gives triangles) with
  * per-vertex position, normal, UV and branch id, and a triangulated view of every face for
  * PN-triangles and exporters. Faces are counter-clockwise seen from outside. A quad (a, b, c, d)
- * is triangulated as (a, b, c), (a, c, d). The arrays belong to the mesh. */
+ * is triangulated as (a, b, c), (a, c, d). The arrays belong to the mesh.
+ *
+ * UV seams: u runs around each branch and closes where a ring's last vertex meets its first
+ * again ((k - 1)/k back to 0). The vertex there is shared, so the mesh stays closed; the faces
+ * that close the ring instead mark the corner in uv_wraps, and a corner's UV is (u + 1, v) when
+ * its bit is set. Texturing needs those corner UVs: exporters write them (OBJ as extra vt
+ * entries, GLB through xyl_mesh_split_seams), and a renderer can draw the split mesh. */
 
 typedef struct xyl_mesh {
     const xyl_vec3 *positions;
@@ -136,6 +142,9 @@ typedef struct xyl_mesh {
     const uint32_t *face_branches; /* one per face, quads first, then triangles */
     const uint32_t *tri_view;     /* 3 indices per triangle: quads split, then the triangles */
     size_t tri_view_count;        /* 2 * quad_count + triangle_count */
+    const uint8_t *uv_wraps;      /* one per face, quads first: bit c set means corner c's u is
+                                     its vertex's u + 1 (see above); NULL in a view a caller
+                                     built means none */
 } xyl_mesh;
 
 typedef struct xyl_mesh_limits {
@@ -154,6 +163,7 @@ typedef struct xyl_mesh_desc {
     const uint32_t *triangles;
     size_t triangle_count;
     const uint32_t *face_branches; /* optional: NULL means all 0 */
+    const uint8_t *uv_wraps;       /* optional, one per face: NULL means none (xyl_mesh) */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_mesh_desc;
@@ -164,6 +174,19 @@ typedef struct xyl_mesh_desc {
  * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched. */
 XYL_API xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag);
 XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
+
+/* The mesh with its UV seams split, for renderers and formats that keep one UV per vertex: a
+ * vertex that some face uses with its u + 1 (uv_wraps) gets a copy with that UV, appended after
+ * the original vertices in the order of the originals (a vertex used only so is not copied: its
+ * u moves by 1). Faces, their order and branches, positions, normals and branch ids are kept; the
+ * split mesh's uv_wraps are all 0. Its seams are open by index (an edge along a seam is used once
+ * by each side's vertices) but closed by position, so it is for drawing and export, not for
+ * xyl_mesh_check, subdivision or the intersection test. A mesh without wraps comes back as a
+ * copy. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, an index out of range, a
+ * wrap bit beyond a face's corners), XYL_ERR_LIMIT_EXCEEDED (more than 2^32 - 1 vertices),
+ * XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_mesh_split_seams(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                        xyl_mesh **out, xyl_diag *diag);
 
 /* Axis-aligned bounds of all positions (for framing a camera: xyl_tess_camera_frame). A NULL
  * or empty mesh gives lo = hi = 0. */
