@@ -1082,6 +1082,11 @@ static void rejects_broken_caller_built_views(void **state)
     assert_int_equal(xyl_mesh_subdivide(&view, &sd, &out, &diag), XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(diag.index, 3);
     q[13] = cube_quads[13];
+    uint8_t wraps[6] = {0, 0, 0, 0x10, 0, 0}; /* a quad has corners 0..3 */
+    view.uv_wraps = wraps;
+    assert_int_equal(xyl_mesh_subdivide(&view, &sd, &out, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(diag.index, 3);
+    view.uv_wraps = NULL;
     p[5].y = NAN;
     assert_int_equal(xyl_mesh_subdivide(&view, &sd, &out, &diag), XYL_ERR_NON_FINITE);
     assert_int_equal(diag.index, 5);
