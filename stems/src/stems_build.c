@@ -942,6 +942,42 @@ static xyl__dvec3 first_direction(const stems *s, const stems_ring *bridge)
     return first_band_folds(s, bridge, seg) ? bridge->tangent : seg;
 }
 
+/* A first station with laterals keeps the bridge ring's normal (first_direction). Where its
+ * first band folds along it and the station lies far out to the side (its direction from the
+ * bridge ring's centre more than acos 0.2, 78 degrees, off the normal), the band runs along the
+ * bridge ring's plane to the station and crosses the bridges of the station's laterals. The
+ * tube then goes out along the normal first, to a node-less station (an elbow) 0.4 of the
+ * station's distance ahead of the ring and a quarter of the way from the ring's radius to the
+ * station's, and turns there to the station; if either band folds then, or the elbow would take
+ * the chain past its rings in ring_bound (its nodes plus one), there is none. */
+static xyl_result add_elbow(stems *s, const stems_ring *bridge)
+{
+    const stems_station *st = s->stations;
+    if (s->nstations > s->nchain || !lateral_count(s, &st[0]) ||
+        !first_band_folds(s, bridge, bridge->tangent))
+        return XYL_OK;
+    xyl__dvec3 c = bridge->centre, n = bridge->tangent, to_st = xyl__d3_sub(st[0].p, c);
+    double ahead = xyl__d3_dot(to_st, n);
+    if (ahead > 0.2 * xyl__d3_len(to_st)) return XYL_OK;
+    double f = s->inflate, rb = bridge->radius, re = 0.75 * rb + 0.25 * st[0].r;
+    xyl__dvec3 e = xyl__d3_add(c, xyl__d3_scale(n, 0.4 * ahead));
+    xyl__dvec3 to = dir_between(e, st[0].p, n);
+    xyl__dvec3 te = xyl__d3_normalize_or(xyl__d3_add(n, to), to);
+    xyl__dvec3 t_out = s->nstations > 1 ? dir_between(st[0].p, st[1].p, to) : to;
+    xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(to, t_out), to);
+    if (band_folds(c, n, f * rb, e, te, f * re) ||
+        band_folds(e, te, f * re, st[0].p, t0, f * st[0].r))
+        return XYL_OK;
+    if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, s->nstations + 1,
+                   sizeof *s->stations))
+        return oom(s);
+    memmove(s->stations + 1, s->stations, s->nstations * sizeof *s->stations);
+    stems_station elbow = {e, re, UINT32_MAX, 0};
+    s->stations[0] = elbow;
+    s->nstations++;
+    return XYL_OK;
+}
+
 static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 {
     uint32_t branch = s->sk->nodes[start].branch;
@@ -956,7 +992,11 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     if (!from || s->nstations > 1 || lateral_count(s, &s->stations[0]))
         r = ensure_two_stations(s, dir);
     if (r) return r;
-    if (from) dir = first_direction(s, from);
+    if (from) {
+        dir = first_direction(s, from);
+        r = add_elbow(s, from);
+        if (r) return r;
+    }
     s->nrings = 0;
     if (from) { /* the bridge ring is this branch's first ring */
         if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings))
@@ -982,7 +1022,7 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 }
 
 /* Upper bounds on the rings (each k vertices) and on the branch chains of the mesh: a chain's
- * stations are at most its nodes plus one (ensure_two_stations), a fork station adds
+ * stations are at most its nodes plus one (ensure_two_stations, add_elbow), a fork station adds
  * fork_extra_rings for the laterals merged into it (no more than the sum over its nodes), and
  * each lateral child adds its bridge ring. Faces: k per band and per bridge, at most k per
  * chain for the caps, so k (rings + chains) covers quads and triangles together; vertices: k
