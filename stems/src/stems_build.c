@@ -978,6 +978,25 @@ static xyl_result add_elbow(stems *s, const stems_ring *bridge)
     return XYL_OK;
 }
 
+/* Before subdivision the limit surface at ring i lies, along the branch, at
+ * (c[i-1] + 4 c[i] + c[i+1]) / 6 (the cubic B-spline of Catmull-Clark on the tube's regular
+ * grid, and Loop's limit on the split bands): on a bend it is pulled towards the centre of
+ * curvature by (c[i-1] - 2 c[i] + c[i+1]) / 6. Moving each inner ring's centre by minus that
+ * leaves the limit within (the fourth difference) / 36 of the skeleton. The first ring (a
+ * bridge, fixed to the parent's patch, or the root's cap) and the last (the tip's cap) stay. */
+static void limit_centres(stems *s)
+{
+    if (s->nrings < 3) return;
+    xyl__dvec3 prev = s->rings[0].centre, cur = s->rings[1].centre;
+    for (size_t i = 1; i + 1 < s->nrings; ++i) {
+        xyl__dvec3 next = s->rings[i + 1].centre;
+        xyl__dvec3 bend = xyl__d3_add(xyl__d3_sub(prev, xyl__d3_scale(cur, 2.0)), next);
+        s->rings[i].centre = xyl__d3_sub(cur, xyl__d3_scale(bend, 1.0 / 6.0));
+        prev = cur;
+        cur = next;
+    }
+}
+
 static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
 {
     uint32_t branch = s->sk->nodes[start].branch;
@@ -1010,6 +1029,7 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     stems_fork_span *spans = s->spans;
     size_t nspans = 0;
     r = branch_rings(s, dir, spans, &nspans);
+    if (!r && s->limit_centres) limit_centres(s);
     if (!r) r = emit_rings(s, from ? 1 : 0, branch);
     if (!r && !out_reserve(s, s->nv + 2, s->nq + s->k)) r = oom(s); /* the caps */
     s->apex[0] = s->apex[1] = UINT32_MAX;
@@ -1349,6 +1369,7 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     s.sum_normals = desc->normals == XYL_NORMALS_BRANCH && desc->subdivision == XYL_SUBDIVIDE_NONE;
     s.unit_per_branch = s.sum_normals && s.k % 2 == 0; /* index_children may still veto */
     s.inflate = inflate ? 1.0 / limit_mean_radius(s.k) : 1.0;
+    s.limit_centres = inflate;
     r = build_all(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)
         r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,

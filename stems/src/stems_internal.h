@@ -41,6 +41,7 @@ typedef struct stems {
     const xyl_skeleton *sk;
     uint32_t k;
     double inflate;     /* ring radius factor before Catmull-Clark: 1 / mean limit radius */
+    bool limit_centres; /* before subdivision: ring centres moved against the limit's pull */
     xyl_allocator alloc;
     xyl_diag *diag;
     uint64_t max_vertices, max_faces;

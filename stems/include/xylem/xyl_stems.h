@@ -279,7 +279,9 @@ typedef struct xyl_stems_desc {
     xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
     bool keep_control_radius;     /* default false: before subdivision, rings are inflated so
                                      the limit surface's MEAN radius is the skeleton's (1.522
-                                     for k = 4 with Catmull-Clark; docs/stems.md) */
+                                     for k = 4 with Catmull-Clark; docs/stems.md), and inner
+                                     ring centres are moved against the limit's pull towards
+                                     the centre of curvature on bends */
     bool keep_control_points;     /* default false: subdivided vertices sit on the limit
                                      surface (see xyl_subdivide_desc) */
     xyl_mesh_limits limits;
