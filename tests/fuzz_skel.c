@@ -68,6 +68,29 @@ static void check_obj(const xyl_skeleton *sk)
     free(obj);
 }
 
+/* The mesh's UV wraps name only each face's own corners, and its seam-split mesh puts every
+ * corner where the mesh has it, with the corner's UV (u + 1 where wrapped). */
+static void check_seams(const xyl_mesh *m)
+{
+    xyl_mesh *split = NULL;
+    check(xyl_mesh_split_seams(m, NULL, &split, NULL) == XYL_OK);
+    check(split->vertex_count >= m->vertex_count && split->quad_count == m->quad_count &&
+          split->triangle_count == m->triangle_count);
+    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
+        int n = f < m->quad_count ? 4 : 3;
+        const uint32_t *a = n == 4 ? m->quads + 4 * f : m->triangles + 3 * (f - m->quad_count);
+        const uint32_t *b = n == 4 ? split->quads + 4 * f
+                                   : split->triangles + 3 * (f - m->quad_count);
+        check((m->uv_wraps[f] >> n) == 0 && split->uv_wraps[f] == 0);
+        for (int c = 0; c < n; ++c) {
+            float u = m->uvs[2 * a[c]] + ((m->uv_wraps[f] >> c & 1u) ? 1.0f : 0.0f);
+            check(memcmp(&split->positions[b[c]], &m->positions[a[c]], sizeof(xyl_vec3)) == 0);
+            check(split->uvs[2 * b[c]] == u && split->uvs[2 * b[c] + 1] == m->uvs[2 * a[c] + 1]);
+        }
+    }
+    xyl_mesh_destroy(split);
+}
+
 /* Every skeleton the reader accepts must mesh into a closed oriented manifold with one sphere
  * per root: the mesher's guarantee holds by construction, whatever the geometry. (Degenerate
  * faces are allowed here: random radii and coincident nodes can make faces below the tolerance.) */
@@ -86,6 +109,7 @@ static void check_mesh(const xyl_skeleton *sk, uint32_t sides)
     check(rep.boundary_edges == 0 && rep.nonmanifold_edges == 0 && rep.misoriented_edges == 0);
     check(rep.nonmanifold_vertices == 0 && rep.duplicate_faces == 0);
     check(rep.euler == 2 * (int64_t)sk->root_count && rep.components == sk->root_count);
+    check_seams(m);
     xyl_mesh_destroy(m);
 }
 

@@ -534,11 +534,12 @@ static void thin_spokes_stay_separate_branches(void **state)
  * (1e16) that the station added after them rounds onto them, leaving its fork without a band
  * for the fork's own lateral. Every k must still mesh into a closed manifold; its faces at
  * 1e16 are below the degenerate-face tolerance, as the fuzzer allows. */
-static void a_fork_whose_stations_round_together_still_meshes(void **state)
+/* A skeleton the .skel fuzzer found, from tests/data/skel: it meshes into a closed manifold for
+ * k = 3..8 with finite positions, normals and UVs, and exports. */
+static void assert_fuzz_case_meshes(const char *file)
 {
-    (void)state;
     char path[1024];
-    snprintf(path, sizeof path, "%s/skel/fuzz_stations_round_together.skel", XYL_TEST_DATA);
+    snprintf(path, sizeof path, "%s/skel/%s", XYL_TEST_DATA, file);
     xyl_skeleton *sk = NULL;
     assert_int_equal(xyl_skeleton_read_file(path, NULL, &sk, NULL), XYL_OK);
     for (uint32_t k = 3; k <= 8; ++k) {
@@ -549,9 +550,31 @@ static void a_fork_whose_stations_round_together_still_meshes(void **state)
         assert_int_equal(rep.nonmanifold_vertices + rep.duplicate_faces, 0);
         assert_int_equal(rep.euler, 2 * (int64_t)sk->root_count);
         assert_int_equal(rep.components, sk->root_count);
+        for (size_t v = 0; v < m->vertex_count; ++v)
+            if (!isfinite(m->uvs[2 * v]) || !isfinite(m->uvs[2 * v + 1]) ||
+                !isfinite(m->normals[v].x + m->normals[v].y + m->normals[v].z))
+                fail_msg("%s k = %u: vertex %zu has a non-finite UV or normal", file, k, v);
+        size_t need = 0;
+        assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, 0, &need), XYL_OK);
         xyl_mesh_destroy(m);
     }
     xyl_skeleton_destroy(sk);
+}
+
+static void a_fork_whose_stations_round_together_still_meshes(void **state)
+{
+    (void)state;
+    assert_fuzz_case_meshes("fuzz_stations_round_together.skel");
+}
+
+/* A patch between two parent rings at one place has no height, so the child's bridge ring on it
+ * has radius 0, and so has the stub that keeps the bridge ring's radius: the arc length between
+ * them, in units of their circumference, was 0 / 0 and the stub's v NaN, which no GLB can hold.
+ * Such a tube now adds nothing to v. */
+static void a_bridge_ring_of_radius_zero_keeps_uvs_finite(void **state)
+{
+    (void)state;
+    assert_fuzz_case_meshes("fuzz_zero_radius_bridge.skel");
 }
 
 /* ---- normals ------------------------------------------------------------------------------- */
@@ -1185,6 +1208,7 @@ int main(void)
         cmocka_unit_test(siblings_that_never_part_become_one_tube),
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
         cmocka_unit_test(a_fork_whose_stations_round_together_still_meshes),
+        cmocka_unit_test(a_bridge_ring_of_radius_zero_keeps_uvs_finite),
         cmocka_unit_test(thin_spokes_stay_separate_branches),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(subdivision_limit_keeps_the_skeleton_radius),

@@ -230,7 +230,8 @@ static uint32_t put_apex(stems *s, const stems_ring *ring, bool forward, uint32_
     size_t v = s->nv;
     s->pos[v] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, h)));
     s->uv[2 * v] = 0.5f;
-    s->uv[2 * v + 1] = (float)(ring->v + h / (2.0 * XYL__PI * ring->radius));
+    /* a ring of radius 0 (a bridge on a patch without height) has its apex on it */
+    s->uv[2 * v + 1] = (float)(ring->v + (ring->radius > 0.0 ? h / (2.0 * XYL__PI * ring->radius) : 0.0));
     s->vbranch[v] = branch;
     if (s->nrm) memset(s->nrm + v, 0, sizeof *s->nrm);
     s->nv = v + 1;
@@ -412,7 +413,11 @@ static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
     if (prev) {
         ring->u = transport(prev->u, prev->centre, prev->tangent, c, t);
         double mean_r = 0.5 * (prev->radius + r);
-        ring->v = prev->v + xyl__d3_len(xyl__d3_sub(c, prev->centre)) / (2.0 * XYL__PI * mean_r);
+        /* v is arc length in units of the circumference; a tube of radius 0 (a bridge ring
+         * on a patch without height, and the stub that keeps its radius) has none, and its
+         * length would give 0 / 0 or an infinite v: it adds nothing */
+        double along = xyl__d3_len(xyl__d3_sub(c, prev->centre));
+        ring->v = prev->v + (mean_r > 0.0 ? along / (2.0 * XYL__PI * mean_r) : 0.0);
     } else {
         ring->u = xyl__d3_any_orthogonal(t);
         ring->v = 0.0;
