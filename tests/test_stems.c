@@ -35,6 +35,18 @@ static size_t meshed_branches(const xyl_mesh *m, const xyl_skeleton *sk)
     return n;
 }
 
+static void assert_finite(const xyl_mesh *m, const char *what)
+{
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        const float c[8] = {m->positions[v].x, m->positions[v].y, m->positions[v].z,
+                            m->normals[v].x,   m->normals[v].y,   m->normals[v].z,
+                            m->uvs[2 * v],     m->uvs[2 * v + 1]};
+        for (int i = 0; i < 8; ++i)
+            if (!isfinite(c[i]))
+                fail_msg("%s: vertex %zu has a non-finite position, normal or UV", what, v);
+    }
+}
+
 static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char *what)
 {
     xyl_mesh_report rep;
@@ -46,9 +58,7 @@ static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char 
                  what, rep.closed_manifold, (long long)rep.euler, rep.components, sk->root_count,
                  rep.boundary_edges, rep.nonmanifold_edges, rep.nonmanifold_vertices,
                  rep.misoriented_edges, rep.degenerate_faces, rep.duplicate_faces);
-    for (size_t v = 0; v < m->vertex_count; ++v)
-        assert_true(isfinite(m->positions[v].x) && isfinite(m->positions[v].y) &&
-                    isfinite(m->positions[v].z));
+    assert_finite(m, what);
 }
 
 /* ---- topology ------------------------------------------------------------------------------ */
@@ -550,10 +560,9 @@ static void assert_fuzz_case_meshes(const char *file)
         assert_int_equal(rep.nonmanifold_vertices + rep.duplicate_faces, 0);
         assert_int_equal(rep.euler, 2 * (int64_t)sk->root_count);
         assert_int_equal(rep.components, sk->root_count);
-        for (size_t v = 0; v < m->vertex_count; ++v)
-            if (!isfinite(m->uvs[2 * v]) || !isfinite(m->uvs[2 * v + 1]) ||
-                !isfinite(m->normals[v].x + m->normals[v].y + m->normals[v].z))
-                fail_msg("%s k = %u: vertex %zu has a non-finite UV or normal", file, k, v);
+        char what[128];
+        snprintf(what, sizeof what, "%s k = %u", file, k);
+        assert_finite(m, what);
         size_t need = 0;
         assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, 0, &need), XYL_OK);
         xyl_mesh_destroy(m);
