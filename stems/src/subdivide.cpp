@@ -407,47 +407,47 @@ void find_origins(const Far::TopologyLevel &base, bool face_points, Origin *out)
         out[base.GetFaceChildVertex(f)] = Origin{Origin::FACE, f};
 }
 
-/* The UV that base face f gives a level-1 vertex of one of its child faces, in f's own frame
- * (its corners with their wraps): linear, as OpenSubdiv's varying rules (a vertex keeps its UV,
- * an edge point averages its ends, a face point the face's corners). */
-Point2 corner_uv(const Far::TopologyLevel &base, int f, uint8_t wraps, const Origin &o,
-                 const float *uvs)
-{
-    Far::ConstIndexArray fv = base.GetFaceVertices(f);
-    auto at = [&](int c) {
-        Point2 p = {uvs ? uvs[2 * fv[c]] : 0.0, uvs ? uvs[2 * fv[c] + 1] : 0.0};
-        if (wraps >> c & 1u) p.u += 1.0;
-        return p;
-    };
-    Point2 sum = {0.0, 0.0};
-    if (o.kind == Origin::FACE) {
-        const double w = 1.0 / fv.size();
-        for (int c = 0; c < fv.size(); ++c) sum.AddWithWeight(at(c), w);
-        return sum;
-    }
-    if (o.kind == Origin::VERTEX) {
-        for (int c = 0; c < fv.size(); ++c)
-            if (fv[c] == o.index) return at(c);
-        return sum; /* not reached: a child face's vertex child is its parent's corner */
-    }
-    Far::ConstIndexArray ends = base.GetEdgeVertices(o.index);
-    for (int c = 0; c < fv.size(); ++c)
-        if (fv[c] == ends[0] || fv[c] == ends[1]) sum.AddWithWeight(at(c), 0.5);
-    return sum;
-}
+/* Base face f in its own UV frame (its corners with their wraps): the UV it gives each kind of
+ * level-1 vertex of its child faces, linear as OpenSubdiv's varying rules (a vertex keeps its UV,
+ * an edge point averages its ends, a face point the face's corners), and its u span. Faces are
+ * quads or triangles. */
+struct FaceFrame {
+    Far::ConstIndexArray fv, fe;
+    Point2 corner[4], edge[4], centre;
+    double span;
 
-/* The u span of base face f's corners, with its wraps. */
-double parent_span(const Far::TopologyLevel &base, int f, uint8_t wraps, const float *uvs)
-{
-    Far::ConstIndexArray fv = base.GetFaceVertices(f);
-    double lo = INFINITY, hi = -INFINITY;
-    for (int c = 0; c < fv.size(); ++c) {
-        double u = (uvs ? uvs[2 * fv[c]] : 0.0) + (wraps >> c & 1u);
-        lo = u < lo ? u : lo;
-        hi = u > hi ? u : hi;
+    FaceFrame(const Far::TopologyLevel &base, int f, uint8_t wraps, const float *uvs)
+        : fv(base.GetFaceVertices(f)), fe(base.GetFaceEdges(f)), centre{0.0, 0.0}
+    {
+        const int n = fv.size();
+        double lo = INFINITY, hi = -INFINITY;
+        for (int c = 0; c < n; ++c) {
+            corner[c] = Point2{uvs ? uvs[2 * fv[c]] : 0.0, uvs ? uvs[2 * fv[c] + 1] : 0.0};
+            if (wraps >> c & 1u) corner[c].u += 1.0;
+            lo = corner[c].u < lo ? corner[c].u : lo;
+            hi = corner[c].u > hi ? corner[c].u : hi;
+        }
+        span = hi - lo;
+        const double w = 1.0 / n;
+        for (int c = 0; c < n; ++c) centre.AddWithWeight(corner[c], w);
+        for (int e = 0; e < n; ++e) { /* its ends' corners, in corner order */
+            Far::ConstIndexArray ends = base.GetEdgeVertices(fe[e]);
+            edge[e] = Point2{0.0, 0.0};
+            for (int c = 0; c < n; ++c)
+                if (fv[c] == ends[0] || fv[c] == ends[1]) edge[e].AddWithWeight(corner[c], 0.5);
+        }
     }
-    return hi - lo;
-}
+
+    Point2 at(const Origin &o) const
+    {
+        const int n = fv.size();
+        if (o.kind == Origin::FACE) return centre;
+        const Far::ConstIndexArray &of = o.kind == Origin::VERTEX ? fv : fe;
+        for (int c = 0; c < n; ++c)
+            if (of[c] == o.index) return o.kind == Origin::VERTEX ? corner[c] : edge[c];
+        return centre; /* not reached: a child face's vertex is born of its parent's parts */
+    }
+};
 
 /* UVs of level 1 with their seams: each child face's corners take their UV in the parent face's
  * frame, so a face that closed a ring (u from (k - 1)/k to 1) has children that do too. Where
@@ -455,54 +455,51 @@ double parent_span(const Far::TopologyLevel &base, int f, uint8_t wraps, const f
  * wrap; where they differ otherwise (a cap, whose corners go all around, next to a band; faces
  * at a joint that mix two branches' u), the vertex takes the UV of its narrowest parent face
  * (the smallest of those) and a corner at least half a turn above it wraps, so band faces stay
- * exact. Where no face wraps this is exactly the varying interpolation. */
+ * exact. Where no face wraps this is exactly the varying interpolation. Two passes over the
+ * base faces (each frame is cheap to make again): the vertices' UVs, then the corners' wraps. */
 bool interpolate_uvs(const Refiner &r, const xyl__mesh_arrays *in, const Control &control,
                      bool face_points, const xyl_allocator *alloc, Refined *out)
 {
     const Far::TopologyLevel &base = r.GetLevel(0), &fine = r.GetLevel(1);
     const size_t n1 = static_cast<size_t>(fine.GetNumVertices());
     Buffer<Origin> origin(alloc, n1);
-    Buffer<Point2> uv(alloc, n1), corner(alloc, static_cast<size_t>(fine.GetNumFaceVertices()));
-    Buffer<int> first(alloc, static_cast<size_t>(fine.GetNumFaces()) + 1);
+    Buffer<Point2> uv(alloc, n1);
     Buffer<double> narrowest(alloc, n1); /* the span of the parent face uv[] came from */
     Buffer<uint8_t> seen(alloc, n1);
-    if (!origin.get() || !uv.get() || !corner.get() || !first.get() || !narrowest.get() ||
-        !seen.get())
-        return false;
+    if (!origin.get() || !uv.get() || !narrowest.get() || !seen.get()) return false;
     find_origins(base, face_points, origin.get());
     const uint8_t *parent_wraps = control.wraps.get();
-    /* corners are stored fine face by fine face; first[] finds a face's */
-    for (int f = 0, at = 0; f < fine.GetNumFaces(); ++f) {
-        first.get()[f] = at;
-        at += fine.GetFaceVertices(f).size();
-    }
     for (int f = 0; f < base.GetNumFaces(); ++f) {
+        const FaceFrame frame(base, f, parent_wraps[f], in->uvs);
         Far::ConstIndexArray kids = base.GetFaceChildFaces(f);
-        const double span = parent_span(base, f, parent_wraps[f], in->uvs);
         for (int i = 0; i < kids.size(); ++i) {
             Far::ConstIndexArray fv = fine.GetFaceVertices(kids[i]);
-            Point2 *c = corner.get() + first.get()[kids[i]];
             for (int j = 0; j < fv.size(); ++j) {
-                c[j] = corner_uv(base, f, parent_wraps[f], origin.get()[fv[j]], in->uvs);
+                const Point2 c = frame.at(origin.get()[fv[j]]);
                 Point2 &own = uv.get()[fv[j]];
                 double &best = narrowest.get()[fv[j]];
-                bool take = !seen.get()[fv[j]] || span < best || (span == best && c[j].u < own.u);
-                if (take) own = c[j], best = span;
+                bool take = !seen.get()[fv[j]] || frame.span < best ||
+                            (frame.span == best && c.u < own.u);
+                if (take) own = c, best = frame.span;
                 seen.get()[fv[j]] = 1;
             }
+        }
+    }
+    for (int f = 0; f < base.GetNumFaces(); ++f) {
+        const FaceFrame frame(base, f, parent_wraps[f], in->uvs);
+        Far::ConstIndexArray kids = base.GetFaceChildFaces(f);
+        for (int i = 0; i < kids.size(); ++i) {
+            Far::ConstIndexArray fv = fine.GetFaceVertices(kids[i]);
+            uint8_t bits = 0;
+            for (int j = 0; j < fv.size(); ++j)
+                if (frame.at(origin.get()[fv[j]]).u - uv.get()[fv[j]].u >= 0.5)
+                    bits = static_cast<uint8_t>(bits | 1u << j);
+            out->wraps.get()[kids[i]] = bits;
         }
     }
     for (size_t v = 0; v < n1; ++v) {
         out->uvs.get()[2 * v] = static_cast<float>(uv.get()[v].u);
         out->uvs.get()[2 * v + 1] = static_cast<float>(uv.get()[v].v);
-    }
-    for (int f = 0; f < fine.GetNumFaces(); ++f) {
-        Far::ConstIndexArray fv = fine.GetFaceVertices(f);
-        const Point2 *c = corner.get() + first.get()[f];
-        uint8_t bits = 0;
-        for (int j = 0; j < fv.size(); ++j)
-            if (c[j].u - uv.get()[fv[j]].u >= 0.5) bits = static_cast<uint8_t>(bits | 1u << j);
-        out->wraps.get()[f] = bits;
     }
     return true;
 }
