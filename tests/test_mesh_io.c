@@ -846,37 +846,65 @@ static unsigned char *slurp(const char *path, size_t *len)
     return b;
 }
 
+/* A stem of 400 segments (k = 5): its OBJ text is far above the 64 KiB that write_file's buffer
+ * starts with, and its faces wrap UVs at every ring. */
+static xyl_mesh *long_stem(void)
+{
+    enum { NODES = 401 };
+    xyl_skel_node nodes[NODES];
+    memset(nodes, 0, sizeof nodes);
+    for (int i = 0; i < NODES; ++i) {
+        nodes[i].pos = (xyl_vec3){0.1f * (float)sin(0.05 * i), 0.25f * (float)i, 0.0f};
+        nodes[i].radius = 0.1f;
+        nodes[i].parent = i - 1;
+    }
+    xyl_skeleton_desc sd = {0};
+    sd.nodes = nodes;
+    sd.node_count = NODES;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&sd, &sk, NULL), XYL_OK);
+    xyl_stems_desc d = {0};
+    d.sides = 5;
+    xyl_mesh *m = NULL;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL), XYL_OK);
+    xyl_skeleton_destroy(sk);
+    return m;
+}
+
 static void write_file_writes_what_write_memory_renders(void **state)
 {
     (void)state;
     tmpdir t;
     make_tmpdir(&t);
-    xyl_mesh *m = mixed();
     const char *names[2] = {"mesh.obj", "mesh.glb"};
-    for (int f = 0; f < 2; ++f) {
-        char path[128];
-        snprintf(path, sizeof path, "%s/%s", t.path, names[f]);
-        xyl_diag d;
-        memset(&d, 0, sizeof d);
-        d.code = XYL_ERR_IO;
-        assert_int_equal(xyl_mesh_write_file(m, path, (xyl_mesh_format)f, &d), XYL_OK);
-        assert_int_equal(d.code, XYL_OK);
-        size_t len, elen;
-        unsigned char *got = slurp(path, &len);
-        unsigned char *expect = write_alloc(m, (xyl_mesh_format)f, &elen);
-        assert_int_equal(len, elen);
-        assert_memory_equal(got, expect, len);
-        free(got);
-        free(expect);
-    }
-    assert_int_equal(dir_entries(t.path), 2);
-    for (int f = 0; f < 2; ++f) {
-        char path[128];
-        snprintf(path, sizeof path, "%s/%s", t.path, names[f]);
-        unlink(path);
+    for (int which = 0; which < 2; ++which) {
+        xyl_mesh *m = which ? long_stem() : mixed();
+        for (int f = 0; f < 2; ++f) {
+            char path[128];
+            snprintf(path, sizeof path, "%s/%s", t.path, names[f]);
+            xyl_diag d;
+            memset(&d, 0, sizeof d);
+            d.code = XYL_ERR_IO;
+            assert_int_equal(xyl_mesh_write_file(m, path, (xyl_mesh_format)f, &d), XYL_OK);
+            assert_int_equal(d.code, XYL_OK);
+            size_t len, elen;
+            unsigned char *got = slurp(path, &len);
+            unsigned char *expect = write_alloc(m, (xyl_mesh_format)f, &elen);
+            assert_int_equal(len, elen);
+            assert_memory_equal(got, expect, len);
+            if (which) assert_true(len > (1u << 16));
+            free(got);
+            free(expect);
+        }
+        assert_int_equal(dir_entries(t.path), 2);
+        for (int f = 0; f < 2; ++f) {
+            char path[128];
+            snprintf(path, sizeof path, "%s/%s", t.path, names[f]);
+            unlink(path);
+        }
+        xyl_mesh_destroy(m);
     }
     rmdir(t.path);
-    xyl_mesh_destroy(m);
 }
 
 static void write_file_replaces_an_existing_file_atomically(void **state)

@@ -1,9 +1,9 @@
 /* Mesh export: Wavefront OBJ text and glTF 2.0 binary (.glb), both rendered here by hand
  * (docs/mesh-export.md describes the layouts).
  *
- * Both writers count, then fill: prepare() checks the view and sizes the output exactly, and
- * emit() writes exactly that many bytes, so a too-small buffer is refused before a byte of it is
- * touched. Nothing depends on the C locale or the host's byte order: integers are printed by
+ * In memory both writers count, then fill: prepare() checks the view and sizes the output
+ * exactly, and emit() writes exactly that many bytes, so a too-small buffer is refused before a
+ * byte of it is touched; xyl_mesh_write_file renders OBJ text once, into a growing buffer. Nothing depends on the C locale or the host's byte order: integers are printed by
  * hand, snprintf's decimal point is replaced with '.', and GLB numbers are stored byte by byte,
  * little-endian, as glTF requires. */
 #include <assert.h>
@@ -39,16 +39,32 @@
 
 /* ==== byte sink ============================================================================== */
 
-/* Counts bytes, and also stores them when buf is set (sized by an earlier counting pass). */
+/* Counts bytes, and also stores them when buf is set: sized by an earlier counting pass, or,
+ * with cap set, grown as it goes (from the C library's allocator; overflow on failure). */
 typedef struct sink {
     unsigned char *buf;
     size_t len;
-    bool overflow; /* the output would not fit in a size_t (with room for a NUL) */
+    bool overflow; /* the output would not fit in a size_t (with room for a NUL), or memory ran out */
+    size_t cap;    /* 0: buf has room for everything */
 } sink;
+
+static bool sink_room(sink *s, size_t n)
+{
+    size_t cap = s->cap;
+    while (cap - s->len < n) cap = cap > SIZE_MAX / 2 ? SIZE_MAX : 2 * cap;
+    unsigned char *b = xyl__alloc(NULL, cap);
+    if (!b) return false;
+    memcpy(b, s->buf, s->len);
+    xyl__free(NULL, s->buf);
+    s->buf = b;
+    s->cap = cap;
+    return true;
+}
 
 static void put(sink *s, const void *bytes, size_t n)
 {
-    if (s->overflow || n > SIZE_MAX - 1 - s->len) {
+    if (s->overflow || n > SIZE_MAX - 1 - s->len ||
+        (s->cap && s->cap - s->len < n + 1 && !sink_room(s, n + 1))) {
         s->overflow = true;
         return;
     }
@@ -474,7 +490,7 @@ static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
     if (r == XYL_OK) r = check_vertices(m, true, diag);
     if (r != XYL_OK) return r;
     if (m->vertex_count) position_bounds(m, l);
-    sink count = {NULL, 0, false};
+    sink count = {NULL, 0, false, 0};
     render_json(l, &count);
     l->json_len = count.len;
     l->total = glb_total(l);
@@ -486,7 +502,8 @@ static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
 /* What prepare() learnt: the exact output size and, for GLB, the layout. */
 typedef struct plan {
     xyl_mesh_format format;
-    size_t size; /* bytes, without the NUL an OBJ text gets in memory */
+    size_t size; /* bytes, without the NUL an OBJ text gets in memory; for OBJ, SIZE_MAX
+                    going into prepare() skips counting them (the text is rendered once) */
     glb_layout glb;
     xyl_mesh *split; /* the mesh with its UV seams split, where it has any (plan_free) */
 } plan;
@@ -520,6 +537,7 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
 {
     p->format = format;
     p->split = NULL;
+    /* p->size comes in as SIZE_MAX where OBJ text need not be counted first (plan.size) */
     xyl_result r = check_arrays(m, diag);
     /* a GLB's size is checked before any array is read (plan_glb); the split only adds to it */
     if (r == XYL_OK && format == XYL_MESH_FORMAT_GLB) r = plan_glb(m, &p->glb, diag);
@@ -531,8 +549,8 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
     if (format == XYL_MESH_FORMAT_GLB) {
         if (p->split) r = plan_glb(p->split, &p->glb, diag);
         p->size = (size_t)p->glb.total;
-    } else {
-        sink count = {NULL, 0, false};
+    } else if (p->size != SIZE_MAX) { /* SIZE_MAX: the caller renders once as it writes */
+        sink count = {NULL, 0, false, 0};
         render_obj(m, uv_mesh(m, p), &count);
         if (count.overflow)
             r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
@@ -546,7 +564,7 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
 /* Writes exactly p->size bytes (and a NUL after OBJ text, whose room the caller checked). */
 static void emit(const xyl_mesh *m, const plan *p, unsigned char *out)
 {
-    sink fill = {out, 0, false};
+    sink fill = {out, 0, false, 0};
     if (p->format == XYL_MESH_FORMAT_GLB) {
         emit_glb(uv_mesh(m, p), &p->glb, &fill);
     } else {
@@ -561,6 +579,7 @@ xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, v
 {
     if (!mesh || !format_ok(format) || (!buffer && !needed)) return XYL_ERR_INVALID_ARGUMENT;
     plan p;
+    p.size = 0;
     xyl_result r = prepare(mesh, format, &p, NULL);
     if (r != XYL_OK) return r;
     if (needed) *needed = p.size;
@@ -578,20 +597,31 @@ xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_
     if (!mesh || !path || !*path || !format_ok(format))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "mesh and path must be given and the format must be OBJ or GLB");
+    /* OBJ text is rendered once, into a buffer that grows, not counted first: formatting the
+     * floats is most of its cost */
     plan p;
+    p.size = format == XYL_MESH_FORMAT_OBJ ? SIZE_MAX : 0;
     xyl_result r = prepare(mesh, format, &p, diag);
     if (r != XYL_OK) return r;
     /* The view may be the caller's own, so the C library's allocator is used, not the mesh's. */
-    unsigned char *bytes = xyl__alloc(NULL, p.size + 1);
-    if (!bytes) {
-        plan_free(&p);
-        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for %zu bytes",
-                         p.size + 1);
+    sink out = {NULL, 0, false, 0};
+    if (format == XYL_MESH_FORMAT_OBJ) {
+        out.cap = (size_t)1 << 16;
+        out.buf = xyl__alloc(NULL, out.cap);
+        if (out.buf) render_obj(mesh, uv_mesh(mesh, &p), &out);
+    } else {
+        out.buf = xyl__alloc(NULL, p.size + 1);
+        if (out.buf) emit(mesh, &p, out.buf);
+        out.len = p.size;
     }
-    emit(mesh, &p, bytes);
     plan_free(&p);
-    r = xyl__write_file_atomic(path, bytes, p.size, diag);
-    xyl__free(NULL, bytes);
+    if (!out.buf || out.overflow) {
+        xyl__free(NULL, out.buf);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the %s",
+                         format == XYL_MESH_FORMAT_OBJ ? "OBJ text" : "GLB");
+    }
+    r = xyl__write_file_atomic(path, out.buf, out.len, diag);
+    xyl__free(NULL, out.buf);
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }
