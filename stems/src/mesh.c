@@ -94,8 +94,8 @@ static xyl_result check_face(const uint32_t *f, int n, size_t vertex_count, size
     return XYL_OK;
 }
 
-/* A face's wrap bits name only its own corners. */
-static xyl_result check_wraps(const uint8_t *wraps, size_t quads, size_t triangles, xyl_diag *diag)
+xyl_result xyl__check_uv_wraps(const uint8_t *wraps, size_t quads, size_t triangles,
+                               xyl_diag *diag)
 {
     for (size_t f = 0; wraps && f < quads + triangles; ++f)
         if (wraps[f] & (uint8_t)~XYL__WRAP_BITS(f < quads ? 4 : 3))
@@ -138,7 +138,7 @@ static xyl_result validate(const xyl_mesh_desc *d, xyl_diag *diag)
         xyl_result r = check_face(d->triangles + 3 * f, 3, d->vertex_count, d->quad_count + f, diag);
         if (r) return r;
     }
-    return check_wraps(d->uv_wraps, d->quad_count, d->triangle_count, diag);
+    return xyl__check_uv_wraps(d->uv_wraps, d->quad_count, d->triangle_count, diag);
 }
 
 /* Copies count * size bytes of src (or zeroes when src is NULL) into a new zeroed array of room
@@ -278,7 +278,7 @@ void xyl_mesh_destroy(xyl_mesh *mesh)
 
 enum { USED_PLAIN = 1, USED_WRAPPED = 2 };
 
-/* The corners of a view, checked: indices in range, wrap bits within each face's corners. */
+/* A caller's view gets the face checks of xyl_mesh_create (check_face) and its wrap bits. */
 static xyl_result check_view(const xyl_mesh *m, xyl_diag *diag)
 {
     size_t faces = m->quad_count + m->triangle_count;
@@ -288,22 +288,20 @@ static xyl_result check_view(const xyl_mesh *m, xyl_diag *diag)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a mesh array is NULL but its count is not 0");
     for (size_t f = 0; f < faces; ++f) {
-        int n = f < m->quad_count ? 4 : 3;
-        const uint32_t *c = n == 4 ? m->quads + 4 * f : m->triangles + 3 * (f - m->quad_count);
-        for (int k = 0; k < n; ++k)
-            if (c[k] >= m->vertex_count)
-                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)f,
-                                 "face %zu uses vertex %u of %zu", f, c[k], m->vertex_count);
+        int n;
+        const uint32_t *c = xyl__mesh_face(m, f, &n);
+        xyl_result r = check_face(c, n, m->vertex_count, f, diag);
+        if (r) return r;
     }
-    return check_wraps(m->uv_wraps, m->quad_count, m->triangle_count, diag);
+    return xyl__check_uv_wraps(m->uv_wraps, m->quad_count, m->triangle_count, diag);
 }
 
 /* How each vertex is used: USED_PLAIN and/or USED_WRAPPED, from every face corner. */
 static void mark_uses(const xyl_mesh *m, uint8_t *use)
 {
     for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
-        int n = f < m->quad_count ? 4 : 3;
-        const uint32_t *c = n == 4 ? m->quads + 4 * f : m->triangles + 3 * (f - m->quad_count);
+        int n;
+        const uint32_t *c = xyl__mesh_face(m, f, &n);
         uint8_t w = m->uv_wraps ? m->uv_wraps[f] : 0;
         for (int k = 0; k < n; ++k) use[c[k]] |= (w >> k & 1u) ? USED_WRAPPED : USED_PLAIN;
     }
@@ -384,8 +382,8 @@ xyl_result xyl_mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, x
         }
     }
     remap_faces(m->quads, m->quad_count, 4, m->uv_wraps, copy, a.quads);
-    remap_faces(m->triangles, m->triangle_count, 3, m->uv_wraps ? m->uv_wraps + m->quad_count : NULL,
-                copy, a.triangles);
+    const uint8_t *tri_wraps = m->uv_wraps ? m->uv_wraps + m->quad_count : NULL;
+    remap_faces(m->triangles, m->triangle_count, 3, tri_wraps, copy, a.triangles);
     xyl__free(alloc, use);
     xyl__free(alloc, copy);
     return xyl__mesh_adopt(&a, alloc, out, diag);

@@ -43,16 +43,6 @@ typedef struct scratch {
 
 /* ---- faces and slots ------------------------------------------------------------------------ */
 
-static const uint32_t *face_vertices(const xyl_mesh *m, size_t f, int *n)
-{
-    if (f < m->quad_count) {
-        *n = 4;
-        return m->quads + 4 * f;
-    }
-    *n = 3;
-    return m->triangles + 3 * (f - m->quad_count);
-}
-
 static uint32_t face_first_slot(const xyl_mesh *m, size_t f)
 {
     size_t q = m->quad_count;
@@ -112,7 +102,7 @@ static xyl_result validate(const xyl_mesh *m, xyl_diag *diag)
     size_t faces = m->quad_count + m->triangle_count;
     for (size_t f = 0; f < faces; ++f) {
         int n;
-        const uint32_t *idx = face_vertices(m, f, &n);
+        const uint32_t *idx = xyl__mesh_face(m, f, &n);
         xyl_result r = check_face(idx, n, m->vertex_count, f, diag);
         if (r) return r;
     }
@@ -194,7 +184,7 @@ static double area_tolerance(const xyl_mesh *m, uint8_t *state)
     size_t faces = m->quad_count + m->triangle_count;
     for (size_t f = 0; f < faces; ++f) {
         int n;
-        const uint32_t *idx = face_vertices(m, f, &n);
+        const uint32_t *idx = xyl__mesh_face(m, f, &n);
         for (int k = 0; k < n; ++k) state[idx[k]] = 1;
     }
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -227,7 +217,7 @@ static bool face_degenerate(const xyl_mesh *m, size_t f, double tol)
     const xyl_vec3 *p = m->positions;
     double limit = 4.0 * tol * tol;
     int n;
-    const uint32_t *q = face_vertices(m, f, &n);
+    const uint32_t *q = xyl__mesh_face(m, f, &n);
     if (n == 3) return twice_area_sq(p, q[0], q[1], q[2]) <= limit;
     xyl__dvec3 a = xyl__from_f3(p[q[0]]), b = xyl__from_f3(p[q[1]]);
     xyl__dvec3 c = xyl__from_f3(p[q[2]]), d = xyl__from_f3(p[q[3]]);
@@ -246,7 +236,7 @@ static void bucket_half_edges(const xyl_mesh *m, scratch *s)
     size_t faces = m->quad_count + m->triangle_count;
     for (size_t f = 0; f < faces; ++f) {
         int n;
-        const uint32_t *idx = face_vertices(m, f, &n);
+        const uint32_t *idx = xyl__mesh_face(m, f, &n);
         for (int k = 0; k < n; ++k) {
             uint32_t a = idx[k], b = idx[k + 1 < n ? k + 1 : 0];
             s->offsets[a < b ? a : b]++;
@@ -255,7 +245,7 @@ static void bucket_half_edges(const xyl_mesh *m, scratch *s)
     for (size_t v = 1; v <= m->vertex_count; ++v) s->offsets[v] += s->offsets[v - 1];
     for (size_t f = 0; f < faces; ++f) {
         int n;
-        const uint32_t *idx = face_vertices(m, f, &n);
+        const uint32_t *idx = xyl__mesh_face(m, f, &n);
         uint32_t first = face_first_slot(m, f);
         for (int k = 0; k < n; ++k) {
             uint32_t a = idx[k], b = idx[k + 1 < n ? k + 1 : 0];
@@ -361,7 +351,7 @@ static face_key make_key(const xyl_mesh *m, size_t f)
 {
     face_key k = {{UINT32_MAX, UINT32_MAX, UINT32_MAX, UINT32_MAX}};
     int n;
-    const uint32_t *idx = face_vertices(m, f, &n);
+    const uint32_t *idx = xyl__mesh_face(m, f, &n);
     for (int i = 0; i < n; ++i) {
         int j = i;
         for (; j > 0 && k.v[j - 1] > idx[i]; --j) k.v[j] = k.v[j - 1];
@@ -373,7 +363,7 @@ static face_key make_key(const xyl_mesh *m, size_t f)
 static uint32_t smallest_vertex(const xyl_mesh *m, size_t f)
 {
     int n;
-    const uint32_t *idx = face_vertices(m, f, &n);
+    const uint32_t *idx = xyl__mesh_face(m, f, &n);
     uint32_t v = idx[0];
     for (int i = 1; i < n; ++i) v = idx[i] < v ? idx[i] : v;
     return v;

@@ -45,9 +45,25 @@ xyl_result xyl__mesh_adopt(xyl__mesh_arrays *a, const xyl_allocator *alloc, xyl_
 xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
                                 const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag);
 
+/* Face f of a mesh (quads first, then triangles): its vertex indices, and their number in *n. */
+static inline const uint32_t *xyl__mesh_face(const xyl_mesh *m, size_t f, int *n)
+{
+    if (f < m->quad_count) {
+        *n = 4;
+        return m->quads + 4 * f;
+    }
+    *n = 3;
+    return m->triangles + 3 * (f - m->quad_count);
+}
+
 /* Bit c of a face's uv_wraps set: corner c's u is its vertex's u + 1. The bits a face of n
  * corners may use. */
 #define XYL__WRAP_BITS(n) ((uint8_t)((1u << (n)) - 1u))
+
+/* XYL_ERR_INVALID_ARGUMENT (diag.index = the face) where a face's wrap bits name a corner it does
+ * not have; NULL wraps are none. */
+xyl_result xyl__check_uv_wraps(const uint8_t *wraps, size_t quads, size_t triangles,
+                               xyl_diag *diag);
 
 /* The wrap bits of a face of n <= 4 corners whose u's lie on a circle of circumference 1 (a
  * cylindrical map): the cut at the widest gap, which leaves the corners the shortest span,

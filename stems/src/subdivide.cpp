@@ -125,10 +125,6 @@ xyl_result validate_input(const xyl__mesh_arrays *a, xyl_diag *diag)
     for (size_t f = 0; f < face_count(a); ++f) {
         int n = 0;
         const uint32_t *idx = face_vertices(a, f, &n);
-        if (a->uv_wraps && (a->uv_wraps[f] >> n) != 0)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, static_cast<int64_t>(f),
-                             "face %zu has uv wrap bits 0x%x beyond its %d corners", f,
-                             unsigned(a->uv_wraps[f]), n);
         for (int k = 0; k < n; ++k) {
             bool repeated = false;
             for (int j = 0; j < k; ++j) repeated = repeated || idx[j] == idx[k];
@@ -138,7 +134,7 @@ xyl_result validate_input(const xyl__mesh_arrays *a, xyl_diag *diag)
                                  repeated ? "twice" : "out of range");
         }
     }
-    return XYL_OK;
+    return xyl__check_uv_wraps(a->uv_wraps, a->quad_count, a->triangle_count, diag);
 }
 
 struct Limits {
@@ -242,7 +238,8 @@ void fill_control(const xyl__mesh_arrays *in, bool loop, Control *c)
             *branch++ = b;
             *branch++ = b;
             *wrap++ = static_cast<uint8_t>(w & 7u);
-            *wrap++ = static_cast<uint8_t>(wrap_bit(w, 0, 0) | wrap_bit(w, 2, 1) | wrap_bit(w, 3, 2));
+            *wrap++ = static_cast<uint8_t>(wrap_bit(w, 0, 0) | wrap_bit(w, 2, 1) |
+                                           wrap_bit(w, 3, 2));
             continue;
         }
         for (int k = 0; k < n; ++k) *idx++ = static_cast<int>(fv[k]);

@@ -182,8 +182,8 @@ XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
  * split mesh's uv_wraps are all 0. Its seams are open by index (an edge along a seam is used once
  * by each side's vertices) but closed by position, so it is for drawing and export, not for
  * xyl_mesh_check, subdivision or the intersection test. A mesh without wraps comes back as a
- * copy. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, an index out of range, a
- * wrap bit beyond a face's corners), XYL_ERR_LIMIT_EXCEEDED (more than 2^32 - 1 vertices),
+ * copy. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, an index out of range or
+ * repeated within a face, a wrap bit beyond a face's corners: diag.index is the face), XYL_ERR_LIMIT_EXCEEDED (more than 2^32 - 1 vertices),
  * XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_split_seams(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         xyl_mesh **out, xyl_diag *diag);
