@@ -1,9 +1,10 @@
 /* Mesh export: Wavefront OBJ text and glTF 2.0 binary (.glb), both rendered here by hand
  * (docs/mesh-export.md describes the layouts).
  *
- * In memory both writers count, then fill: prepare() checks the view and sizes the output
- * exactly, and emit() writes exactly that many bytes, so a too-small buffer is refused before a
- * byte of it is touched; xyl_mesh_write_file renders OBJ text once, into a growing buffer. Nothing depends on the C locale or the host's byte order: integers are printed by
+ * In memory both writers count, then fill: prepare() checks the view, size_output() sizes the
+ * output exactly and emit() writes exactly that many bytes, so a too-small buffer is refused
+ * before a byte of it is touched; xyl_mesh_write_file renders OBJ text once, into a growing
+ * buffer. Nothing depends on the C locale or the host's byte order: integers are printed by
  * hand, snprintf's decimal point is replaced with '.', and GLB numbers are stored byte by byte,
  * little-endian, as glTF requires. */
 #include <assert.h>
@@ -44,7 +45,8 @@
 typedef struct sink {
     unsigned char *buf;
     size_t len;
-    bool overflow; /* the output would not fit in a size_t (with room for a NUL), or memory ran out */
+    bool overflow; /* the output would not fit in a size_t (with room for a NUL), or memory
+                      ran out */
     size_t cap;    /* 0: buf has room for everything */
 } sink;
 
@@ -499,11 +501,10 @@ static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
 
 /* ==== public entry points ==================================================================== */
 
-/* What prepare() learnt: the exact output size and, for GLB, the layout. */
+/* What prepare() learnt: for GLB the layout and size, for OBJ (size_output) the size. */
 typedef struct plan {
     xyl_mesh_format format;
-    size_t size; /* bytes, without the NUL an OBJ text gets in memory; for OBJ, SIZE_MAX
-                    going into prepare() skips counting them (the text is rendered once) */
+    size_t size; /* bytes, without the NUL an OBJ text gets in memory (size_output) */
     glb_layout glb;
     xyl_mesh *split; /* the mesh with its UV seams split, where it has any (plan_free) */
 } plan;
@@ -537,7 +538,7 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
 {
     p->format = format;
     p->split = NULL;
-    /* p->size comes in as SIZE_MAX where OBJ text need not be counted first (plan.size) */
+    p->size = 0;
     xyl_result r = check_arrays(m, diag);
     /* a GLB's size is checked before any array is read (plan_glb); the split only adds to it */
     if (r == XYL_OK && format == XYL_MESH_FORMAT_GLB) r = plan_glb(m, &p->glb, diag);
@@ -549,16 +550,22 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
     if (format == XYL_MESH_FORMAT_GLB) {
         if (p->split) r = plan_glb(p->split, &p->glb, diag);
         p->size = (size_t)p->glb.total;
-    } else if (p->size != SIZE_MAX) { /* SIZE_MAX: the caller renders once as it writes */
-        sink count = {NULL, 0, false, 0};
-        render_obj(m, uv_mesh(m, p), &count);
-        if (count.overflow)
-            r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
-                          "the OBJ text would not fit in memory");
-        p->size = count.len;
     }
     if (r != XYL_OK) plan_free(p);
     return r;
+}
+
+/* The exact output size into p->size: a GLB's came with its layout; OBJ text is counted by
+ * rendering it. On failure the plan is freed. */
+static xyl_result size_output(const xyl_mesh *m, plan *p)
+{
+    if (p->format == XYL_MESH_FORMAT_GLB) return XYL_OK;
+    sink count = {NULL, 0, false, 0};
+    render_obj(m, uv_mesh(m, p), &count);
+    p->size = count.len;
+    if (!count.overflow) return XYL_OK;
+    plan_free(p);
+    return XYL_ERR_OUT_OF_MEMORY; /* the OBJ text would not fit in memory */
 }
 
 /* Writes exactly p->size bytes (and a NUL after OBJ text, whose room the caller checked). */
@@ -579,8 +586,8 @@ xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, v
 {
     if (!mesh || !format_ok(format) || (!buffer && !needed)) return XYL_ERR_INVALID_ARGUMENT;
     plan p;
-    p.size = 0;
     xyl_result r = prepare(mesh, format, &p, NULL);
+    if (r == XYL_OK) r = size_output(mesh, &p);
     if (r != XYL_OK) return r;
     if (needed) *needed = p.size;
     /* OBJ is text and gets a terminating NUL, as xyl_skeleton_write_text; GLB is bytes. */
@@ -600,7 +607,6 @@ xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_
     /* OBJ text is rendered once, into a buffer that grows, not counted first: formatting the
      * floats is most of its cost */
     plan p;
-    p.size = format == XYL_MESH_FORMAT_OBJ ? SIZE_MAX : 0;
     xyl_result r = prepare(mesh, format, &p, diag);
     if (r != XYL_OK) return r;
     /* The view may be the caller's own, so the C library's allocator is used, not the mesh's. */
