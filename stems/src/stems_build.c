@@ -231,7 +231,8 @@ static uint32_t put_apex(stems *s, const stems_ring *ring, bool forward, uint32_
     s->pos[v] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, h)));
     s->uv[2 * v] = 0.5f;
     /* a ring of radius 0 (a bridge on a patch without height) has its apex on it */
-    s->uv[2 * v + 1] = (float)(ring->v + (ring->radius > 0.0 ? h / (2.0 * XYL__PI * ring->radius) : 0.0));
+    double along = ring->radius > 0.0 ? h / (2.0 * XYL__PI * ring->radius) : 0.0;
+    s->uv[2 * v + 1] = (float)(ring->v + along);
     s->vbranch[v] = branch;
     if (s->nrm) memset(s->nrm + v, 0, sizeof *s->nrm);
     s->nv = v + 1;
@@ -921,17 +922,23 @@ static bool band_folds(xyl__dvec3 ca, xyl__dvec3 ta, double ra, xyl__dvec3 cb, x
            xyl__d3_dot(xyl__d3_sub(ca, cb), tb) >= -ra * tilt;
 }
 
-/* Whether a lateral's first band, from its bridge ring to the ring of its first station, folds
- * when the tube comes into that station along t_in (the station's ring is turned halfway from
- * t_in to the next segment, if there is one, as branch_rings turns it). */
-static bool first_band_folds(const stems *s, const stems_ring *bridge, xyl__dvec3 t_in)
+/* Whether the band from a ring (centre c, unit tangent t, radius r) to the ring of the first
+ * station folds when the tube comes into that station along t_in (the station's ring is turned
+ * halfway from t_in to the next segment, if there is one, as branch_rings turns it). */
+static bool band_to_first_station_folds(const stems *s, xyl__dvec3 c, xyl__dvec3 t, double r,
+                                        xyl__dvec3 t_in)
 {
     const stems_station *st = s->stations;
     xyl__dvec3 t_out = s->nstations > 1 ? dir_between(st[0].p, st[1].p, t_in) : t_in;
     xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
     double f = s->inflate;
-    return band_folds(bridge->centre, bridge->tangent, f * bridge->radius, st[0].p, t0,
-                      f * st[0].r);
+    return band_folds(c, t, f * r, st[0].p, t0, f * st[0].r);
+}
+
+/* Whether a lateral's first band, from its bridge ring to its first station, folds. */
+static bool first_band_folds(const stems *s, const stems_ring *bridge, xyl__dvec3 t_in)
+{
+    return band_to_first_station_folds(s, bridge->centre, bridge->tangent, bridge->radius, t_in);
 }
 
 /* The direction a lateral's tube comes into its first station along: the bridge ring's normal,
@@ -968,10 +975,7 @@ static xyl_result add_elbow(stems *s, const stems_ring *bridge)
     xyl__dvec3 e = xyl__d3_add(c, xyl__d3_scale(n, 0.4 * ahead));
     xyl__dvec3 to = dir_between(e, st[0].p, n);
     xyl__dvec3 te = xyl__d3_normalize_or(xyl__d3_add(n, to), to);
-    xyl__dvec3 t_out = s->nstations > 1 ? dir_between(st[0].p, st[1].p, to) : to;
-    xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(to, t_out), to);
-    if (band_folds(c, n, f * rb, e, te, f * re) ||
-        band_folds(e, te, f * re, st[0].p, t0, f * st[0].r))
+    if (band_folds(c, n, f * rb, e, te, f * re) || band_to_first_station_folds(s, e, te, re, to))
         return XYL_OK;
     if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, s->nstations + 1,
                    sizeof *s->stations))
@@ -1238,9 +1242,10 @@ static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
 
 static void free_state(stems *s)
 {
-    void *arrays[] = {s->child_start, s->child_list, s->main, s->pos, s->uv, s->vbranch, s->nrm,
-                      s->quads, s->fbranch, s->qwrap, s->tris, s->tbranch, s->twrap, s->taken, s->chain, s->stations,
-                      s->rings, s->spans, s->pending, s->cones};
+    void *arrays[] = {s->child_start, s->child_list, s->main,  s->pos,      s->uv,
+                      s->vbranch,     s->nrm,        s->quads, s->fbranch,  s->qwrap,
+                      s->tris,        s->tbranch,    s->twrap, s->taken,    s->chain,
+                      s->stations,    s->rings,      s->spans, s->pending,  s->cones};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 
