@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mesh_internal.h"
 #include "xylem/xyl_stems.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -77,10 +78,8 @@ static void check_seams(const xyl_mesh *m)
     check(split->vertex_count >= m->vertex_count && split->quad_count == m->quad_count &&
           split->triangle_count == m->triangle_count);
     for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
-        int n = f < m->quad_count ? 4 : 3;
-        const uint32_t *a = n == 4 ? m->quads + 4 * f : m->triangles + 3 * (f - m->quad_count);
-        const uint32_t *b = n == 4 ? split->quads + 4 * f
-                                   : split->triangles + 3 * (f - m->quad_count);
+        int n, ns;
+        const uint32_t *a = xyl__mesh_face(m, f, &n), *b = xyl__mesh_face(split, f, &ns);
         check((m->uv_wraps[f] >> n) == 0 && split->uv_wraps[f] == 0);
         for (int c = 0; c < n; ++c) {
             float u = m->uvs[2 * a[c]] + ((m->uv_wraps[f] >> c & 1u) ? 1.0f : 0.0f);

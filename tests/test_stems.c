@@ -4,7 +4,7 @@
 
 #include "skel_overlap.h"
 #include "test_util.h"
-#include "xyl_internal.h"
+#include "mesh_internal.h"
 
 static xyl_mesh *build(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
                        xyl_normal_mode normals)
@@ -741,8 +741,9 @@ static void subdivision_limit_follows_a_bent_branch(void **state)
     const double arc = 4.0 * r / (2.0 * sin(step / 2.0)); /* chord 4 r */
     xyl_skel_node nodes[SEGMENTS + 1];
     for (int i = 0; i <= SEGMENTS; ++i)
-        nodes[i] = (xyl_skel_node){{(float)(arc * (1.0 - cos(i * step))), (float)(arc * sin(i * step)), 0},
-                                   (float)r, i - 1, 0, 0};
+        nodes[i] = (xyl_skel_node){
+            {(float)(arc * (1.0 - cos(i * step))), (float)(arc * sin(i * step)), 0}, (float)r,
+            i - 1, 0, 0};
     xyl_skeleton *sk = skeleton_of(nodes, SEGMENTS + 1);
     static const uint32_t sides[] = {4, 8};
     static const double bound[] = {0.015, 0.002};
@@ -772,17 +773,6 @@ static void subdivision_limit_follows_a_bent_branch(void **state)
 
 /* ---- UV seams ------------------------------------------------------------------------------ */
 
-/* Face f's corners (quads first) and their number. */
-static int face_of(const xyl_mesh *m, size_t f, const uint32_t **idx)
-{
-    if (f < m->quad_count) {
-        *idx = m->quads + 4 * f;
-        return 4;
-    }
-    *idx = m->triangles + 3 * (f - m->quad_count);
-    return 3;
-}
-
 /* The u of corner c of face f as a texture sees it: its vertex's u, + 1 where the face wraps. */
 static double corner_u(const xyl_mesh *m, size_t f, const uint32_t *idx, int c)
 {
@@ -792,8 +782,8 @@ static double corner_u(const xyl_mesh *m, size_t f, const uint32_t *idx, int c)
 /* The span of face f's corner u's, with its wraps or without. */
 static double u_span(const xyl_mesh *m, size_t f, bool wraps)
 {
-    const uint32_t *idx;
-    int n = face_of(m, f, &idx);
+    int n;
+    const uint32_t *idx = xyl__mesh_face(m, f, &n);
     double lo = INFINITY, hi = -INFINITY;
     for (int c = 0; c < n; ++c) {
         double u = wraps ? corner_u(m, f, idx, c) : m->uvs[2 * idx[c]];
@@ -859,8 +849,8 @@ static void assert_split_matches(const xyl_mesh *m, const xyl_mesh *s)
     uint8_t *use = calloc(m->vertex_count ? m->vertex_count : 1, 1);
     assert_non_null(use);
     for (size_t f = 0; f < faces; ++f) {
-        const uint32_t *idx;
-        int n = face_of(m, f, &idx);
+        int n;
+        const uint32_t *idx = xyl__mesh_face(m, f, &n);
         for (int c = 0; c < n; ++c) use[idx[c]] |= (m->uv_wraps[f] >> c & 1u) ? 2 : 1;
     }
     for (size_t v = 0; v < m->vertex_count; ++v) both += use[v] == 3;
@@ -869,9 +859,9 @@ static void assert_split_matches(const xyl_mesh *m, const xyl_mesh *s)
     assert_int_equal(s->quad_count, m->quad_count);
     assert_int_equal(s->triangle_count, m->triangle_count);
     for (size_t f = 0; f < faces; ++f) {
-        const uint32_t *a, *b;
-        int n = face_of(m, f, &a);
-        face_of(s, f, &b);
+        int n, ns;
+        const uint32_t *a = xyl__mesh_face(m, f, &n), *b = xyl__mesh_face(s, f, &ns);
+        assert_int_equal(ns, n);
         assert_int_equal(s->face_branches[f], m->face_branches[f]);
         assert_int_equal(s->uv_wraps[f], 0);
         for (int c = 0; c < n; ++c) {
@@ -987,8 +977,8 @@ static void obj_corners_carry_their_wrapped_uv(void **state)
             ++nvt;
         }
         if (strncmp(line, "f ", 2) != 0) continue;
-        const uint32_t *idx;
-        int n = face_of(m, face, &idx), used = 0;
+        int n, used = 0;
+        const uint32_t *idx = xyl__mesh_face(m, face, &n);
         char *at = line + 1;
         for (int c = 0; c < n; ++c) {
             unsigned long a, b, nn;
@@ -1058,10 +1048,11 @@ static void subdivision_keeps_the_seams(void **state)
         xyl_mesh *m = build(sk, k, (xyl_subdivision)scheme, XYL_NORMALS_BRANCH);
         size_t band = 0, wrapped = 0;
         for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
-            const uint32_t *idx;
-            int n = face_of(m, f, &idx);
+            int n;
+            const uint32_t *idx = xyl__mesh_face(m, f, &n);
             bool cap = true;
-            for (int c = 1; c < n; ++c) cap = cap && m->uvs[2 * idx[c] + 1] == m->uvs[2 * idx[0] + 1];
+            for (int c = 1; c < n; ++c)
+                cap = cap && m->uvs[2 * idx[c] + 1] == m->uvs[2 * idx[0] + 1];
             if (cap) continue;
             ++band;
             wrapped += m->uv_wraps[f] != 0;
