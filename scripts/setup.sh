@@ -9,6 +9,7 @@ packages=(
   clang libclang-rt-14-dev   # ASan/UBSan and libFuzzer runtimes for clang 14
   libcmocka-dev              # test framework
   libosd-dev                 # OpenSubdiv 3.5 (Far), for stems/ subdivision
+  libdragonbox-dev           # shortest round-trip float text (OBJ, .skel, glTF JSON)
   libepoxy-dev libegl-dev libegl1-mesa-dev libgl1-mesa-dri   # GL 4.5 backend, EGL headless (llvmpipe)
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers   # Vulkan backend (lavapipe), validation
   glslang-tools spirv-tools  # shaders: GLSL -> SPIR-V and validation at build time
@@ -16,6 +17,7 @@ packages=(
   libglfw3-dev xvfb xauth    # xylem view: GL in a GLFW window; tests run it under Xvfb
   libtinygltf-dev nlohmann-json3-dev   # xylem render --mesh reads .glb (samples only)
   gnuplot-nox                # docs/ plots from bench_tess (scripts/bench.sh)
+  locales                    # a decimal-comma locale for the writers' locale tests
 )
 
 missing=()
@@ -32,13 +34,20 @@ elif ! command -v npm >/dev/null 2>&1; then
   missing+=(npm)
 fi
 
+sudo_cmd=()
+[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
 if [ ${#missing[@]} -gt 0 ]; then
   echo "setup: installing ${missing[*]}"
-  sudo_cmd=()
-  [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   export DEBIAN_FRONTEND=noninteractive
   "${sudo_cmd[@]}" apt-get update -qq
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The writers must print '.' whatever the locale: their tests switch to de_DE, which a fresh
+# machine does not have compiled.
+if ! locale -a 2>/dev/null | grep -qix 'de_DE.utf-\?8'; then
+  echo "setup: compiling the de_DE.UTF-8 locale (for the locale tests)"
+  "${sudo_cmd[@]}" localedef -i de_DE -f UTF-8 de_DE.UTF-8
 fi
 
 # The glTF-Validator at the version tests/gltf/package-lock.json pins. npm writes

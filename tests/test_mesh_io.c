@@ -24,6 +24,7 @@
 #include <cmocka.h>
 
 #include "xylem/xyl_stems.h"
+#include "float_text.h"
 
 #define GLB_MAGIC 0x46546C67u
 #define GLB_JSON 0x4E4F534Au
@@ -329,7 +330,7 @@ static void obj_of_a_tiny_mesh_is_exact(void **state)
     size_t len;
     char *text = (char *)write_alloc(m, XYL_MESH_FORMAT_OBJ, &len);
     const char *expect = "# xylem mesh: 5 vertices, 1 quads, 1 triangles\n"
-                         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.100000001 -2.5 1.00000001e-07\n"
+                         "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.1 -2.5 1e-7\n"
                          "vt 0 0\nvt 0.25 0\nvt 0.25 1\nvt 0 1\nvt 0.5 3\n"
                          "vn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 1 0\n"
                          "g branch_0\nf 1/1/1 2/2/2 3/3/3 4/4/4\n"
@@ -355,7 +356,7 @@ static void obj_cube_has_eight_vertices_and_six_quads(void **state)
     assert_contains(text, "\nf 1/1/1 4/4/4 3/3/3 2/2/2\n");
     assert_contains(text, "\nf 2/2/2 3/3/3 7/7/7 6/6/6\n");
     /* smooth normals of a cube corner point along the diagonal */
-    assert_contains(text, "\nvn -0.577350259 -0.577350259 -0.577350259\n");
+    assert_contains(text, "\nvn -0.57735026 -0.57735026 -0.57735026\n");
     free(text);
     xyl_mesh_destroy(m);
 }
@@ -414,9 +415,9 @@ static void obj_does_not_depend_on_the_locale(void **state)
     char *text = (char *)write_alloc(m, XYL_MESH_FORMAT_OBJ, &len_obj);
     unsigned char *bytes = write_alloc(m, XYL_MESH_FORMAT_GLB, &len_glb);
     setlocale(LC_NUMERIC, "C");
-    assert_contains(text, "v 0.100000001 ");
+    assert_contains(text, "v 0.1 ");
     glb g = parse_glb(bytes, len_glb);
-    assert_contains(g.json, "\"min\":[-3.00000005e+38,");
+    assert_contains(g.json, "\"min\":[-3e38,");
     free(g.json);
     free(text);
     free(bytes);
@@ -1018,6 +1019,104 @@ static int write_samples(const char *folder)
     return 0;
 }
 
+/* ---- float text (float_text.h): every text writer's numbers ---------------------------------- */
+
+static uint32_t float_bits(float f)
+{
+    uint32_t b;
+    memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+static float float_of_bits(uint32_t b)
+{
+    float f;
+    memcpy(&f, &b, sizeof f);
+    return f;
+}
+
+/* Significant digits of a number's text: those of its mantissa without leading zeros, or
+ * trailing ones (an integer's padding). */
+static int significant_digits(const char *t)
+{
+    int first = -1, last = -1, i = 0;
+    for (; t[i] && t[i] != 'e'; ++i)
+        if (t[i] >= '1' && t[i] <= '9') {
+            if (first < 0) first = i;
+            last = i;
+        }
+    int n = 0;
+    for (int j = first; j >= 0 && j <= last; ++j) n += t[j] >= '0' && t[j] <= '9';
+    return n;
+}
+
+/* v's text reads back as exactly v, in the documented alphabet, and no text with one
+ * significant digit fewer does: the nearest such decimal (printf's %.*e) reads back as
+ * another float. */
+static void check_float_text(float v)
+{
+    char out[XYL__FLOAT_TEXT_MAX + 1];
+    size_t n = xyl__float_text(v, out);
+    assert_true(n > 0 && n <= 16);
+    out[n] = '\0';
+    for (size_t i = 0; i < n; ++i)
+        if (!strchr("0123456789.-e", out[i])) fail_msg("'%s' for %a has '%c'", out, (double)v, out[i]);
+    char *end = NULL;
+    float back = strtof(out, &end);
+    if (*end != '\0' || float_bits(back) != float_bits(v))
+        fail_msg("'%s' reads back as %a, not %a", out, (double)back, (double)v);
+    int d = significant_digits(out);
+    if (d > 1) {
+        char shorter[48];
+        snprintf(shorter, sizeof shorter, "%.*e", d - 2, (double)v);
+        if (float_bits(strtof(shorter, NULL)) == float_bits(v))
+            fail_msg("'%s' for %a, but '%s' reads back too", out, (double)v, shorter);
+    }
+}
+
+static void float_text_is_the_shortest_that_reads_back(void **state)
+{
+    (void)state;
+    static const struct {
+        float v;
+        const char *text;
+    } cases[] = {
+        {0.0f, "0"}, {-0.0f, "-0"}, {0.1f, "0.1"}, {-2.5f, "-2.5"}, {1.0f / 3.0f, "0.33333334"},
+        {123456.789f, "123456.79"}, {16777216.0f, "16777216"}, {16777218.0f, "16777218"},
+        {1e8f, "100000000"}, {1e9f, "1e9"}, {0.00001f, "0.00001"}, {0.000001f, "1e-6"},
+        {1e-7f, "1e-7"}, {-2.5e-7f, "-2.5e-7"}, {FLT_MAX, "3.4028235e38"},
+        {-3.0e38f, "-3e38"}, {FLT_MIN, "1.1754944e-38"}, {1e-45f, "1e-45"},
+        {-0.57735026f, "-0.57735026"}, {1.5e10f, "1.5e10"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        char out[XYL__FLOAT_TEXT_MAX + 1];
+        size_t n = xyl__float_text(cases[i].v, out);
+        out[n] = '\0';
+        if (strcmp(out, cases[i].text) != 0)
+            fail_msg("%a: '%s', expected '%s'", (double)cases[i].v, out, cases[i].text);
+        check_float_text(cases[i].v);
+    }
+    /* every binade's ends and their neighbours, then random bits, denormals included */
+    for (uint32_t e = 0; e < 255; ++e)
+        for (uint32_t m = 0; m < 4; ++m) {
+            uint32_t b = e << 23;
+            check_float_text(float_of_bits(b + m));
+            check_float_text(float_of_bits((b | 0x7fffffu) - m));
+            check_float_text(float_of_bits(0x80000000u | (b + m)));
+        }
+    uint64_t x = 0x9e3779b97f4a7c15u;
+    for (int i = 0; i < 300000; ++i) {
+        x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+        float v = float_of_bits((uint32_t)(x >> 32));
+        if (isfinite(v)) check_float_text(v);
+    }
+    char out[XYL__FLOAT_TEXT_MAX];
+    assert_int_equal(xyl__float_text(NAN, out), 3);
+    assert_memory_equal(out, "nan", 3);
+    assert_int_equal(xyl__float_text(-INFINITY, out), 4);
+    assert_memory_equal(out, "-inf", 4);
+}
+
 int main(void)
 {
     const char *samples = getenv("XYL_GLB_SAMPLES");
@@ -1048,6 +1147,7 @@ int main(void)
         cmocka_unit_test(write_file_replaces_an_existing_file_atomically),
         cmocka_unit_test(write_file_into_a_missing_folder_fails_with_io_and_leaves_nothing),
         cmocka_unit_test(write_file_rejects_bad_arguments),
+        cmocka_unit_test(float_text_is_the_shortest_that_reads_back),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

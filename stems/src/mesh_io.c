@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "float_text.h"
 #include "mesh_internal.h"
 
 /* GLB container (glTF 2.0 spec, "Binary glTF Layout"). */
@@ -90,30 +91,12 @@ static void put_uint(sink *s, uint64_t v)
     put(s, b + k, sizeof b - k);
 }
 
-static bool is_number_char(char c)
-{
-    return (c >= '0' && c <= '9') || c == '-' || c == '+' || c == 'e';
-}
-
-/* "%.9g", which names every float uniquely and is valid JSON for finite values. snprintf prints
- * the locale's decimal point; a %g number has no other characters outside [0-9+-e], so any such
- * run becomes one '.'. */
+/* The shortest text that reads back as the same float (float_text.h): valid JSON for finite
+ * values, '.' whatever the locale. */
 static void put_float(sink *s, float v)
 {
-    char raw[48], out[48];
-    int n = snprintf(raw, sizeof raw, "%.9g", (double)v);
-    size_t k = 0;
-    bool in_point = false;
-    for (int i = 0; i < n && raw[i] != '\0' && k < sizeof out; ++i) {
-        if (is_number_char(raw[i])) {
-            out[k++] = raw[i];
-            in_point = false;
-        } else if (!in_point) {
-            out[k++] = '.';
-            in_point = true;
-        }
-    }
-    put(s, out, k);
+    char out[XYL__FLOAT_TEXT_MAX];
+    put(s, out, xyl__float_text(v, out));
 }
 
 static void put_u32le(sink *s, uint32_t v)

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "float_text.h"
 #include "skeleton_internal.h"
 #include "xylem/xyl_stems.h"
 
@@ -716,26 +717,13 @@ static void put_int(sink *s, long long v)
     put(s, b, (size_t)n);
 }
 
-/* " %.9g", which names every float uniquely. snprintf prints the locale's decimal point; a %g
- * number has no other characters outside [0-9+-e], so any such run becomes one '.'. */
+/* " " and the shortest text that reads back as the same float (float_text.h), with '.' as
+ * decimal point whatever the locale. */
 static void put_float(sink *s, float v)
 {
-    char raw[48], out[48];
-    int n = snprintf(raw, sizeof raw, "%.9g", (double)v);
-    size_t k = 0;
-    bool in_point = false;
-    out[k++] = ' ';
-    for (int i = 0; i < n && raw[i] != '\0' && k < sizeof out; ++i) {
-        char c = raw[i];
-        if (is_digit(c) || c == '-' || c == '+' || c == 'e') {
-            out[k++] = c;
-            in_point = false;
-        } else if (!in_point) {
-            out[k++] = '.';
-            in_point = true;
-        }
-    }
-    put(s, out, k);
+    char out[1 + XYL__FLOAT_TEXT_MAX];
+    out[0] = ' ';
+    put(s, out, 1 + xyl__float_text(v, out + 1));
 }
 
 static void put_vec3(sink *s, xyl_vec3 v)

@@ -1,5 +1,5 @@
 /* OpenSubdiv shim: one uniform level of Catmull-Clark or Loop refinement through Far
- * (docs/subdivision.md). The only C++ file of the library: every entry point is extern "C" and
+ * (docs/subdivision.md). One of the library's two C++ files: every entry point is extern "C" and
  * catches every exception, so none reaches C. */
 #include "subdivide.h"
 

@@ -1,5 +1,5 @@
-/* One uniform level of subdivision through OpenSubdiv Far (stems/src/subdivide.cpp, the only C++
- * file of the library). Not installed. See docs/subdivision.md. */
+/* One uniform level of subdivision through OpenSubdiv Far (stems/src/subdivide.cpp, one of two C++
+ * files of the library). Not installed. See docs/subdivision.md. */
 #ifndef XYL_SUBDIVIDE_H
 #define XYL_SUBDIVIDE_H
 
