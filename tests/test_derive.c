@@ -1,5 +1,6 @@
 /* Derivation: known lengths, ABOP context rules, parametric and stochastic rewriting, the cut
  * symbol, determinism, and every bound. */
+#include <locale.h>
 #include <math.h>
 
 #include "test_util.h"
@@ -253,6 +254,27 @@ static void string_accessors_check_their_arguments(void **state)
     xyl_lstring_destroy(NULL);
 }
 
+/* A host that calls setlocale (most GUI toolkits do) must still get '.' between digits: a
+ * decimal comma would read as a parameter separator. */
+static void format_ignores_the_locale_decimal_point(void **state)
+{
+    (void)state;
+    const char *names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "ru_RU.UTF-8"};
+    const char *found = NULL;
+    for (size_t i = 0; i < sizeof names / sizeof names[0] && !found; ++i)
+        if (setlocale(LC_NUMERIC, names[i])) found = names[i];
+    if (!found) skip(); /* no locale with a decimal comma installed */
+    xyl_lstring *s = derive("axiom: A(1.5,2,-0.25)B(1e-7,123456.789)\n", 0, 1, XYL_OK, NULL);
+    char text[64];
+    size_t need = 0;
+    xyl_result r = xyl_lstring_format(s, text, sizeof text, &need);
+    setlocale(LC_NUMERIC, "C");
+    assert_int_equal(r, XYL_OK);
+    assert_string_equal(text, "A(1.5,2,-0.25)B(1e-07,123456.789)");
+    assert_int_equal(need, strlen(text));
+    xyl_lstring_destroy(s);
+}
+
 static void derivation_uses_the_grammar_depth_and_seed_by_default(void **state)
 {
     (void)state;
@@ -409,6 +431,7 @@ int main(void)
         cmocka_unit_test(custom_allocator_sees_every_allocation),
         cmocka_unit_test(byte_path_and_general_path_agree),
         cmocka_unit_test(byte_path_refuses_oversized_steps_before_rewriting),
+        cmocka_unit_test(format_ignores_the_locale_decimal_point),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

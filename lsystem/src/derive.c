@@ -99,15 +99,24 @@ xyl_result xyl_lstring_module(const xyl_lstring *s, size_t index, xyl_module_vie
 
 static size_t format_module(const xyl_lstring *s, size_t i, char *out, size_t cap)
 {
-    char tmp[32];
+    char tmp[48];
     size_t n = 0;
     if (n < cap) out[n] = (char)s->sym[i];
     ++n;
     uint32_t np = lsys_np(s, i);
     for (uint32_t k = 0; k < np; ++k) {
         int w = snprintf(tmp, sizeof tmp, "%c%.9g", k ? ',' : '(', lsys_par(s, i)[k]);
-        for (int j = 0; j < w; ++j, ++n)
-            if (n < cap) out[n] = tmp[j];
+        /* snprintf prints the locale's decimal point ("1,5" would read as two parameters);
+         * %g prints nothing else outside [0-9+-e], so any such run after the lead is one '.' */
+        bool in_point = false;
+        for (int j = 0; j < w && j < (int)sizeof tmp - 1; ++j) {
+            char c = tmp[j];
+            bool number = j == 0 || (c >= '0' && c <= '9') || c == '-' || c == '+' || c == 'e';
+            if (!number && in_point) continue;
+            in_point = !number;
+            if (n < cap) out[n] = number ? c : '.';
+            ++n;
+        }
     }
     if (np) {
         if (n < cap) out[n] = ')';

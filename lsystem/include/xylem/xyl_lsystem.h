@@ -107,7 +107,7 @@ XYL_API size_t xyl_lstring_count(const xyl_lstring *string);
 XYL_API xyl_result xyl_lstring_module(const xyl_lstring *string, size_t index,
                                       xyl_module_view *out);
 /* The string as text, "F(1.5)[+(25)F]": count-then-fill like xyl_skeleton_write_text.
- * Parameters are printed with %.9g. */
+ * Parameters are printed with %.9g, with '.' as decimal point whatever the C locale. */
 XYL_API xyl_result xyl_lstring_format(const xyl_lstring *string, char *buffer, size_t capacity,
                                       size_t *needed);
 
