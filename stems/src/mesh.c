@@ -278,7 +278,18 @@ void xyl_mesh_destroy(xyl_mesh *mesh)
 
 enum { USED_PLAIN = 1, USED_WRAPPED = 2 };
 
-/* A caller's view gets the face checks of xyl_mesh_create (check_face) and its wrap bits. */
+xyl_result xyl__check_mesh_faces(const xyl_mesh *m, xyl_diag *diag)
+{
+    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
+        int n;
+        const uint32_t *c = xyl__mesh_face(m, f, &n);
+        xyl_result r = check_face(c, n, m->vertex_count, f, diag);
+        if (r) return r;
+    }
+    return XYL_OK;
+}
+
+/* A caller's view gets the face checks of xyl_mesh_create and its wrap bits. */
 static xyl_result check_view(const xyl_mesh *m, xyl_diag *diag)
 {
     size_t faces = m->quad_count + m->triangle_count;
@@ -287,13 +298,8 @@ static xyl_result check_view(const xyl_mesh *m, xyl_diag *diag)
         (faces && !m->face_branches))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a mesh array is NULL but its count is not 0");
-    for (size_t f = 0; f < faces; ++f) {
-        int n;
-        const uint32_t *c = xyl__mesh_face(m, f, &n);
-        xyl_result r = check_face(c, n, m->vertex_count, f, diag);
-        if (r) return r;
-    }
-    return xyl__check_uv_wraps(m->uv_wraps, m->quad_count, m->triangle_count, diag);
+    xyl_result r = xyl__check_mesh_faces(m, diag);
+    return r ? r : xyl__check_uv_wraps(m->uv_wraps, m->quad_count, m->triangle_count, diag);
 }
 
 /* How each vertex is used: USED_PLAIN and/or USED_WRAPPED, from every face corner. */

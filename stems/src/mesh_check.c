@@ -65,21 +65,6 @@ static uint32_t slot_next(const xyl_mesh *m, uint32_t h)
 
 /* ---- validation ----------------------------------------------------------------------------- */
 
-static xyl_result check_face(const uint32_t *f, int n, size_t vertex_count, size_t face,
-                             xyl_diag *diag)
-{
-    for (int k = 0; k < n; ++k) {
-        if (f[k] >= vertex_count)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)face,
-                             "face %zu uses vertex %u of %zu", face, f[k], vertex_count);
-        for (int j = 0; j < k; ++j)
-            if (f[j] == f[k])
-                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)face,
-                                 "face %zu repeats vertex %u", face, f[k]);
-    }
-    return XYL_OK;
-}
-
 /* The mesh may be a caller-built view, so it gets the checks xyl_mesh_create makes. */
 static xyl_result validate(const xyl_mesh *m, xyl_diag *diag)
 {
@@ -99,14 +84,7 @@ static xyl_result validate(const xyl_mesh *m, xyl_diag *diag)
             return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
                              "vertex %zu has a non-finite position", v);
     }
-    size_t faces = m->quad_count + m->triangle_count;
-    for (size_t f = 0; f < faces; ++f) {
-        int n;
-        const uint32_t *idx = xyl__mesh_face(m, f, &n);
-        xyl_result r = check_face(idx, n, m->vertex_count, f, diag);
-        if (r) return r;
-    }
-    return XYL_OK;
+    return xyl__check_mesh_faces(m, diag);
 }
 
 /* ---- scratch memory ------------------------------------------------------------------------- */

@@ -56,6 +56,11 @@ static inline const uint32_t *xyl__mesh_face(const xyl_mesh *m, size_t f, int *n
     return m->triangles + 3 * (f - m->quad_count);
 }
 
+/* xyl_mesh_create's face checks on a view (the caller's, perhaps): XYL_ERR_INVALID_ARGUMENT,
+ * diag.index = the face, where a face uses a vertex out of range or one twice. The arrays must
+ * be there for the counts. */
+xyl_result xyl__check_mesh_faces(const xyl_mesh *m, xyl_diag *diag);
+
 /* Bit c of a face's uv_wraps set: corner c's u is its vertex's u + 1. The bits a face of n
  * corners may use. */
 #define XYL__WRAP_BITS(n) ((uint8_t)((1u << (n)) - 1u))

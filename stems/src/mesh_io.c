@@ -5,8 +5,8 @@
  * output exactly and emit() writes exactly that many bytes, so a too-small buffer is refused
  * before a byte of it is touched; xyl_mesh_write_file renders OBJ text once, into a growing
  * buffer. Nothing depends on the C locale or the host's byte order: integers are printed by
- * hand, snprintf's decimal point is replaced with '.', and GLB numbers are stored byte by byte,
- * little-endian, as glTF requires. */
+ * hand, floats through float_text.h, and GLB numbers are stored byte by byte, little-endian, as
+ * glTF requires. */
 #include <assert.h>
 #include <math.h>
 #include <stdio.h>

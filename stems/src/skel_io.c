@@ -2,7 +2,7 @@
  *
  * The reader is strict and line based: every error names a 1-based line and column. Neither
  * direction depends on the C locale: numbers are parsed here rather than with strtod, and the
- * writer replaces whatever decimal point snprintf prints with '.'. */
+ * writer prints them with float_text.h. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -280,7 +280,7 @@ static bool is_non_finite_word(const char *s, size_t n)
 }
 
 /* [+-] (digits [. digits*] | . digits) [(e|E) [+-] digits], nearest float. Accurate enough
- * (a few double ulps) that every value "%.9g" prints comes back as the same float. */
+ * (a few double ulps) that every value the writer or "%.9g" prints comes back as the same float. */
 static num_status parse_real(const token *t, float *out)
 {
     size_t i = 0;
