@@ -381,28 +381,25 @@ static bool parse_peer_line(const char *line, peer_case *out)
     return out->triangles > 0 && out->median_s > 0.0;
 }
 
-static bool build_peer_command(const options *o, const char *script, char *cmd, size_t cap)
+/* The script's command line with `args` (NULL-terminated) after it, stderr joined to stdout. */
+static bool build_peer_command(const options *o, const char *script, const char *const *args,
+                               char *cmd, size_t cap)
 {
-    char arg[32];
     cmd[0] = '\0';
-    snprintf(arg, sizeof arg, "%d", o->repeats);
-    bool ok = append_quoted(cmd, cap, o->node) && append_quoted(cmd, cap, script) &&
-              append_quoted(cmd, cap, "--repeats") && append_quoted(cmd, cap, arg);
-    /* --quick: the two smallest cases of the script's ladder; otherwise the whole ladder */
-    if (o->quick)
-        ok = ok && append_quoted(cmd, cap, "--levels") && append_quoted(cmd, cap, "1") &&
-             append_quoted(cmd, cap, "--levels") && append_quoted(cmd, cap, "2");
+    bool ok = append_quoted(cmd, cap, o->node) && append_quoted(cmd, cap, script);
+    for (; ok && *args; ++args) ok = append_quoted(cmd, cap, *args);
     ok = ok && strlen(cmd) + 8 < cap;
     if (ok) strcat(cmd, " 2>&1");
     return ok;
 }
 
-/* Runs the script once; returns the cases it printed, and on none its first line in why. */
-static size_t run_peer(const options *o, const char *script, peer_case *cases, char *why,
-                       size_t why_cap)
+/* Runs the script once with `args`; returns the cases it printed (at most cap), and on none its
+ * first line in why. If steps is not NULL, a line "eztree steps=N" sets it. */
+static size_t run_peer(const options *o, const char *script, const char *const *args,
+                       peer_case *cases, size_t cap, unsigned *steps, char *why, size_t why_cap)
 {
     char cmd[2 * MAX_PATH_LEN];
-    bool ok = build_peer_command(o, script, cmd, sizeof cmd);
+    bool ok = build_peer_command(o, script, args, cmd, sizeof cmd);
     copy_text(why, why_cap, ok ? "no output" : "command too long");
     if (!ok) return 0;
     fflush(stdout);
@@ -413,8 +410,12 @@ static size_t run_peer(const options *o, const char *script, peer_case *cases, c
     bool first = true;
     while (fgets(line, sizeof line, p)) {
         line[strcspn(line, "\r\n")] = '\0';
-        if (n < PEER_MAX && parse_peer_line(line, &cases[n])) {
+        if (n < cap && parse_peer_line(line, &cases[n])) {
             ++n;
+            continue;
+        }
+        if (steps && strncmp(line, "eztree steps=", 13) == 0) {
+            *steps = (unsigned)strtoul(line + 13, NULL, 10);
             continue;
         }
         if (first) copy_text(why, why_cap, line);
@@ -476,55 +477,76 @@ static void print_peer_header(void)
            "", "ms", "ms", "(mesh)", "ratio", "ratio");
 }
 
-static void peer_row(const options *o, const xyl_grammar *g, const peer_case *pc, tri_counts *tc,
-                     size_result *by_depth, peer_summary *sum)
+/* Step `step` of the script's ladder, in a node of its own, then the matched tree, measured
+ * after that node has exited: the two sides of a ratio are taken seconds apart and each on an
+ * otherwise idle machine. (Samples interleaved one by one with a node left running were up to
+ * 2x slower on xylem's side: docs/BENCHMARKS.md, "The peer a step at a time".) */
+static void peer_row(const options *o, const xyl_grammar *g, const char *script, unsigned step,
+                     tri_counts *tc, peer_summary *sum)
 {
-    xyl_diag diag = {0};
-    uint32_t depth = 0;
-    xyl_result r = match_depth(g, pc->triangles, tc, &depth, &diag);
-    if (!r) r = measure_size(o, g, depth, &by_depth[depth], &diag);
-    if (r) {
-        report_error(pc->name, r, &diag);
+    char step_arg[16], repeats_arg[16], why[256];
+    snprintf(step_arg, sizeof step_arg, "%u", step);
+    snprintf(repeats_arg, sizeof repeats_arg, "%d", o->repeats);
+    const char *const args[] = {"--step", step_arg, "--repeats", repeats_arg, NULL};
+    peer_case pc;
+    if (!run_peer(o, script, args, &pc, 1, NULL, why, sizeof why)) {
+        printf("ez-tree step %u: error: %s\n", step, why);
         ++sum->failures;
         return;
     }
-    const size_result *x = &by_depth[depth];
-    double peer_ns = pc->median_s * 1e9 / (double)pc->triangles;
-    double mesh_ns = x->mesh.median_s * 1e9 / (double)x->triangles;
-    double pipe_ns = x->pipeline.median_s * 1e9 / (double)x->triangles;
-    printf("%-16s %9llu %9.2f %8.1f | %5u %9zu %8.3f %8.3f %7.1f | %6.1fx %6.1fx%s\n", pc->name,
-           pc->triangles, pc->median_s * 1e3, peer_ns, depth, x->triangles,
-           x->mesh.median_s * 1e3, x->pipeline.median_s * 1e3, mesh_ns, peer_ns / mesh_ns,
-           peer_ns / pipe_ns, pc->wrapped ? " *" : "");
+    if (!sum->compared) {
+        printf("ez-tree %s: time per tree includes growing its skeleton and leaves; its branch "
+               "mesh is open tubes\n", pc.version);
+        print_peer_header();
+    }
+    xyl_diag diag = {0};
+    uint32_t depth = 0;
+    size_result x;
+    memset(&x, 0, sizeof x);
+    xyl_result r = match_depth(g, pc.triangles, tc, &depth, &diag);
+    if (!r) r = measure_size(o, g, depth, &x, &diag);
+    if (r) {
+        report_error(pc.name, r, &diag);
+        ++sum->failures;
+        return;
+    }
+    double peer_ns = pc.median_s * 1e9 / (double)pc.triangles;
+    double mesh_ns = x.mesh.median_s * 1e9 / (double)x.triangles;
+    double pipe_ns = x.pipeline.median_s * 1e9 / (double)x.triangles;
+    printf("%-16s %9llu %9.2f %8.1f | %5u %9zu %8.3f %8.3f %7.1f | %6.1fx %6.1fx%s\n", pc.name,
+           pc.triangles, pc.median_s * 1e3, peer_ns, depth, x.triangles, x.mesh.median_s * 1e3,
+           x.pipeline.median_s * 1e3, mesh_ns, peer_ns / mesh_ns, peer_ns / pipe_ns,
+           pc.wrapped ? " *" : "");
     if (!sum->compared || peer_ns / mesh_ns < sum->min_mesh_ratio)
         sum->min_mesh_ratio = peer_ns / mesh_ns;
     if (!sum->compared || peer_ns / pipe_ns < sum->min_pipeline_ratio)
         sum->min_pipeline_ratio = peer_ns / pipe_ns;
-    sum->any_wrapped |= pc->wrapped;
+    sum->any_wrapped |= pc.wrapped;
     ++sum->compared;
 }
 
-static peer_summary bench_peer(const options *o, const xyl_grammar *g, size_result *by_depth)
+static peer_summary bench_peer(const options *o, const xyl_grammar *g)
 {
     peer_summary sum = {0, 0.0, 0.0, false, 0};
-    printf("\n== peer: ez-tree (node), same run; xylem tree of the nearest triangle count ==\n");
+    printf("\n== peer: ez-tree (node), same run, a step at a time; xylem tree of the nearest "
+           "triangle count, measured right after ==\n");
     char script[MAX_PATH_LEN], why[256];
     if (!find_script(o, PEER_SCRIPT, script, sizeof script)) {
         printf("%s (no %s)\n", PEER_HINT, PEER_SCRIPT);
         return sum;
     }
-    peer_case cases[PEER_MAX];
-    size_t n = run_peer(o, script, cases, why, sizeof why);
-    if (!n) {
+    unsigned steps = 0;
+    const char *const args[] = {"--steps", NULL};
+    run_peer(o, script, args, NULL, 0, &steps, why, sizeof why);
+    if (!steps) {
         printf("%s (%s)\n", PEER_HINT, why);
         return sum;
     }
-    printf("ez-tree %s: time per tree includes growing its skeleton and leaves; its branch mesh "
-           "is open tubes\n", cases[0].version);
-    print_peer_header();
+    if (o->quick && steps > 2) steps = 2; /* --quick: the two smallest steps */
     tri_counts tc;
     memset(&tc, 0, sizeof tc);
-    for (size_t i = 0; i < n; ++i) peer_row(o, g, &cases[i], &tc, by_depth, &sum);
+    for (unsigned i = 0; i < steps; ++i) peer_row(o, g, script, i, &tc, &sum);
+    if (!sum.compared) return sum;
     printf("ratio = ez-tree ns per branch triangle / xylem ns per output triangle "
            "(mesh: xyl_stems_build alone; pipe: derive + turtle + mesh)\n");
     if (sum.any_wrapped)
@@ -615,7 +637,7 @@ int main(int argc, char **argv)
     bench_pipeline(depths, n, by_depth);
 
     peer_summary peer = {0, 0.0, 0.0, false, 0};
-    if (o.peer) peer = bench_peer(&o, g, by_depth);
+    if (o.peer) peer = bench_peer(&o, g);
     else printf("\n== peer: skipped (--no-peer) ==\n");
     failures += peer.failures;
 

@@ -3,11 +3,14 @@
 // line per tree size. docs/peer-eztree.md records a run and explains the figures.
 //
 //   node eztree_bench.mjs [--repeats N] [--preset NAME|all] [--levels L] [--sections S]
-//                         [--segments G] [--children C]
+//                         [--segments G] [--children C] [--step I] [--steps]
 //   node eztree_bench.mjs                          # the built-in size ladder (see LADDER)
 //   node eztree_bench.mjs --preset 'Oak Large'     # a preset of the package; 'all' for all 16
 //   node eztree_bench.mjs --levels 3 --sections 20 --segments 16
 //
+// --step I runs only step I (from 0) of the ladder, and --steps prints "eztree steps=N" (the
+// ladder's length) and exits: bench_stems runs the ladder a step at a time, each in a node of its
+// own, so that no node is left running while it measures its own tree.
 // --preset and --levels may be repeated, one case each. A --levels case is the package's default
 // options with branch.levels = L; --sections/--segments (every level) and --children (children of
 // the trunk) modify all --levels cases. Without any case the ladder runs.
@@ -53,9 +56,13 @@ function parseCount(flag, text, lo, hi) {
 }
 
 function parseArgs(argv) {
-  const cfg = { repeats: 7, presets: [], levels: [], mods: {} };
+  const cfg = { repeats: 7, presets: [], levels: [], mods: {}, step: undefined, steps: false };
   for (let i = 0; i < argv.length; ++i) {
     const flag = argv[i];
+    if (flag === '--steps') {
+      cfg.steps = true;
+      continue;
+    }
     const value = argv[i + 1];
     if (value === undefined) fail(`${flag} needs a value`);
     ++i;
@@ -65,6 +72,7 @@ function parseArgs(argv) {
     else if (flag === '--sections') cfg.mods.sections = parseCount(flag, value, 1, 1000);
     else if (flag === '--segments') cfg.mods.segments = parseCount(flag, value, 3, 1000);
     else if (flag === '--children') cfg.mods.children = parseCount(flag, value, 0, 10000);
+    else if (flag === '--step') cfg.step = parseCount(flag, value, 0, LADDER.length - 1);
     else fail(`unknown option: ${flag}`);
   }
   return cfg;
@@ -131,7 +139,10 @@ function buildCases(cfg, TreePreset) {
     }
   }
   for (const levels of cfg.levels) cases.push(levelsCase(levels, cfg.mods));
-  if (cases.length === 0) {
+  if (cfg.step !== undefined) {
+    if (cases.length) fail('--step runs a step of the ladder alone, without --preset or --levels');
+    cases.push(levelsCase(LADDER[cfg.step].levels, LADDER[cfg.step]));
+  } else if (cases.length === 0) {
     for (const step of LADDER) cases.push(levelsCase(step.levels, step));
   }
   return cases;
@@ -251,6 +262,10 @@ function measure(Tree, spec, repeats) {
 
 async function main() {
   const cfg = parseArgs(process.argv.slice(2));
+  if (cfg.steps) {
+    console.log(`eztree steps=${LADDER.length}`);
+    return;
+  }
   const stand = installDocumentStandIn();
   const require = createRequire(import.meta.url);
   let Tree;
