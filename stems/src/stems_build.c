@@ -1091,12 +1091,12 @@ static xyl_result index_tree(stems *s)
         if (r) break;
         if (step == 0) { /* parent_of, then scratch */
             parent_of = xyl__alloc_array(&s->alloc, n ? 5 * n : 1, sizeof *parent_of);
-            s->tails = xyl__alloc_array(&s->alloc, n ? 4 * n : 1, sizeof *s->tails);
+            s->tails = xyl__alloc_array(&s->alloc, n ? 6 * n : 1, sizeof *s->tails);
             if (!parent_of || !s->tails) {
                 r = oom(s);
                 break;
             }
-            xyl__stems_tail_spheres(s, s->tails);
+            xyl__stems_tail_boxes(s, s->tails);
             moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
         } else if (step == 1) {
             /* here moved says whether the placement moved laterals: one it moved may lie in

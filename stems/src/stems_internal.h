@@ -91,12 +91,12 @@ typedef struct stems {
     xyl__stems_cone *cones; /* the laterals placed so far at the fork being attached */
     size_t ncones, cone_cap;
 
-    double *tails; /* while indexing: per node, the sphere around its chain's tubes from it on */
+    double *tails; /* while indexing: per node, the box around its chain's tubes from it on */
 } stems;
 
-/* Fills tails (4 per node: centre, radius) with the bounding sphere of each node's ball and the
- * tubes of its chain after it (stems_merge.c). Needs main. */
-void xyl__stems_tail_spheres(const stems *s, double *tails);
+/* Fills tails (6 per node: low and high corner) with the bounding box of each node's ball and
+ * the tubes of its chain after it (stems_merge.c). Needs main. */
+void xyl__stems_tail_boxes(const stems *s, double *tails);
 
 /* Whether lateral a comes before lateral b where siblings are ordered: thicker first, then in
  * node order. */

@@ -43,18 +43,23 @@ static double distance_to(const stems *s, uint32_t n, xyl__dvec3 p)
     return xyl__d3_len(xyl__d3_sub(pos_of(s, n), p));
 }
 
-/* Whether a ball at p of radius r misses the bounding sphere of the tubes from node n to its
- * chain's tip (s->tails, 4 per node: centre, radius), so no segment there can overlap it. */
+/* Whether a ball at p of radius r misses the bounding box of the tubes from node n to its
+ * chain's tip (s->tails, 6 per node: low and high corner), so no segment there can overlap it. */
 static bool misses_tail(const stems *s, xyl__dvec3 p, double r, uint32_t n)
 {
-    const double *b = s->tails + 4 * (size_t)n;
-    double dx = p.x - b[0], dy = p.y - b[1], dz = p.z - b[2], rr = r + b[3];
-    return dx * dx + dy * dy + dz * dz >= rr * rr;
+    const double *b = s->tails + 6 * (size_t)n;
+    double q[3] = {p.x, p.y, p.z}, d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        double below = b[k] - q[k], above = q[k] - b[k + 3];
+        double d = below > 0.0 ? below : above > 0.0 ? above : 0.0;
+        d2 += d * d;
+    }
+    return d2 >= r * r;
 }
 
 /* Whether a ball at p of radius r overlaps the tube of the chain that leaves fork through its
  * child `host`: first_r at the fork, each node's own radius after it. Each segment's tail
- * sphere is tried first: near a fork only a few segments of a long chain need the exact
+ * box is tried first: near a fork only a few segments of a long chain need the exact
  * test. */
 static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork, uint32_t host,
                            double first_r)
@@ -69,29 +74,30 @@ static bool overlaps_chain(const stems *s, xyl__dvec3 p, double r, uint32_t fork
     return false;
 }
 
-/* The tail spheres of every node (s->tails): from the tips down, each node's ball merged with
- * its main child's sphere. A segment's tube, tapered between its nodes' balls, is their convex
- * hull, so it lies in any sphere holding both. */
-void xyl__stems_tail_spheres(const stems *s, double *tails)
+/* The tail boxes of every node (s->tails): from the tips down, each node's ball's box merged
+ * with its main child's. A segment's tube, tapered between its nodes' balls, is their convex
+ * hull, so it lies in any box holding both; ball_meets_cone tests balls along the axis inside
+ * that hull, so a ball that misses the box misses them. (Boxes: a merge is six minima and
+ * maxima where a bounding sphere took a square root and a division, a chain of them along each
+ * branch.) */
+void xyl__stems_tail_boxes(const stems *s, double *tails)
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     for (size_t i = s->sk->node_count; i-- > 0;) {
         xyl__dvec3 c = pos_of(s, (uint32_t)i);
-        double r = nodes[i].radius, *t = tails + 4 * i;
+        double r = nodes[i].radius, *t = tails + 6 * i;
+        /* a little larger: rounding must not shrink it below what it has to hold */
+        double pad = r * (1.0 + 1e-12) + 1e-12 * (fabs(c.x) + fabs(c.y) + fabs(c.z)) + 1e-300;
+        t[0] = c.x - pad, t[1] = c.y - pad, t[2] = c.z - pad;
+        t[3] = c.x + pad, t[4] = c.y + pad, t[5] = c.z + pad;
         uint32_t m = s->main[i];
         if (m != UINT32_MAX) {
-            const double *b = tails + 4 * (size_t)m;
-            xyl__dvec3 cb = xyl__d3(b[0], b[1], b[2]);
-            double d = xyl__d3_len(xyl__d3_sub(cb, c));
-            if (d + r <= b[3]) c = cb, r = b[3];           /* the ball is inside the tail's */
-            else if (d + b[3] > r) {                        /* else the tail is inside the ball */
-                double R = 0.5 * (d + r + b[3]);
-                c = xyl__d3_add(c, xyl__d3_scale(xyl__d3_sub(cb, c), (R - r) / d));
-                r = R;
+            const double *b = tails + 6 * (size_t)m;
+            for (int k = 0; k < 3; ++k) {
+                t[k] = b[k] < t[k] ? b[k] : t[k];
+                t[k + 3] = b[k + 3] > t[k + 3] ? b[k + 3] : t[k + 3];
             }
         }
-        /* a little larger: rounding must not shrink it below what it has to hold */
-        t[0] = c.x, t[1] = c.y, t[2] = c.z, t[3] = r * (1.0 + 1e-12) + 1e-300;
     }
 }
 
@@ -125,7 +131,7 @@ static bool overlaps_parent(const stems *s, const int32_t *parent_of, xyl__dvec3
 {
     const xyl_skel_node *nodes = s->sk->nodes;
     int32_t before = parent_of[fork];
-    /* on one branch, the tail sphere of the node before holds all of it */
+    /* on one branch, the tail box of the node before holds all of it */
     if (before >= 0 && s->main[before] == fork && misses_tail(s, p, r, (uint32_t)before))
         return false;
     if (before < 0 && misses_tail(s, p, r, fork)) return false;
