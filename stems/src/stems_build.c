@@ -283,6 +283,10 @@ static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dve
     /* re-orthogonalise against t1: rounding must not tilt the ring plane */
     uL = xyl__d3_sub(uL, xyl__d3_scale(t1, xyl__d3_dot(uL, t1)));
     double l2 = xyl__d3_dot(uL, uL);
+    /* reflections keep the length: a unit u stays unit up to rounding, and dividing by the
+     * square root would put the slowest operations on the chain that carries u along the
+     * branch; only a u that has drifted is scaled back */
+    if (fabs(l2 - 1.0) <= 1e-12) return uL;
     if (!(l2 > XYL__EPS_NORMALIZE) || !isfinite(l2)) return xyl__d3_any_orthogonal(t1);
     return xyl__d3_scale(uL, 1.0 / sqrt(l2));
 }
