@@ -6,7 +6,11 @@
  * parent quads whose boundary has k vertices and the patch is replaced by a bridge to the child's
  * first ring (face extrusion). Topology is therefore right by construction; geometry (where the
  * rings go) decides only whether surfaces intersect. */
+#include <float.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include "mesh_internal.h"
 #include "stems_internal.h"
@@ -899,20 +903,54 @@ static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, stems_fork_span *
  * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
  * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings and the
  * apexes of its domed caps. */
+static void unit_normal(stems *s, xyl_vec3 *n)
+{
+    if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
+    else s->lonely = true;
+}
+
+#ifdef __SSE2__
+/* unit_normal on n[0] and n[1] at once: the same double operations in the same order, so the
+ * same bits, two lanes per instruction (the square root and the division dominate this pass). */
+static void unit_normal_pair(stems *s, xyl_vec3 *n)
+{
+    __m128d x = _mm_set_pd((double)n[1].x, (double)n[0].x);
+    __m128d y = _mm_set_pd((double)n[1].y, (double)n[0].y);
+    __m128d z = _mm_set_pd((double)n[1].z, (double)n[0].z);
+    __m128d l2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z));
+    /* both with a direction and finite: else each on its own */
+    __m128d ok = _mm_and_pd(_mm_cmpgt_pd(l2, _mm_set1_pd(XYL__EPS_NORMALIZE)),
+                            _mm_cmple_pd(l2, _mm_set1_pd(DBL_MAX)));
+    if (_mm_movemask_pd(ok) != 3) {
+        unit_normal(s, &n[0]);
+        unit_normal(s, &n[1]);
+        return;
+    }
+    __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(l2));
+    __m128 fx = _mm_cvtpd_ps(_mm_mul_pd(x, inv)), fy = _mm_cvtpd_ps(_mm_mul_pd(y, inv));
+    __m128 fz = _mm_cvtpd_ps(_mm_mul_pd(z, inv));
+    float ox[4], oy[4], oz[4];
+    _mm_storeu_ps(ox, fx);
+    _mm_storeu_ps(oy, fy);
+    _mm_storeu_ps(oz, fz);
+    n[0].x = ox[0], n[0].y = oy[0], n[0].z = oz[0];
+    n[1].x = ox[1], n[1].y = oy[1], n[1].z = oz[1];
+}
+#endif
+
 static void unit_branch_normals(stems *s)
 {
     for (size_t i = 0; i < s->nrings; ++i) {
         xyl_vec3 *n = s->nrm + s->rings[i].first;
-        for (uint32_t j = 0; j < s->k; ++j) {
-            if (xyl__has_direction(n[j])) n[j] = xyl__unit_or_up(n[j]);
-            else s->lonely = true;
-        }
+        uint32_t j = 0;
+#ifdef __SSE2__
+        for (; j + 2 <= s->k; j += 2) unit_normal_pair(s, n + j);
+#endif
+        for (; j < s->k; ++j) unit_normal(s, n + j);
     }
     for (int e = 0; e < 2; ++e) {
         if (s->apex[e] == UINT32_MAX) continue;
-        xyl_vec3 *n = s->nrm + s->apex[e];
-        if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
-        else s->lonely = true;
+        unit_normal(s, s->nrm + s->apex[e]);
     }
 }
 
