@@ -35,6 +35,7 @@
 #define PEER_SCRIPT "samples/bench/eztree_bench.mjs"
 #define PEER_HINT "ez-tree: not available (run scripts/bench.sh to install)"
 #define PEER_MAX 16
+#define PEER_SETTLE_S 1.0 /* idle time between an ez-tree step's node and our tree */
 #define TARGET_PEER_RATIO 20.0
 #define TARGET_VERTEX_RATE 1e7
 
@@ -477,6 +478,12 @@ static void print_peer_header(void)
            "", "ms", "ms", "(mesh)", "ratio", "ratio");
 }
 
+static void pause_s(double seconds)
+{
+    struct timespec ts = {(time_t)seconds, (long)((seconds - (double)(time_t)seconds) * 1e9)};
+    while (nanosleep(&ts, &ts) != 0) {}
+}
+
 /* Step `step` of the script's ladder, in a node of its own, then the matched tree, measured
  * after that node has exited: the two sides of a ratio are taken seconds apart and each on an
  * otherwise idle machine. (Samples interleaved one by one with a node left running were up to
@@ -504,6 +511,7 @@ static void peer_row(const options *o, const xyl_grammar *g, const char *script,
     size_result x;
     memset(&x, 0, sizeof x);
     xyl_result r = match_depth(g, pc.triangles, tc, &depth, &diag);
+    pause_s(PEER_SETTLE_S);
     if (!r) r = measure_size(o, g, depth, &x, &diag);
     if (r) {
         report_error(pc.name, r, &diag);
