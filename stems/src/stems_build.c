@@ -146,6 +146,46 @@ static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, dou
     return put_ring_k(s, c, t, u, r, v, branch, s->k);
 }
 
+#ifdef __SSE2__
+/* Lanes (v[i].x, v[i + 1].x) and so on as doubles, built in registers: stores of single floats
+ * read back as a pair would stall on store forwarding. */
+static XYL__ALWAYS_INLINE void load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1, __m128d *out)
+{
+    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
+    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
+    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
+}
+
+/* The normals of the k band quads from ring pa to ring pb (even k), as xyl__quad_normal of quad
+ * j = (a + j, a + j1, b + j1, b + j): the cross product of the diagonals b + j1 - (a + j) and
+ * b + j - (a + j1) in doubles, rounded to floats, for quads j and j + 1 in the two lanes. */
+static XYL__ALWAYS_INLINE void quad_normals_sse2(const xyl_vec3 *pa, const xyl_vec3 *pb,
+                                                 uint32_t k, xyl_vec3 *fn)
+{
+    for (uint32_t j = 0; j < k; j += 2) {
+        uint32_t j1 = j + 1, j2 = j + 2 < k ? j + 2 : 0;
+        __m128d a0[3], a1[3], b0[3], b1[3], d1[3], d2[3];
+        load_pair(pa, j, j1, a0);
+        load_pair(pa, j1, j2, a1);
+        load_pair(pb, j, j1, b0);
+        load_pair(pb, j1, j2, b1);
+        for (int i = 0; i < 3; ++i) {
+            d1[i] = _mm_sub_pd(b1[i], a0[i]);
+            d2[i] = _mm_sub_pd(b0[i], a1[i]);
+        }
+        __m128 nx = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[1], d2[2]), _mm_mul_pd(d1[2], d2[1])));
+        __m128 ny = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[2], d2[0]), _mm_mul_pd(d1[0], d2[2])));
+        __m128 nz = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[0], d2[1]), _mm_mul_pd(d1[1], d2[0])));
+        fn[j].x = _mm_cvtss_f32(nx);
+        fn[j].y = _mm_cvtss_f32(ny);
+        fn[j].z = _mm_cvtss_f32(nz);
+        fn[j1].x = _mm_cvtss_f32(_mm_shuffle_ps(nx, nx, 1));
+        fn[j1].y = _mm_cvtss_f32(_mm_shuffle_ps(ny, ny, 1));
+        fn[j1].z = _mm_cvtss_f32(_mm_shuffle_ps(nz, nz, 1));
+    }
+}
+#endif
+
 /* Adds the normals of the band quads q0 .. q0 + k - 1 (from ring a to ring b) to their vertices.
  * Vertex j of either ring is in quads j - 1 and j (vertex 0: quads 0 and k - 1) and gets their
  * normals in that, the quads', order, as two adds in registers. A ring's vertices share one
@@ -163,6 +203,11 @@ static XYL__ALWAYS_INLINE void sum_band_normals_k(stems *s, uint32_t a, uint32_t
      * are b + j1 - (a + j) and b + j - (a + j1) */
     const xyl_vec3 *pa = s->pos + a, *pb = s->pos + b;
     xyl_vec3 fn[32];
+#ifdef __SSE2__
+    if (k % 2 == 0) { /* two quads per instruction: the same operations, so the same bits */
+        quad_normals_sse2(pa, pb, k, fn);
+    } else
+#endif
     for (uint32_t j = 0; j < k; ++j) {
         uint32_t j1 = j + 1 < k ? j + 1 : 0;
         xyl__dvec3 d1 = xyl__d3_sub(xyl__from_f3(pb[j1]), xyl__from_f3(pa[j]));
