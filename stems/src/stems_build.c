@@ -124,17 +124,40 @@ static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3
     uint32_t *vb = s->vbranch + first;
     xyl__dvec3 w = xyl__d3_cross(t, u);
     double rr = r * s->inflate;
-    for (uint32_t j = 0; j < k; ++j) {
+    uint32_t j = 0;
+#ifdef __SSE2__
+    /* two vertices per instruction, the same operations in the same order: the same bits */
+    __m128d vr = _mm_set1_pd(rr);
+    for (; j + 2 <= k; j += 2) {
+        __m128d ca = _mm_mul_pd(vr, _mm_loadu_pd(s->cos_a + j));
+        __m128d sa = _mm_mul_pd(vr, _mm_loadu_pd(s->sin_a + j));
+        __m128 fx = _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c.x), _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u.x), ca),
+                                                                       _mm_mul_pd(_mm_set1_pd(w.x), sa))));
+        __m128 fy = _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c.y), _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u.y), ca),
+                                                                       _mm_mul_pd(_mm_set1_pd(w.y), sa))));
+        __m128 fz = _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c.z), _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u.z), ca),
+                                                                       _mm_mul_pd(_mm_set1_pd(w.z), sa))));
+        pos[j].x = _mm_cvtss_f32(fx);
+        pos[j].y = _mm_cvtss_f32(fy);
+        pos[j].z = _mm_cvtss_f32(fz);
+        pos[j + 1].x = _mm_cvtss_f32(_mm_shuffle_ps(fx, fx, 1));
+        pos[j + 1].y = _mm_cvtss_f32(_mm_shuffle_ps(fy, fy, 1));
+        pos[j + 1].z = _mm_cvtss_f32(_mm_shuffle_ps(fz, fz, 1));
+    }
+#endif
+    for (; j < k; ++j) {
         xyl__dvec3 p = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(u, rr * s->cos_a[j]),
                                                   xyl__d3_scale(w, rr * s->sin_a[j])));
         pos[j] = xyl__to_f3(p);
+    }
+    for (j = 0; j < k; ++j) {
         uv[2 * j] = s->u_of[j];
         uv[2 * j + 1] = fv;
         vb[j] = branch;
     }
     if (s->nrm) {
         xyl_vec3 *n = s->nrm + first, zero = {0.0f, 0.0f, 0.0f};
-        for (uint32_t j = 0; j < k; ++j) n[j] = zero;
+        for (uint32_t i = 0; i < k; ++i) n[i] = zero;
     }
     s->nv = first + k;
     return (uint32_t)first;
