@@ -8,8 +8,8 @@
 //   node eztree_bench.mjs --preset 'Oak Large'     # a preset of the package; 'all' for all 16
 //   node eztree_bench.mjs --levels 3 --sections 20 --segments 16
 //
-// --step I runs only step I (from 0) of the ladder, and --steps prints "eztree steps=N" (the
-// ladder's length) and exits: bench_stems runs the ladder a step at a time, each in a node of its
+// --step I runs only step I (from 0) of the ladder, and --steps loads the package, prints
+// "eztree steps=N" (the ladder's length) and exits: bench_stems runs the ladder a step at a time, each in a node of its
 // own, so that no node is left running while it measures its own tree.
 // --preset and --levels may be repeated, one case each. A --levels case is the package's default
 // options with branch.levels = L; --sections/--segments (every level) and --children (children of
@@ -262,10 +262,6 @@ function measure(Tree, spec, repeats) {
 
 async function main() {
   const cfg = parseArgs(process.argv.slice(2));
-  if (cfg.steps) {
-    console.log(`eztree steps=${LADDER.length}`);
-    return;
-  }
   const stand = installDocumentStandIn();
   const require = createRequire(import.meta.url);
   let Tree;
@@ -278,6 +274,10 @@ async function main() {
     threeVersion = packageVersion(require, 'three');
   } catch (e) {
     fail(`cannot load the package (npm ci in samples/bench): ${e.message.split('\n')[0]}`);
+  }
+  if (cfg.steps) { // after loading the package, so that a caller learns that it cannot run
+    console.log(`eztree steps=${LADDER.length}`);
+    return;
   }
   const imagesAtImport = stand.images;
   for (const c of buildCases(cfg, TreePreset)) {
