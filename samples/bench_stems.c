@@ -34,7 +34,6 @@
 #define MAX_DEPTH 18
 #define PEER_SCRIPT "samples/bench/eztree_bench.mjs"
 #define PEER_HINT "ez-tree: not available (run scripts/bench.sh to install)"
-#define PEER_MAX 16
 #define PEER_SETTLE_S 1.0 /* idle time between an ez-tree step's node and our tree */
 #define TARGET_PEER_RATIO 20.0
 #define TARGET_VERTEX_RATE 1e7

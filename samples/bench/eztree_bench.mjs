@@ -9,8 +9,9 @@
 //   node eztree_bench.mjs --levels 3 --sections 20 --segments 16
 //
 // --step I runs only step I (from 0) of the ladder, and --steps loads the package, prints
-// "eztree steps=N" (the ladder's length) and exits: bench_stems runs the ladder a step at a time, each in a node of its
-// own, so that no node is left running while it measures its own tree.
+// "eztree steps=N" (the ladder's length) and exits: bench_stems runs the ladder a step at a
+// time, each in a node of its own, so that no node is left running while it measures its own
+// tree.
 // --preset and --levels may be repeated, one case each. A --levels case is the package's default
 // options with branch.levels = L; --sections/--segments (every level) and --children (children of
 // the trunk) modify all --levels cases. Without any case the ladder runs.

@@ -111,6 +111,17 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
 
 /* ---- rings --------------------------------------------------------------------------------- */
 
+#ifdef __SSE2__
+/* One coordinate of two ring vertices, c + (u (r cos) + w (r sin)), rounded to floats in the
+ * low two lanes: xyl__d3_add(c, xyl__d3_add(scale(u, ...), scale(w, ...))) per lane. */
+static XYL__ALWAYS_INLINE __m128 ring_coord(double c, double u, double w, __m128d rcos,
+                                            __m128d rsin)
+{
+    __m128d along = _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u), rcos), _mm_mul_pd(_mm_set1_pd(w), rsin));
+    return _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c), along));
+}
+#endif
+
 /* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
  * counter-clockwise seen from +t. Returns the first vertex index. */
 static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3 t,
@@ -131,12 +142,8 @@ static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3
     for (; j + 2 <= k; j += 2) {
         __m128d ca = _mm_mul_pd(vr, _mm_loadu_pd(s->cos_a + j));
         __m128d sa = _mm_mul_pd(vr, _mm_loadu_pd(s->sin_a + j));
-        __m128 fx = _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c.x), _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u.x), ca),
-                                                                       _mm_mul_pd(_mm_set1_pd(w.x), sa))));
-        __m128 fy = _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c.y), _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u.y), ca),
-                                                                       _mm_mul_pd(_mm_set1_pd(w.y), sa))));
-        __m128 fz = _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c.z), _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u.z), ca),
-                                                                       _mm_mul_pd(_mm_set1_pd(w.z), sa))));
+        __m128 fx = ring_coord(c.x, u.x, w.x, ca, sa), fy = ring_coord(c.y, u.y, w.y, ca, sa);
+        __m128 fz = ring_coord(c.z, u.z, w.z, ca, sa);
         pos[j].x = _mm_cvtss_f32(fx);
         pos[j].y = _mm_cvtss_f32(fy);
         pos[j].z = _mm_cvtss_f32(fz);
@@ -997,12 +1004,12 @@ static void unit_normal_pair(stems *s, xyl_vec3 *n)
     __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(l2));
     __m128 fx = _mm_cvtpd_ps(_mm_mul_pd(x, inv)), fy = _mm_cvtpd_ps(_mm_mul_pd(y, inv));
     __m128 fz = _mm_cvtpd_ps(_mm_mul_pd(z, inv));
-    float ox[4], oy[4], oz[4];
-    _mm_storeu_ps(ox, fx);
-    _mm_storeu_ps(oy, fy);
-    _mm_storeu_ps(oz, fz);
-    n[0].x = ox[0], n[0].y = oy[0], n[0].z = oz[0];
-    n[1].x = ox[1], n[1].y = oy[1], n[1].z = oz[1];
+    n[0].x = _mm_cvtss_f32(fx);
+    n[0].y = _mm_cvtss_f32(fy);
+    n[0].z = _mm_cvtss_f32(fz);
+    n[1].x = _mm_cvtss_f32(_mm_shuffle_ps(fx, fx, 1));
+    n[1].y = _mm_cvtss_f32(_mm_shuffle_ps(fy, fy, 1));
+    n[1].z = _mm_cvtss_f32(_mm_shuffle_ps(fz, fz, 1));
 }
 #endif
 
@@ -1300,8 +1307,6 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
     return XYL_OK;
 }
 
-/* Drops the quads that became bridges and hands the arrays over. With tv (room for 2 nq + nt
- * triangles) the triangulated view is written in the same pass, while each quad is at hand. */
 /* The triangulated view of n quads: (a, b, c) and (a, c, d) for each quad (a, b, c, d). */
 static void triangulate_quads(const uint32_t *q, size_t n, uint32_t *t)
 {
@@ -1319,6 +1324,8 @@ static void triangulate_quads(const uint32_t *q, size_t n, uint32_t *t)
     }
 }
 
+/* Drops the quads that became bridges and hands the arrays over. With tv (room for 2 nq + nt
+ * triangles) the triangulated view is written in the same pass, while each quad is at hand. */
 static void take_arrays(stems *s, xyl__mesh_arrays *a, uint32_t *tv)
 {
     /* taken quads are few (a patch per lateral): move the runs between them whole */
