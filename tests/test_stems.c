@@ -1084,6 +1084,73 @@ static void identical_input_gives_identical_meshes(void **state)
     xyl_skeleton_destroy(sk);
 }
 
+/* tests/stems_scalar.c: xyl_stems_build compiled with its scalar loops only. */
+xyl_result xyl__stems_build_scalar(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                                   xyl_mesh **out, xyl_diag *diag);
+
+/* Every array of two meshes, bit for bit. */
+static void assert_same_mesh(const xyl_mesh *a, const xyl_mesh *b, const char *what)
+{
+    if (a->vertex_count != b->vertex_count || a->quad_count != b->quad_count ||
+        a->triangle_count != b->triangle_count || a->tri_view_count != b->tri_view_count)
+        fail_msg("%s: counts differ", what);
+    size_t v = a->vertex_count, f = a->quad_count + a->triangle_count;
+    struct {
+        const void *x, *y;
+        size_t bytes;
+        const char *name;
+    } arrays[] = {
+        {a->positions, b->positions, v * sizeof *a->positions, "positions"},
+        {a->normals, b->normals, v * sizeof *a->normals, "normals"},
+        {a->uvs, b->uvs, v * 2 * sizeof *a->uvs, "uvs"},
+        {a->branch_ids, b->branch_ids, v * sizeof *a->branch_ids, "branch ids"},
+        {a->quads, b->quads, a->quad_count * 4 * sizeof *a->quads, "quads"},
+        {a->triangles, b->triangles, a->triangle_count * 3 * sizeof *a->triangles, "triangles"},
+        {a->face_branches, b->face_branches, f * sizeof *a->face_branches, "face branches"},
+        {a->uv_wraps, b->uv_wraps, a->uv_wraps ? f : 0, "uv wraps"},
+        {a->tri_view, b->tri_view, a->tri_view_count * 3 * sizeof *a->tri_view, "triangulated view"},
+    };
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i)
+        if (arrays[i].bytes && memcmp(arrays[i].x, arrays[i].y, arrays[i].bytes) != 0)
+            fail_msg("%s: %s differ", what, arrays[i].name);
+}
+
+/* The SSE2 loops (ring vertices, band normals, unit normals, triangulated view) give the bits
+ * of the scalar loops they stand for, which other targets run: the library's mesher against a
+ * copy compiled without them (tests/stems_scalar.c), every preset, k = 3..8 and 16, both normal
+ * modes. (Without SSE2 both copies are scalar.) */
+static void simd_loops_give_the_scalar_bits(void **state)
+{
+    (void)state;
+    static const uint32_t ks[] = {3, 4, 5, 6, 7, 8, 16};
+    size_t compared = 0;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        for (size_t ki = 0; ki < sizeof ks / sizeof ks[0]; ++ki) {
+            for (int smooth = 0; smooth < 2; ++smooth) {
+                xyl_normal_mode mode = smooth ? XYL_NORMALS_SMOOTH : XYL_NORMALS_BRANCH;
+                xyl_mesh *fast = build(sk, ks[ki], XYL_SUBDIVIDE_NONE, mode), *plain = NULL;
+                xyl_stems_desc d = {0};
+                d.sides = ks[ki];
+                d.normals = mode;
+                xyl_diag diag = {0};
+                xyl_result r = xyl__stems_build_scalar(sk, &d, &plain, &diag);
+                if (r != XYL_OK) fail_msg("scalar build: %s: %s", xyl_result_string(r), diag.message);
+                char what[96];
+                snprintf(what, sizeof what, "%s k = %u %s normals", name, ks[ki],
+                         smooth ? "smooth" : "branch");
+                assert_same_mesh(fast, plain, what);
+                ++compared;
+                xyl_mesh_destroy(fast);
+                xyl_mesh_destroy(plain);
+            }
+        }
+        xyl_skeleton_destroy(sk);
+    }
+    assert_int_equal(compared, xyl_lsystem_preset_count() * 14);
+}
+
 static void bad_options_and_limits_return_their_codes(void **state)
 {
     (void)state;
@@ -1187,6 +1254,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(every_hard_case_is_a_closed_manifold),
+        cmocka_unit_test(simd_loops_give_the_scalar_bits),
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k3),

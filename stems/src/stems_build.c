@@ -8,7 +8,11 @@
  * rings go) decides only whether surfaces intersect. */
 #include <float.h>
 #include <string.h>
-#ifdef __SSE2__
+/* The SSE2 loops stand for scalar ones with the same operations in the same order, and give the
+ * same bits; XYL_NO_SIMD compiles the scalar ones alone (tests/stems_scalar.c builds this file
+ * so, to check that). */
+#if defined(__SSE2__) && !defined(XYL_NO_SIMD)
+#define XYL__SSE2 1
 #include <emmintrin.h>
 #endif
 
@@ -111,7 +115,7 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
 
 /* ---- rings --------------------------------------------------------------------------------- */
 
-#ifdef __SSE2__
+#ifdef XYL__SSE2
 /* One coordinate of two ring vertices, c + (u (r cos) + w (r sin)), rounded to floats in the
  * low two lanes: xyl__d3_add(c, xyl__d3_add(scale(u, ...), scale(w, ...))) per lane. */
 static XYL__ALWAYS_INLINE __m128 ring_coord(double c, double u, double w, __m128d rcos,
@@ -136,7 +140,7 @@ static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3
     xyl__dvec3 w = xyl__d3_cross(t, u);
     double rr = r * s->inflate;
     uint32_t j = 0;
-#ifdef __SSE2__
+#ifdef XYL__SSE2
     /* two vertices per instruction, the same operations in the same order: the same bits */
     __m128d vr = _mm_set1_pd(rr);
     for (; j + 2 <= k; j += 2) {
@@ -176,7 +180,7 @@ static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, dou
     return put_ring_k(s, c, t, u, r, v, branch, s->k);
 }
 
-#ifdef __SSE2__
+#ifdef XYL__SSE2
 /* Lanes (v[i].x, v[i + 1].x) and so on as doubles, built in registers: stores of single floats
  * read back as a pair would stall on store forwarding. */
 static XYL__ALWAYS_INLINE void load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1, __m128d *out)
@@ -233,7 +237,7 @@ static XYL__ALWAYS_INLINE void sum_band_normals_k(stems *s, uint32_t a, uint32_t
      * are b + j1 - (a + j) and b + j - (a + j1) */
     const xyl_vec3 *pa = s->pos + a, *pb = s->pos + b;
     xyl_vec3 fn[32];
-#ifdef __SSE2__
+#ifdef XYL__SSE2
     if (k % 2 == 0) { /* two quads per instruction: the same operations, so the same bits */
         quad_normals_sse2(pa, pb, k, fn);
     } else
@@ -984,7 +988,7 @@ static void unit_normal(stems *s, xyl_vec3 *n)
     else s->lonely = true;
 }
 
-#ifdef __SSE2__
+#ifdef XYL__SSE2
 /* unit_normal on n[0] and n[1] at once: the same double operations in the same order, so the
  * same bits, two lanes per instruction (the square root and the division dominate this pass). */
 static void unit_normal_pair(stems *s, xyl_vec3 *n)
@@ -1018,7 +1022,7 @@ static void unit_branch_normals(stems *s)
     for (size_t i = 0; i < s->nrings; ++i) {
         xyl_vec3 *n = s->nrm + s->rings[i].first;
         uint32_t j = 0;
-#ifdef __SSE2__
+#ifdef XYL__SSE2
         for (; j + 2 <= s->k; j += 2) unit_normal_pair(s, n + j);
 #endif
         for (; j < s->k; ++j) unit_normal(s, n + j);
@@ -1311,7 +1315,7 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
 static void triangulate_quads(const uint32_t *q, size_t n, uint32_t *t)
 {
     size_t i = 0;
-#ifdef __SSE2__
+#ifdef XYL__SSE2
     for (; i < n; ++i, q += 4, t += 6) { /* one load, two shuffles, two stores per quad */
         __m128i v = _mm_loadu_si128((const __m128i *)(const void *)q);
         _mm_storeu_si128((__m128i *)(void *)t, _mm_shuffle_epi32(v, _MM_SHUFFLE(0, 2, 1, 0)));

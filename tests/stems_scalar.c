@@ -1,0 +1,6 @@
+/* The stem mesher once more, with its scalar loops only (XYL_NO_SIMD) and under another name, so
+ * that test_stems can check that the SSE2 loops give the same bits as the loops they stand for,
+ * which targets without SSE2 run. */
+#define XYL_NO_SIMD 1
+#define xyl_stems_build xyl__stems_build_scalar
+#include "stems_build.c"
