@@ -35,8 +35,8 @@ const char *xyl_result_string(xyl_result r)
 
 /* ---- allocation: xyl__alloc, xyl__calloc and xyl__free are in alloc.c ------------------- */
 
-bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
-               size_t elem)
+bool xyl__grow_slow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
+                    size_t elem)
 {
     if (need == 0) need = 1; /* an array is never NULL after a successful grow */
     if (need <= *cap && *ptr) return true;

@@ -52,9 +52,16 @@ void *xyl__alloc(const xyl_allocator *a, size_t size);
 void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size); /* overflow-checked, zeroed */
 void xyl__free(const xyl_allocator *a, void *p);
 /* Grows *ptr (of *cap elements of elem bytes, *used of which are live) to hold at least need
- * elements; doubling. Returns false on overflow or allocation failure (then *ptr unchanged). */
-bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
-               size_t elem);
+ * elements; doubling. Returns false on overflow or allocation failure (then *ptr unchanged).
+ * The usual case, room left, is decided inline; xyl__grow_slow does the rest. */
+bool xyl__grow_slow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used, size_t need,
+                    size_t elem);
+static inline bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used,
+                             size_t need, size_t elem)
+{
+    if (need != 0 && need <= *cap && *ptr) return true;
+    return xyl__grow_slow(a, ptr, cap, used, need, elem);
+}
 /* a * b without overflow, false if it would overflow. */
 static inline bool xyl__mul_ok(size_t a, size_t b, size_t *out)
 {
