@@ -49,12 +49,6 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
     return true;
 }
 
-/* Room for one more element: the common case (capacity left) without a call into common.c. */
-static inline bool room_for_one(stems *s, void **ptr, size_t *cap, size_t used, size_t elem)
-{
-    return (used < *cap && *ptr) || xyl__grow(&s->alloc, ptr, cap, used, used + 1, elem);
-}
-
 static xyl_result oom(stems *s)
 {
     return xyl__fail(s->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the stem mesh");
@@ -427,7 +421,8 @@ static xyl_result collect_chain(stems *s, uint32_t start)
 {
     s->nchain = 0;
     for (uint32_t n = start; n != UINT32_MAX; n = main_child(s, n)) {
-        if (!room_for_one(s, (void **)&s->chain, &s->ccap, s->nchain, sizeof *s->chain))
+        if (!xyl__grow(&s->alloc, (void **)&s->chain, &s->ccap, s->nchain, s->nchain + 1,
+                       sizeof *s->chain))
             return oom(s);
         s->chain[s->nchain++] = n;
     }
@@ -467,7 +462,8 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
             continue;
         }
         if (behind) p = xyl__d3_add(bridge->centre, xyl__d3_scale(bridge->tangent, 2 * bridge->radius));
-        if (!room_for_one(s, (void **)&s->stations, &s->scap, s->nstations, sizeof *s->stations))
+        if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations,
+                       s->nstations + 1, sizeof *s->stations))
             return oom(s);
         stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
         /* a stub stands for none of the child's nodes, so it need not have their radius: at it,
@@ -489,7 +485,9 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
  * faster on its own than interleaved with the vertex and quad stores. */
 static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
 {
-    if (!room_for_one(s, (void **)&s->rings, &s->rcap, s->nrings, sizeof *s->rings)) return oom(s);
+    if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + 1,
+                   sizeof *s->rings))
+        return oom(s);
     /* filled in place: a ring built on the stack and copied in as a whole stalled on store
      * forwarding (its fields written in pieces, read back in 16-byte blocks) */
     stems_ring *ring = &s->rings[s->nrings], *prev = s->nrings ? ring - 1 : NULL;
@@ -901,7 +899,8 @@ static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, u
         return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                          "internal: no free patch left at node %u", node);
     if (more) {
-        if (!room_for_one(s, (void **)&s->cones, &s->cone_cap, s->ncones, sizeof *s->cones))
+        if (!xyl__grow(&s->alloc, (void **)&s->cones, &s->cone_cap, s->ncones, s->ncones + 1,
+                       sizeof *s->cones))
             return oom(s);
         bool reaches;
         s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);

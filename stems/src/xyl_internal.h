@@ -59,7 +59,7 @@ bool xyl__grow_slow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used
 static inline bool xyl__grow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used,
                              size_t need, size_t elem)
 {
-    if (need != 0 && need <= *cap && *ptr) return true;
+    if (need - 1 < *cap && *ptr) return true; /* need 0 wraps round: the slow path's case */
     return xyl__grow_slow(a, ptr, cap, used, need, elem);
 }
 /* a * b without overflow, false if it would overflow. */
