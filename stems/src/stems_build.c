@@ -110,6 +110,26 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
 /* ---- rings --------------------------------------------------------------------------------- */
 
 #ifdef XYL__SSE2
+/* Lanes (v[i].x, v[i1].x) and so on as doubles, built in registers: stores of single floats
+ * read back as a pair would stall on store forwarding. */
+static XYL__ALWAYS_INLINE void load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1, __m128d *out)
+{
+    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
+    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
+    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
+}
+
+/* The low two lanes of x, y and z (floats) as out[0] and out[1]. */
+static XYL__ALWAYS_INLINE void store_pair(__m128 x, __m128 y, __m128 z, xyl_vec3 *out)
+{
+    out[0].x = _mm_cvtss_f32(x);
+    out[0].y = _mm_cvtss_f32(y);
+    out[0].z = _mm_cvtss_f32(z);
+    out[1].x = _mm_cvtss_f32(_mm_shuffle_ps(x, x, 1));
+    out[1].y = _mm_cvtss_f32(_mm_shuffle_ps(y, y, 1));
+    out[1].z = _mm_cvtss_f32(_mm_shuffle_ps(z, z, 1));
+}
+
 /* One coordinate of two ring vertices, c + (u (r cos) + w (r sin)), rounded to floats in the
  * low two lanes: xyl__d3_add(c, xyl__d3_add(scale(u, ...), scale(w, ...))) per lane. */
 static XYL__ALWAYS_INLINE __m128 ring_coord(double c, double u, double w, __m128d rcos,
@@ -141,13 +161,7 @@ static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3
         __m128d ca = _mm_mul_pd(vr, _mm_loadu_pd(s->cos_a + j));
         __m128d sa = _mm_mul_pd(vr, _mm_loadu_pd(s->sin_a + j));
         __m128 fx = ring_coord(c.x, u.x, w.x, ca, sa), fy = ring_coord(c.y, u.y, w.y, ca, sa);
-        __m128 fz = ring_coord(c.z, u.z, w.z, ca, sa);
-        pos[j].x = _mm_cvtss_f32(fx);
-        pos[j].y = _mm_cvtss_f32(fy);
-        pos[j].z = _mm_cvtss_f32(fz);
-        pos[j + 1].x = _mm_cvtss_f32(_mm_shuffle_ps(fx, fx, 1));
-        pos[j + 1].y = _mm_cvtss_f32(_mm_shuffle_ps(fy, fy, 1));
-        pos[j + 1].z = _mm_cvtss_f32(_mm_shuffle_ps(fz, fz, 1));
+        store_pair(fx, fy, ring_coord(c.z, u.z, w.z, ca, sa), pos + j);
     }
 #endif
     for (; j < k; ++j) {
@@ -175,15 +189,6 @@ static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, dou
 }
 
 #ifdef XYL__SSE2
-/* Lanes (v[i].x, v[i + 1].x) and so on as doubles, built in registers: stores of single floats
- * read back as a pair would stall on store forwarding. */
-static XYL__ALWAYS_INLINE void load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1, __m128d *out)
-{
-    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
-    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
-    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
-}
-
 /* The normals of the k band quads from ring pa to ring pb (even k), as xyl__quad_normal of quad
  * j = (a + j, a + j1, b + j1, b + j): the cross product of the diagonals b + j1 - (a + j) and
  * b + j - (a + j1) in doubles, rounded to floats, for quads j and j + 1 in the two lanes. */
@@ -204,12 +209,7 @@ static XYL__ALWAYS_INLINE void quad_normals_sse2(const xyl_vec3 *pa, const xyl_v
         __m128 nx = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[1], d2[2]), _mm_mul_pd(d1[2], d2[1])));
         __m128 ny = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[2], d2[0]), _mm_mul_pd(d1[0], d2[2])));
         __m128 nz = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[0], d2[1]), _mm_mul_pd(d1[1], d2[0])));
-        fn[j].x = _mm_cvtss_f32(nx);
-        fn[j].y = _mm_cvtss_f32(ny);
-        fn[j].z = _mm_cvtss_f32(nz);
-        fn[j1].x = _mm_cvtss_f32(_mm_shuffle_ps(nx, nx, 1));
-        fn[j1].y = _mm_cvtss_f32(_mm_shuffle_ps(ny, ny, 1));
-        fn[j1].z = _mm_cvtss_f32(_mm_shuffle_ps(nz, nz, 1));
+        store_pair(nx, ny, nz, fn + j);
     }
 }
 #endif
@@ -992,10 +992,10 @@ static void unit_normal(stems *s, xyl_vec3 *n)
  * same bits, two lanes per instruction (the square root and the division dominate this pass). */
 static void unit_normal_pair(stems *s, xyl_vec3 *n)
 {
-    __m128d x = _mm_set_pd((double)n[1].x, (double)n[0].x);
-    __m128d y = _mm_set_pd((double)n[1].y, (double)n[0].y);
-    __m128d z = _mm_set_pd((double)n[1].z, (double)n[0].z);
-    __m128d l2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z));
+    __m128d v[3];
+    load_pair(n, 0, 1, v);
+    __m128d l2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(v[0], v[0]), _mm_mul_pd(v[1], v[1])),
+                            _mm_mul_pd(v[2], v[2]));
     /* both with a direction and finite: else each on its own */
     __m128d ok = _mm_and_pd(_mm_cmpgt_pd(l2, _mm_set1_pd(XYL__EPS_NORMALIZE)),
                             _mm_cmple_pd(l2, _mm_set1_pd(DBL_MAX)));
@@ -1005,14 +1005,8 @@ static void unit_normal_pair(stems *s, xyl_vec3 *n)
         return;
     }
     __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(l2));
-    __m128 fx = _mm_cvtpd_ps(_mm_mul_pd(x, inv)), fy = _mm_cvtpd_ps(_mm_mul_pd(y, inv));
-    __m128 fz = _mm_cvtpd_ps(_mm_mul_pd(z, inv));
-    n[0].x = _mm_cvtss_f32(fx);
-    n[0].y = _mm_cvtss_f32(fy);
-    n[0].z = _mm_cvtss_f32(fz);
-    n[1].x = _mm_cvtss_f32(_mm_shuffle_ps(fx, fx, 1));
-    n[1].y = _mm_cvtss_f32(_mm_shuffle_ps(fy, fy, 1));
-    n[1].z = _mm_cvtss_f32(_mm_shuffle_ps(fz, fz, 1));
+    store_pair(_mm_cvtpd_ps(_mm_mul_pd(v[0], inv)), _mm_cvtpd_ps(_mm_mul_pd(v[1], inv)),
+               _mm_cvtpd_ps(_mm_mul_pd(v[2], inv)), n);
 }
 #endif
 
