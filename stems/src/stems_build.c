@@ -611,8 +611,18 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
      * ring's crosses it on the inside of the bend when delta < r sin(half bend); the rings on
      * that side then turn from t_in to t_out in even steps instead */
     double rr = 1.05 * st->r * s->inflate;
-    bool turn_in = d_in < rr * xyl__d3_len(xyl__d3_cross(t_in, t));
-    bool turn_out = d_out < rr * xyl__d3_len(xyl__d3_cross(t, t_out));
+    double sin_in = xyl__d3_len(xyl__d3_cross(t_in, t)), sin_out = xyl__d3_len(xyl__d3_cross(t, t_out));
+    bool turn_in = d_in < rr * sin_in;
+    bool turn_out = d_out < rr * sin_out;
+    /* turned in even steps, neighbouring rings are a step apart in angle and cross each other
+     * unless they are spaced by at least rr sin(step) (64 thin laterals on a bend: 1e-4 apart,
+     * steps of 2 degrees on a ring 0.1 wide); they take that spacing where the segment has the
+     * room */
+    if (turn_in) d_in = fmin(fmax(d_in, rr * sin(asin(fmin(sin_in, 1.0)) / (double)behind)),
+                             fmax(d_in, 0.45 * seg_in / (double)behind));
+    if (turn_out && seg_out > 0.0)
+        d_out = fmin(fmax(d_out, rr * sin(asin(fmin(sin_out, 1.0)) / (double)ahead)),
+                     fmax(d_out, 0.45 * seg_out / (double)ahead));
     for (size_t m = behind; m >= 1 && !r; --m) {
         xyl__dvec3 tm = turn_in ? blend(t_in, t, (double)(behind - m) / (double)behind) : t_in;
         r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), tm, st->r);
