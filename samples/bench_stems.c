@@ -113,6 +113,10 @@ static size_t segments_of(const xyl_skeleton *sk)
 
 /* ---- jobs: meshing alone, and the whole pipeline ------------------------------------------- */
 
+/* The ladder, the pipeline and the peer comparison time the construction alone; the checked
+ * build (the library's default) is timed beside it in the variants (docs/BENCHMARKS.md). */
+static const xyl_stems_desc unchecked = {.joints = XYL_JOINTS_UNCHECKED};
+
 typedef struct mesh_job {
     const xyl_skeleton *sk;
     xyl_stems_desc desc;
@@ -149,7 +153,7 @@ static xyl_result pipeline_once(void *ctx, double *seconds, xyl_diag *diag)
     double t0 = now_s();
     xyl_result r = derive_at(j->g, j->depth, &s, diag);
     if (!r) r = interpret(j->g, s, &sk, diag);
-    if (!r) r = xyl_stems_build(sk, NULL, &m, diag);
+    if (!r) r = xyl_stems_build(sk, &unchecked, &m, diag);
     *seconds = now_s() - t0;
     if (!r) j->triangles = m->tri_view_count;
     xyl_mesh_destroy(m);
@@ -186,7 +190,7 @@ static xyl_result measure_size(const options *o, const xyl_grammar *g, uint32_t 
 {
     if (res->ok) return XYL_OK;
     xyl_skeleton *sk = NULL;
-    xyl_stems_desc desc = {0};
+    xyl_stems_desc desc = unchecked;
     mesh_job mj = {0};
     xyl_result r = grow(g, depth, &sk, diag);
     if (!r) r = measure_mesh(o, sk, &desc, &mj, &res->mesh, diag);
@@ -252,7 +256,8 @@ static int bench_ladder(const options *o, const xyl_grammar *g, const uint32_t *
                         size_result *by_depth)
 {
     int failures = 0;
-    printf("\n== mesh: xyl_stems_build (k = 4, no subdivision, branch normals) ==\n");
+    printf("\n== mesh: xyl_stems_build (k = 4, no subdivision, branch normals, joints unchecked) "
+           "==\n");
     print_mesh_header();
     for (size_t i = 0; i < n; ++i) {
         xyl_diag diag = {0};
@@ -292,7 +297,10 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
         const char *label;
         uint32_t sides;
         xyl_subdivision scheme;
-    } variants[] = {{"k=8", 8, XYL_SUBDIVIDE_NONE}, {"k=4 catmark", 4, XYL_SUBDIVIDE_CATMARK}};
+        xyl_joint_check joints;
+    } variants[] = {{"k=8", 8, XYL_SUBDIVIDE_NONE, XYL_JOINTS_UNCHECKED},
+                    {"k=4 catmark", 4, XYL_SUBDIVIDE_CATMARK, XYL_JOINTS_UNCHECKED},
+                    {"k=4 checked", 4, XYL_SUBDIVIDE_NONE, XYL_JOINTS_CHECKED}};
     xyl_diag diag = {0};
     xyl_skeleton *sk = NULL;
     xyl_result r = grow(g, depth, &sk, &diag);
@@ -307,6 +315,9 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
         xyl_stems_desc desc = {0};
         desc.sides = variants[i].sides;
         desc.subdivision = variants[i].scheme;
+        desc.joints = variants[i].joints;
+        xyl_stems_stats st = {0};
+        desc.stats = &st;
         mesh_job j = {0};
         timing t = {0};
         if ((r = measure_mesh(o, sk, &desc, &j, &t, &diag))) {
@@ -315,6 +326,10 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
             continue;
         }
         print_mesh_row(variants[i].label, segments_of(sk), j.vertices, j.triangles, &t);
+        if (desc.joints == XYL_JOINTS_CHECKED)
+            printf("%-14s %u builds, %zu pairs at joints, %u laterals left out, %zu of %zu faces "
+                   "kept\n", "", st.builds, st.joint_pairs_first, st.branches_dropped,
+                   st.faces_checked, st.faces_first);
     }
     xyl_skeleton_destroy(sk);
     return failures;
@@ -437,7 +452,7 @@ static xyl_result triangles_at(const xyl_grammar *g, uint32_t depth, tri_counts 
     xyl_skeleton *sk = NULL;
     xyl_mesh *m = NULL;
     xyl_result r = grow(g, depth, &sk, diag);
-    if (!r) r = xyl_stems_build(sk, NULL, &m, diag);
+    if (!r) r = xyl_stems_build(sk, &unchecked, &m, diag);
     if (!r) tc->by_depth[depth] = m->tri_view_count;
     xyl_mesh_destroy(m);
     xyl_skeleton_destroy(sk);

@@ -75,8 +75,10 @@ static const char usage_text[] =
     "                               grow the branch skeleton and write it\n"
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
-    "           --out FILE.glb|FILE.obj\n"
-    "                               wrap the skeleton in one closed quad mesh and write it\n"
+    "           [--joints checked|unchecked] --out FILE.glb|FILE.obj\n"
+    "                               wrap the skeleton in one closed quad mesh and write it;\n"
+    "                               checked (default): laterals whose joints intersect are\n"
+    "                               left out\n"
     "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
@@ -228,6 +230,10 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
         if (strcmp(val, "branch") == 0) m->normals = XYL_NORMALS_BRANCH;
         else if (strcmp(val, "smooth") == 0) m->normals = XYL_NORMALS_SMOOTH;
         else return usage_error("--normals takes branch or smooth, not '%s'", val);
+    } else if (strcmp(opt, "--joints") == 0) {
+        if (strcmp(val, "checked") == 0) m->joints = XYL_JOINTS_CHECKED;
+        else if (strcmp(val, "unchecked") == 0) m->joints = XYL_JOINTS_UNCHECKED;
+        else return usage_error("--joints takes checked or unchecked, not '%s'", val);
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
     } else if (strcmp(opt, "--mesh") == 0) {
@@ -531,8 +537,11 @@ static int cmd_mesh(const options *o)
     int rc = load_skeleton(o, &sk, &source);
     double t1 = now_seconds();
     xyl_diag d = {0};
+    xyl_stems_stats st = {0};
+    xyl_stems_desc desc = o->stems;
+    desc.stats = &st;
     if (!rc) {
-        xyl_result r = xyl_stems_build(sk, &o->stems, &m, &d);
+        xyl_result r = xyl_stems_build(sk, &desc, &m, &d);
         if (r) rc = report(source, r, &d);
     }
     double t2 = now_seconds();
@@ -542,6 +551,12 @@ static int cmd_mesh(const options *o)
                "view)\n",
                source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
                m->tri_view_count);
+        if (desc.joints == XYL_JOINTS_CHECKED)
+            printf("joints: %zu intersecting pairs at joints, %u laterals left out (%zu of %zu "
+                   "faces kept) in %u builds; %zu pairs where the skeleton overlaps itself\n",
+                   st.joint_pairs_first, st.branches_dropped, st.faces_checked, st.faces_first,
+                   st.builds, st.skeleton_pairs);
+        if (d.warning_count) printf("warning: %s\n", d.warning);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
                (t2 - t1) * 1e3, (now_seconds() - t2) * 1e3);
         printf("wrote %s\n", o->out);

@@ -568,11 +568,10 @@ static bool find_pairs(tri_set *s, morton_entry *tmp)
     return true;
 }
 
-xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs, size_t capacity,
-                                       size_t *count, xyl_diag *diag)
+/* Every intersecting pair of a valid mesh in one pass, into s->pairs (i << 32 | j, sorted; s->kept
+ * of them); false when memory ran out, with nothing to free. */
+static bool all_pairs(const xyl_mesh *mesh, size_t capacity, tri_set *out)
 {
-    xyl_result r = validate(mesh, pairs, capacity, count, diag);
-    if (r) return r;
     /* Scratch comes from malloc: the call takes no allocator. */
     size_t t = mesh->tri_view_count;
     tri_set s = {.m = mesh,
@@ -583,11 +582,37 @@ xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs, si
     morton_entry *tmp = xyl__calloc(NULL, t, sizeof *tmp);
     bool ok = s.order && s.boxes && s.nodes && tmp && find_pairs(&s, tmp);
     xyl__free(NULL, tmp);
-    if (!ok) {
-        tri_set_free(&s);
+    if (!ok) tri_set_free(&s);
+    *out = s;
+    return ok;
+}
+
+xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, uint64_t **pairs, size_t *count,
+                                        xyl_diag *diag)
+{
+    size_t zero = 0;
+    xyl_result r = validate(mesh, NULL, 0, &zero, diag);
+    if (r) return r;
+    tri_set s;
+    if (!all_pairs(mesh, SIZE_MAX, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
-    }
+    *pairs = s.pairs; /* malloc'd: the caller frees it with xyl__free(NULL, .) */
+    *count = s.kept;
+    s.pairs = NULL;
+    tri_set_free(&s);
+    return XYL_OK;
+}
+
+xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs, size_t capacity,
+                                       size_t *count, xyl_diag *diag)
+{
+    xyl_result r = validate(mesh, pairs, capacity, count, diag);
+    if (r) return r;
+    tri_set s;
+    if (!all_pairs(mesh, capacity, &s))
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
+                         "out of memory for the self-intersection test");
     /* Written only now, so a failure leaves pairs and count untouched. */
     for (size_t k = 0; k < s.kept; ++k) {
         pairs[2 * k] = (uint32_t)(s.pairs[k] >> 32);

@@ -1200,6 +1200,17 @@ static bool has_sibling_laterals(const stems *s)
     return false;
 }
 
+/* Detaches every node of the branches marked in s->drop (never a root's: checked joints only
+ * mark laterals), so that nothing of them or of what grows from them is meshed. */
+static bool drop_branches(const stems *s, int32_t *parent_of)
+{
+    const xyl_skel_node *nodes = s->sk->nodes;
+    bool any = false;
+    for (size_t i = 0; i < s->sk->node_count; ++i)
+        if (s->drop[nodes[i].branch] && nodes[i].parent >= 0) parent_of[i] = -1, any = true;
+    return any;
+}
+
 /* Children of every node, indexed again after laterals inside their parent or a sibling were
  * moved, and again after laterals that came to hang from one node were merged (stems_merge.c),
  * so that the rest of the mesher sees the tree as meshed. One call site of index_children:
@@ -1226,6 +1237,7 @@ static xyl_result index_tree(stems *s)
             /* here moved says whether the placement moved laterals: one it moved may lie in
              * its new fork's tube, siblings or not */
             moved = (moved || has_sibling_laterals(s)) && xyl__stems_merge_siblings(s, parent_of);
+            if (s->drop && drop_branches(s, parent_of)) moved = true;
         }
     }
     xyl__free(&s->alloc, parent_of);
@@ -1309,8 +1321,10 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
     uint32_t k = d->sides ? d->sides : 4;
     if (k < 3 || k > 32)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "sides must be 3..32, not %u", k);
-    if ((unsigned)d->normals > XYL_NORMALS_SMOOTH || (unsigned)d->subdivision > XYL_SUBDIVIDE_LOOP)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "unknown normal mode or scheme");
+    if ((unsigned)d->normals > XYL_NORMALS_SMOOTH || (unsigned)d->subdivision > XYL_SUBDIVIDE_LOOP ||
+        (unsigned)d->joints > XYL_JOINTS_UNCHECKED)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "unknown normal mode, scheme or joint check");
     return XYL_OK;
 }
 
@@ -1492,16 +1506,15 @@ static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
     return XYL_OK;
 }
 
-xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                           xyl_mesh **out, xyl_diag *diag)
+/* One mesh of the skeleton, leaving out the branches marked in drop (NULL: none). */
+static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                             const uint8_t *drop, xyl_mesh **out, xyl_diag *diag)
 {
-    static const xyl_stems_desc zero;
-    if (!desc) desc = &zero;
-    xyl_result r = check_desc(skeleton, desc, out, diag);
-    if (r) return r;
+    xyl_result r;
     stems s;
     memset(&s, 0, sizeof s);
     s.sk = skeleton;
+    s.drop = drop;
     s.k = desc->sides ? desc->sides : 4;
     s.alloc = desc->alloc;
     s.diag = diag;
@@ -1523,4 +1536,79 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     if (!r) r = hand_over(&s, &a, &tv);
     free_state(&s);
     return r ? r : finish(&s, desc, &a, tv, out);
+}
+
+/* Checked joints (docs/stems.md): builds, tests the mesh for intersecting pairs, leaves out a
+ * lateral for each pair at a joint and builds again, until a mesh has none. Each round leaves
+ * out at least one more branch, and a branch left out has no faces to blame again, so this ends
+ * within as many rounds as there are lateral branches. The test runs on the mesh before
+ * subdivision, at the skeleton's radii; a subdivided mesh is then built once more, leaving out
+ * the same branches. */
+static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                                xyl_mesh **out, xyl_stems_stats *st, xyl_diag *diag)
+{
+    uint8_t *drop = xyl__calloc(&desc->alloc, skeleton->branch_count ? skeleton->branch_count : 1, 1);
+    if (!drop) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    xyl_stems_desc plain = *desc;
+    plain.subdivision = XYL_SUBDIVIDE_NONE;
+    xyl_mesh *m = NULL;
+    xyl_result r;
+    for (;;) {
+        r = build_once(skeleton, &plain, drop, &m, diag);
+        if (r) break;
+        if (++st->builds == 1) st->faces_first = m->quad_count + m->triangle_count;
+        uint64_t *pairs = NULL;
+        size_t count = 0;
+        r = xyl__mesh_intersecting_pairs(m, &pairs, &count, diag);
+        xyl__joint_tally t;
+        if (!r) r = xyl__stems_judge_joints(skeleton, m, pairs, count, drop, &desc->alloc, &t, diag);
+        xyl__free(NULL, pairs);
+        if (r) break;
+        if (st->builds == 1) st->joint_pairs_first = t.joint;
+        st->branches_dropped += t.marked;
+        if (!t.marked) {
+            st->joint_pairs_left = t.joint;
+            st->skeleton_pairs = t.own;
+            st->faces_checked = m->quad_count + m->triangle_count;
+            break;
+        }
+        xyl_mesh_destroy(m);
+        m = NULL;
+    }
+    if (!r && desc->subdivision != XYL_SUBDIVIDE_NONE) {
+        xyl_mesh_destroy(m);
+        m = NULL;
+        r = build_once(skeleton, desc, st->branches_dropped ? drop : NULL, &m, diag);
+        ++st->builds;
+    }
+    xyl__free(&desc->alloc, drop);
+    if (r) {
+        xyl_mesh_destroy(m);
+        return r;
+    }
+    xyl__diag_ok(diag);
+    if (st->joint_pairs_left)
+        xyl__warn(diag, "%zu intersecting triangle pairs at joints are left on a root's own tube",
+                  st->joint_pairs_left);
+    *out = m;
+    return XYL_OK;
+}
+
+xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
+                           xyl_mesh **out, xyl_diag *diag)
+{
+    static const xyl_stems_desc zero;
+    if (!desc) desc = &zero;
+    xyl_result r = check_desc(skeleton, desc, out, diag);
+    if (r) return r;
+    xyl_stems_stats st;
+    memset(&st, 0, sizeof st);
+    if (desc->joints == XYL_JOINTS_UNCHECKED) {
+        r = build_once(skeleton, desc, NULL, out, diag);
+        st.builds = 1;
+    } else {
+        r = build_checked(skeleton, desc, out, &st, diag);
+    }
+    if (!r && desc->stats) *desc->stats = st;
+    return r;
 }

@@ -92,6 +92,7 @@ typedef struct stems {
     size_t ncones, cone_cap;
 
     double *tails; /* while indexing: per node, the box around its chain's tubes from it on */
+    const uint8_t *drop; /* per skeleton branch: left out by checked joints, or NULL */
 } stems;
 
 /* Fills tails (6 per node: low and high corner) with the bounding box of each node's ball and
@@ -125,5 +126,25 @@ bool xyl__stems_merge_siblings(const stems *s, int32_t *parent_of);
 /* Whether two cones come closer than their radii at their axes' closest points: a cheap test
  * for two lateral tubes that would cross (stems_merge.c). */
 bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b);
+
+/* Closest points of segments p0-p1 and q0-q1 as parameters *s, *t in [0, 1] (stems_merge.c). */
+void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
+                         double *t);
+
+/* What xyl__stems_judge_joints found in one mesh. */
+typedef struct xyl__joint_tally {
+    size_t joint;   /* intersecting pairs at joints */
+    size_t own;     /* intersecting pairs that the skeleton's own overlaps explain */
+    size_t stuck;   /* pairs at joints with no lateral to leave out (a root's own tube) */
+    uint32_t marked; /* branches newly marked in drop */
+} xyl__joint_tally;
+
+/* Sorts the intersecting pairs of mesh m, built from sk, into those at joints and those where
+ * the skeleton overlaps itself (docs/stems.md, "Checked joints"), and marks in drop (one entry
+ * per skeleton branch) a lateral branch to leave out for each pair at a joint (stems_joints.c).
+ * pairs: i << 32 | j triangle indices of m's triangulated view. Errors: XYL_ERR_OUT_OF_MEMORY. */
+xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
+                                   const uint64_t *pairs, size_t count, uint8_t *drop,
+                                   const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag);
 
 #endif

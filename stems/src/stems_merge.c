@@ -423,8 +423,8 @@ bool xyl__stems_place_laterals(const stems *s, int32_t *parent_of, uint32_t *scr
 
 /* Closest points of segments p0-p1 and q0-q1 as parameters *s, *t in [0, 1] (Ericson 2005,
  * "Real-Time Collision Detection", 5.1.9). */
-static void closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
-                           double *t)
+void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
+                         double *t)
 {
     xyl__dvec3 d1 = xyl__d3_sub(p1, p0), d2 = xyl__d3_sub(q1, q0), r = xyl__d3_sub(p0, q0);
     double a = xyl__d3_dot(d1, d1), e = xyl__d3_dot(d2, d2), f = xyl__d3_dot(d2, r);
@@ -452,7 +452,7 @@ static void closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dve
 bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b)
 {
     double s, t;
-    closest_params(a->p0, a->p1, b->p0, b->p1, &s, &t);
+    xyl__closest_params(a->p0, a->p1, b->p0, b->p1, &s, &t);
     xyl__dvec3 pa = xyl__d3_add(a->p0, xyl__d3_scale(xyl__d3_sub(a->p1, a->p0), s));
     xyl__dvec3 pb = xyl__d3_add(b->p0, xyl__d3_scale(xyl__d3_sub(b->p1, b->p0), t));
     double ra = a->r0 + (a->r1 - a->r0) * s, rb = b->r0 + (b->r1 - b->r0) * t;

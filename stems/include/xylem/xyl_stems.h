@@ -272,6 +272,33 @@ typedef enum xyl_normal_mode {
     XYL_NORMALS_SMOOTH = 1  /* a vertex averages all its faces */
 } xyl_normal_mode;
 
+/* Whether xyl_stems_build checks its mesh at the joints (docs/stems.md, "Checked joints"). */
+typedef enum xyl_joint_check {
+    XYL_JOINTS_CHECKED = 0,  /* default: the mesh is tested for intersecting triangle pairs; for
+                                each pair at a joint (every pair but those where the skeleton
+                                overlaps itself) a lateral is left out, with all that grows from
+                                it, and the mesh is built again, until no pair at a joint is
+                                left. The test runs before subdivision, on the mesh at the
+                                skeleton's radii; a subdivided mesh leaves out the same laterals */
+    XYL_JOINTS_UNCHECKED = 1 /* the construction alone, without the test: faster
+                                (docs/BENCHMARKS.md); the presets then have pairs at joints */
+} xyl_joint_check;
+
+/* What a checked build did (all 0 but builds when unchecked). Face counts are of the mesh
+ * before subdivision. */
+typedef struct xyl_stems_stats {
+    uint32_t builds;           /* meshes built: 1, plus one per round of laterals left out,
+                                  plus one to subdivide */
+    uint32_t branches_dropped; /* laterals left out, with all that grows from them */
+    size_t faces_first;        /* faces of the first mesh built */
+    size_t faces_checked;      /* faces of the mesh that passed, to compare */
+    size_t joint_pairs_first;  /* intersecting pairs at joints in the first mesh */
+    size_t joint_pairs_left;   /* in the mesh that passed: 0, unless a root's own tube has some
+                                  (then diag gets a warning) */
+    size_t skeleton_pairs;     /* intersecting pairs of the mesh that passed that the skeleton's
+                                  own overlaps explain */
+} xyl_stems_stats;
+
 typedef struct xyl_stems_desc {
     uint32_t sides;               /* ring sides k, 3..32; default (0): 4. Even k gives quads
                                      only; odd k one triangle per cap and per bridge */
@@ -284,6 +311,8 @@ typedef struct xyl_stems_desc {
                                      the centre of curvature on bends */
     bool keep_control_points;     /* default false: subdivided vertices sit on the limit
                                      surface (see xyl_subdivide_desc) */
+    xyl_joint_check joints;
+    xyl_stems_stats *stats;       /* optional: filled when the build succeeds */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_stems_desc;
