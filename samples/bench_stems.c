@@ -327,9 +327,10 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
         }
         print_mesh_row(variants[i].label, segments_of(sk), j.vertices, j.triangles, &t);
         if (desc.joints == XYL_JOINTS_CHECKED)
-            printf("%-14s %u builds, %zu pairs at joints, %u laterals left out, %zu of %zu faces "
-                   "kept\n", "", st.builds, st.joint_pairs_first, st.branches_dropped,
-                   st.faces_checked, st.faces_first);
+            printf("%-14s %u builds, %zu pairs at joints, %u laterals start later, %u left out, "
+                   "%zu of %zu faces kept\n", "", st.builds, st.joint_pairs_first,
+                   st.laterals_started_later, st.branches_dropped, st.faces_checked,
+                   st.faces_first);
     }
     xyl_skeleton_destroy(sk);
     return failures;

@@ -77,8 +77,8 @@ static const char usage_text[] =
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
     "           [--joints checked|unchecked] --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
-    "                               checked (default): laterals whose joints intersect are\n"
-    "                               left out\n"
+    "                               checked (default): laterals whose joints intersect\n"
+    "                               start later or are left out\n"
     "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
@@ -552,10 +552,11 @@ static int cmd_mesh(const options *o)
                source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
                m->tri_view_count);
         if (desc.joints == XYL_JOINTS_CHECKED)
-            printf("joints: %zu intersecting pairs at joints, %u laterals left out (%zu of %zu "
-                   "faces kept) in %u builds; %zu pairs where the skeleton overlaps itself\n",
-                   st.joint_pairs_first, st.branches_dropped, st.faces_checked, st.faces_first,
-                   st.builds, st.skeleton_pairs);
+            printf("joints: %zu intersecting pairs at joints; %u laterals start later, %u are "
+                   "left out (%zu of %zu faces kept), %u builds; %zu pairs where the skeleton "
+                   "overlaps itself\n",
+                   st.joint_pairs_first, st.laterals_started_later, st.branches_dropped,
+                   st.faces_checked, st.faces_first, st.builds, st.skeleton_pairs);
         if (d.warning_count) printf("warning: %s\n", d.warning);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
                (t2 - t1) * 1e3, (now_seconds() - t2) * 1e3);

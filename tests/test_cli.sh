@@ -94,9 +94,9 @@ contains "triangles" "odd sides summary"
 expect 64 "sides below 3" -- "$XYLEM" mesh --sides 2 --out "$tmp/x.glb"
 expect 64 "bad subdivision" -- "$XYLEM" mesh --subdivide cubic --out "$tmp/x.glb"
 expect 0 "checked joints" -- "$XYLEM" mesh --preset faycal-leaves --out "$tmp/f.glb"
-contains "laterals left out" "joint summary"
+contains "laterals start later" "joint summary"
 expect 0 "unchecked joints" -- "$XYLEM" mesh --preset faycal-leaves --joints unchecked --out "$tmp/f.glb"
-grep -qF "laterals left out" "$tmp/out" && { failed=$((failed + 1)); echo "FAIL: unchecked build reports joints"; } || passed=$((passed + 1))
+grep -qF "laterals start later" "$tmp/out" && { failed=$((failed + 1)); echo "FAIL: unchecked build reports joints"; } || passed=$((passed + 1))
 expect 64 "bad joint check" -- "$XYLEM" mesh --joints some --out "$tmp/x.glb"
 expect 64 "mesh needs --out" -- "$XYLEM" mesh
 expect 64 "skeleton and preset" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --preset abop-1.24a --out "$tmp/x.glb"

@@ -1207,7 +1207,8 @@ static bool drop_branches(const stems *s, int32_t *parent_of)
     const xyl_skel_node *nodes = s->sk->nodes;
     bool any = false;
     for (size_t i = 0; i < s->sk->node_count; ++i)
-        if (s->drop[nodes[i].branch] && nodes[i].parent >= 0) parent_of[i] = -1, any = true;
+        if (s->drop[nodes[i].branch] >= XYL__JOINT_DROP && nodes[i].parent >= 0)
+            parent_of[i] = -1, any = true;
     return any;
 }
 
@@ -1538,10 +1539,11 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     return r ? r : finish(&s, desc, &a, tv, out);
 }
 
-/* Checked joints (docs/stems.md): builds, tests the mesh for intersecting pairs, leaves out a
- * lateral for each pair at a joint and builds again, until a mesh has none. Each round leaves
- * out at least one more branch, and a branch left out has no faces to blame again, so this ends
- * within as many rounds as there are lateral branches. The test runs on the mesh before
+/* Checked joints (docs/stems.md): builds, tests the mesh for intersecting pairs, and for each
+ * pair at a joint raises one lateral's level (stems_joints.c): it starts a node later, then
+ * another, then is left out with all that grows from it; and builds again, until a mesh has no
+ * pair at a joint. Each round raises at least one level, levels only rise, and a branch left
+ * out has no faces to blame again, so this ends within XYL__JOINT_DROP rounds per lateral. The test runs on the mesh before
  * subdivision, at the skeleton's radii; a subdivided mesh is then built once more, leaving out
  * the same branches. */
 static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
@@ -1565,7 +1567,6 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
         xyl__free(NULL, pairs);
         if (r) break;
         if (st->builds == 1) st->joint_pairs_first = t.joint;
-        st->branches_dropped += t.marked;
         if (!t.marked) {
             st->joint_pairs_left = t.joint;
             st->skeleton_pairs = t.own;
@@ -1575,10 +1576,15 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
         xyl_mesh_destroy(m);
         m = NULL;
     }
+    for (size_t b = 0; b < skeleton->branch_count; ++b) {
+        st->branches_dropped += drop[b] >= XYL__JOINT_DROP;
+        st->laterals_started_later += drop[b] && drop[b] < XYL__JOINT_DROP;
+    }
     if (!r && desc->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl_mesh_destroy(m);
         m = NULL;
-        r = build_once(skeleton, desc, st->branches_dropped ? drop : NULL, &m, diag);
+        bool any = st->branches_dropped || st->laterals_started_later;
+        r = build_once(skeleton, desc, any ? drop : NULL, &m, diag);
         ++st->builds;
     }
     xyl__free(&desc->alloc, drop);

@@ -92,7 +92,7 @@ typedef struct stems {
     size_t ncones, cone_cap;
 
     double *tails; /* while indexing: per node, the box around its chain's tubes from it on */
-    const uint8_t *drop; /* per skeleton branch: left out by checked joints, or NULL */
+    const uint8_t *drop; /* per skeleton branch: checked joints' level (XYL__JOINT_DROP), or NULL */
 } stems;
 
 /* Fills tails (6 per node: low and high corner) with the bounding box of each node's ball and
@@ -130,6 +130,13 @@ bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b);
 /* Closest points of segments p0-p1 and q0-q1 as parameters *s, *t in [0, 1] (stems_merge.c). */
 void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
                          double *t);
+
+/* Per skeleton branch, what checked joints ask of it (stems_joints.c): levels 1 ..
+ * XYL__JOINT_DROP - 1 start the lateral that many nodes later than the placement would,
+ * XYL__JOINT_DROP leaves it out with all that grows from it. */
+#ifndef XYL__JOINT_DROP
+#define XYL__JOINT_DROP 3
+#endif
 
 /* What xyl__stems_judge_joints found in one mesh. */
 typedef struct xyl__joint_tally {

@@ -19,6 +19,7 @@ typedef struct judge {
     uint32_t *child_start, *child_list; /* node n's children: child_list[child_start[n] ..) */
     uint32_t *faces;         /* per branch: its faces in the mesh */
     size_t *grown;           /* per branch: the faces of it and of all that grows from it */
+    uint8_t *bumped;         /* per branch: its level rose in this round */
 } judge;
 
 static xyl__dvec3 at(const judge *j, uint32_t n)
@@ -114,7 +115,7 @@ static uint32_t blame_two(const judge *j, uint32_t a, uint32_t b)
 /* For a pair on one branch a, near point c: a fork's rings crowd the tube there, so the lateral
  * with least grown from it of a's node nearest to c that has laterals still meshed before this
  * round, if c is within three of that node's radii; else a itself, unless it is a root's. */
-static uint32_t blame_one(const judge *j, const uint8_t *drop, uint32_t a, xyl__dvec3 c)
+static uint32_t blame_one(const judge *j, uint32_t a, xyl__dvec3 c)
 {
     const xyl_skel_node *nodes = j->sk->nodes;
     uint32_t best = UINT32_MAX;
@@ -125,7 +126,7 @@ static uint32_t blame_one(const judge *j, const uint8_t *drop, uint32_t a, xyl__
         if (d >= best_d || d > 3.0 * nodes[n].radius) continue;
         for (uint32_t v = j->child_start[n]; v < j->child_start[n + 1]; ++v) {
             uint32_t x = nodes[j->child_list[v]].branch;
-            if (x != a && drop[x] != 1 && j->faces[x]) {
+            if (x != a && j->faces[x]) {
                 best = n, best_d = d;
                 break;
             }
@@ -135,7 +136,7 @@ static uint32_t blame_one(const judge *j, const uint8_t *drop, uint32_t a, xyl__
     uint32_t pick = UINT32_MAX;
     for (uint32_t v = j->child_start[best]; v < j->child_start[best + 1]; ++v) {
         uint32_t x = nodes[j->child_list[v]].branch;
-        if (x == a || drop[x] == 1 || !j->faces[x]) continue;
+        if (x == a || !j->faces[x]) continue;
         if (pick == UINT32_MAX || j->grown[x] < j->grown[pick] ||
             (j->grown[x] == j->grown[pick] && x > pick))
             pick = x;
@@ -179,7 +180,9 @@ static bool judge_make(judge *j, const xyl_skeleton *sk, const xyl_mesh *m,
     j->child_list = xyl__alloc_array(alloc, nn ? nn : 1, sizeof *j->child_list);
     j->faces = xyl__calloc(alloc, nb ? nb : 1, sizeof *j->faces);
     j->grown = xyl__calloc(alloc, nb ? nb : 1, sizeof *j->grown);
-    if (!j->start || !j->nodes || !j->child_start || !j->child_list || !j->faces || !j->grown)
+    j->bumped = xyl__calloc(alloc, nb ? nb : 1, 1);
+    if (!j->start || !j->nodes || !j->child_start || !j->child_list || !j->faces || !j->grown ||
+        !j->bumped)
         return false;
     /* counting sorts: counts at [x + 2], prefix sums, then filling moves [x + 1] to x's end */
     for (size_t i = 0; i < nn; ++i) {
@@ -210,11 +213,12 @@ static void judge_free(judge *j, const xyl_allocator *alloc)
     xyl__free(alloc, j->child_list);
     xyl__free(alloc, j->faces);
     xyl__free(alloc, j->grown);
+    xyl__free(alloc, j->bumped);
 }
 
 /* Pairs at joints, each branch pair judged once (sorted keys, a verdict per run); pairs on one
- * branch are blamed one by one, by where they are. Marks go in as 2 and become 1 at the end,
- * so that blame_one keeps to what was meshed. */
+ * branch are blamed one by one, by where they are. A blamed branch's level rises by one per
+ * round, however many pairs blame it. */
 xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
                                    const uint64_t *pairs, size_t count, uint8_t *drop,
                                    const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag)
@@ -253,18 +257,17 @@ xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
                 out = blame_two(&j, a, b);
             } else {
                 uint32_t t0 = (uint32_t)(keys[p].pair >> 32), t1 = (uint32_t)keys[p].pair;
-                out = blame_one(&j, drop, a, pair_centre(m, t0, t1));
+                out = blame_one(&j, a, pair_centre(m, t0, t1));
             }
             if (out == UINT32_MAX) ++t->stuck;
-            else if (!drop[out]) drop[out] = 2, ++t->marked;
+            else if (!j.bumped[out] && drop[out] < XYL__JOINT_DROP)
+                j.bumped[out] = 1, ++drop[out], ++t->marked;
             if (a != b) { /* one verdict for the run */
                 if (out == UINT32_MAX) t->stuck += run - 1;
                 break;
             }
         }
     }
-    for (size_t b = 0; b < sk->branch_count; ++b)
-        if (drop[b]) drop[b] = 1;
 done:
     judge_free(&j, alloc);
     xyl__free(alloc, keys);

@@ -323,11 +323,16 @@ static bool inside(const stems *s, const placing *pl, uint32_t x, uint32_t h, ui
  * recording each one's tube; *last and *in become the last hidden node and its tube (unchanged
  * if none is hidden). Returns the first node that is clear, or UINT32_MAX. */
 static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, uint32_t h,
-                         uint32_t *last, uint32_t *in)
+                         uint32_t *last, uint32_t *in, uint32_t extra)
 {
     uint32_t first = x, t;
-    for (; x != UINT32_MAX && inside(s, pl, x, h, &t); x = s->main[x])
+    for (; x != UINT32_MAX; x = s->main[x]) {
+        if (!inside(s, pl, x, h, &t)) {
+            if (!extra) break;
+            --extra, t = UINT32_MAX; /* checked joints: start one node later, from the parent */
+        }
         *last = x, *in = t, pl->tube[x] = t;
+    }
     for (uint32_t y = first; y != x; y = s->main[y]) pl->link[y] = p, pl->owner[y] = x;
     return x;
 }
@@ -354,7 +359,10 @@ static bool place_lateral(const stems *s, uint32_t i, uint32_t p, uint32_t h, pl
 {
     /* where it comes from: its fork, in the tube the fork is hidden in if it is */
     uint32_t last = p, in = pl->link[p] != UINT32_MAX ? pl->tube[p] : UINT32_MAX;
-    uint32_t c = hide_run(s, pl, i, p, h, &last, &in);
+    /* checked joints (stems_joints.c) may have asked this lateral to start later */
+    uint32_t level = s->drop ? s->drop[s->sk->nodes[i].branch] : 0;
+    uint32_t extra = level < XYL__JOINT_DROP ? level : 0;
+    uint32_t c = hide_run(s, pl, i, p, h, &last, &in, extra);
     if (c != UINT32_MAX) pl->placed[pl->nplaced++] = c;
     if (c == i && h == p) return false; /* leaves its parent at once */
     if (c != i) pl->parent_of[i] = -1;
@@ -371,7 +379,7 @@ static bool cut_crossings(const stems *s, uint32_t c, uint32_t p, uint32_t h, pl
     for (uint32_t x = s->main[c], t; x != UINT32_MAX; x = s->main[x]) {
         if (!inside(s, pl, x, h, &t)) continue;
         uint32_t first = x, last = x, in = t;
-        x = hide_run(s, pl, x, p, h, &last, &in);
+        x = hide_run(s, pl, x, p, h, &last, &in, 0);
         pl->parent_of[first] = -1;
         any = true;
         if (x == UINT32_MAX) break;

@@ -276,10 +276,11 @@ typedef enum xyl_normal_mode {
 typedef enum xyl_joint_check {
     XYL_JOINTS_CHECKED = 0,  /* default: the mesh is tested for intersecting triangle pairs; for
                                 each pair at a joint (every pair but those where the skeleton
-                                overlaps itself) a lateral is left out, with all that grows from
-                                it, and the mesh is built again, until no pair at a joint is
-                                left. The test runs before subdivision, on the mesh at the
-                                skeleton's radii; a subdivided mesh leaves out the same laterals */
+                                overlaps itself) a lateral starts a node later, a second, or at
+                                last is left out with all that grows from it, and the mesh is
+                                built again, until no pair at a joint is left. The test runs
+                                before subdivision, on the mesh at the skeleton's radii; a
+                                subdivided mesh makes the same changes */
     XYL_JOINTS_UNCHECKED = 1 /* the construction alone, without the test: faster
                                 (docs/BENCHMARKS.md); the presets then have pairs at joints */
 } xyl_joint_check;
@@ -289,6 +290,7 @@ typedef enum xyl_joint_check {
 typedef struct xyl_stems_stats {
     uint32_t builds;           /* meshes built: 1, plus one per round of laterals left out,
                                   plus one to subdivide */
+    uint32_t laterals_started_later; /* laterals that start a node or two further out */
     uint32_t branches_dropped; /* laterals left out, with all that grows from them */
     size_t faces_first;        /* faces of the first mesh built */
     size_t faces_checked;      /* faces of the mesh that passed, to compare */
