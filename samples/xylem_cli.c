@@ -553,10 +553,11 @@ static int cmd_mesh(const options *o)
                m->tri_view_count);
         if (desc.joints == XYL_JOINTS_CHECKED)
             printf("joints: %zu intersecting pairs at joints; %u laterals start later, %u are "
-                   "left out (%zu of %zu faces kept), %u builds; %zu pairs where the skeleton "
+                   "left out (%zu of %zu faces kept), %u build%s; %zu pairs where the skeleton "
                    "overlaps itself\n",
                    st.joint_pairs_first, st.laterals_started_later, st.branches_dropped,
-                   st.faces_checked, st.faces_first, st.builds, st.skeleton_pairs);
+                   st.faces_checked, st.faces_first, st.builds, st.builds == 1 ? "" : "s",
+                   st.skeleton_pairs);
         if (d.warning_count) printf("warning: %s\n", d.warning);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
                (t2 - t1) * 1e3, (now_seconds() - t2) * 1e3);

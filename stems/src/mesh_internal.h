@@ -62,10 +62,10 @@ static inline const uint32_t *xyl__mesh_face(const xyl_mesh *m, size_t f, int *n
 xyl_result xyl__check_mesh_faces(const xyl_mesh *m, xyl_diag *diag);
 
 /* Every intersecting triangle pair of a mesh's triangulated view, as xyl_mesh_self_intersections
- * finds them, in one pass: *pairs (malloc'd, i << 32 | j with i < j, sorted; free with
- * xyl__free(NULL, .)) and *count. Errors: those of xyl_mesh_self_intersections. */
-xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, uint64_t **pairs, size_t *count,
-                                        xyl_diag *diag);
+ * finds them, in one pass: *pairs (from alloc, NULL for malloc; i << 32 | j with i < j, sorted;
+ * free with xyl__free(alloc, .)) and *count. Errors: those of xyl_mesh_self_intersections. */
+xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                        uint64_t **pairs, size_t *count, xyl_diag *diag);
 
 /* Bit c of a face's uv_wraps set: corner c's u is its vertex's u + 1. The bits a face of n
  * corners may use. */

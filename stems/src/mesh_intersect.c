@@ -57,6 +57,7 @@ typedef struct tri_set {
     size_t capacity;     /* how many the caller wants: pairs never holds more */
     size_t total;        /* pairs found */
     bool out_of_memory;
+    const xyl_allocator *alloc; /* of the scratch and the pairs: NULL is malloc */
 } tri_set;
 
 typedef struct p2 {
@@ -452,7 +453,7 @@ static void record(tri_set *s, uint32_t i, uint32_t j)
     uint64_t key = i < j ? (uint64_t)i << 32 | j : (uint64_t)j << 32 | i;
     s->total++;
     if (s->kept < s->capacity) {
-        if (!xyl__grow(NULL, (void **)&s->pairs, &s->kept_cap, s->kept, s->kept + 1,
+        if (!xyl__grow(s->alloc, (void **)&s->pairs, &s->kept_cap, s->kept, s->kept + 1,
                        sizeof *s->pairs)) {
             s->out_of_memory = true;
             return;
@@ -549,10 +550,10 @@ static xyl_result validate(const xyl_mesh *m, const uint32_t *pairs, size_t capa
 
 static void tri_set_free(tri_set *s)
 {
-    xyl__free(NULL, s->order);
-    xyl__free(NULL, s->boxes);
-    xyl__free(NULL, s->nodes);
-    xyl__free(NULL, s->pairs);
+    xyl__free(s->alloc, s->order);
+    xyl__free(s->alloc, s->boxes);
+    xyl__free(s->alloc, s->nodes);
+    xyl__free(s->alloc, s->pairs);
 }
 
 /* Finds every pair into s->pairs, sorted; false when memory ran out. tmp holds one entry per
@@ -569,35 +570,37 @@ static bool find_pairs(tri_set *s, morton_entry *tmp)
 }
 
 /* Every intersecting pair of a valid mesh in one pass, into s->pairs (i << 32 | j, sorted; s->kept
- * of them); false when memory ran out, with nothing to free. */
-static bool all_pairs(const xyl_mesh *mesh, size_t capacity, tri_set *out)
+ * of them); false when memory ran out, with nothing to free. Memory comes from alloc (NULL:
+ * malloc). */
+static bool all_pairs(const xyl_mesh *mesh, size_t capacity, const xyl_allocator *alloc,
+                      tri_set *out)
 {
-    /* Scratch comes from malloc: the call takes no allocator. */
     size_t t = mesh->tri_view_count;
     tri_set s = {.m = mesh,
                  .capacity = capacity,
-                 .order = xyl__calloc(NULL, t, sizeof(morton_entry)),
-                 .boxes = xyl__calloc(NULL, t, sizeof(box)),
-                 .nodes = xyl__calloc(NULL, t, 2 * sizeof(bvh_node))};
-    morton_entry *tmp = xyl__calloc(NULL, t, sizeof *tmp);
+                 .alloc = alloc,
+                 .order = xyl__calloc(alloc, t, sizeof(morton_entry)),
+                 .boxes = xyl__calloc(alloc, t, sizeof(box)),
+                 .nodes = xyl__calloc(alloc, t, 2 * sizeof(bvh_node))};
+    morton_entry *tmp = xyl__calloc(alloc, t, sizeof *tmp);
     bool ok = s.order && s.boxes && s.nodes && tmp && find_pairs(&s, tmp);
-    xyl__free(NULL, tmp);
+    xyl__free(alloc, tmp);
     if (!ok) tri_set_free(&s);
     *out = s;
     return ok;
 }
 
-xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, uint64_t **pairs, size_t *count,
-                                        xyl_diag *diag)
+xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                        uint64_t **pairs, size_t *count, xyl_diag *diag)
 {
     size_t zero = 0;
     xyl_result r = validate(mesh, NULL, 0, &zero, diag);
     if (r) return r;
     tri_set s;
-    if (!all_pairs(mesh, SIZE_MAX, &s))
+    if (!all_pairs(mesh, SIZE_MAX, alloc, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
-    *pairs = s.pairs; /* malloc'd: the caller frees it with xyl__free(NULL, .) */
+    *pairs = s.pairs; /* the caller frees it with xyl__free(alloc, .) */
     *count = s.kept;
     s.pairs = NULL;
     tri_set_free(&s);
@@ -609,8 +612,8 @@ xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs, si
 {
     xyl_result r = validate(mesh, pairs, capacity, count, diag);
     if (r) return r;
-    tri_set s;
-    if (!all_pairs(mesh, capacity, &s))
+    tri_set s; /* scratch from malloc: the call takes no allocator */
+    if (!all_pairs(mesh, capacity, NULL, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
     /* Written only now, so a failure leaves pairs and count untouched. */

@@ -1561,10 +1561,10 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
         if (++st->builds == 1) st->faces_first = m->quad_count + m->triangle_count;
         uint64_t *pairs = NULL;
         size_t count = 0;
-        r = xyl__mesh_intersecting_pairs(m, &pairs, &count, diag);
+        r = xyl__mesh_intersecting_pairs(m, &desc->alloc, &pairs, &count, diag);
         xyl__joint_tally t;
         if (!r) r = xyl__stems_judge_joints(skeleton, m, pairs, count, drop, &desc->alloc, &t, diag);
-        xyl__free(NULL, pairs);
+        xyl__free(&desc->alloc, pairs);
         if (r) break;
         if (st->builds == 1) st->joint_pairs_first = t.joint;
         if (!t.marked) {
