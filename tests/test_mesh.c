@@ -1078,6 +1078,27 @@ static void self_intersections_with_one_shared_vertex_look_beyond_it(void **stat
     assert_int_equal(shared_vertex_pair((xyl_vec3){1, 1, 0}, (xyl_vec3){0.2f, 0.2f, 1}), 1);
 }
 
+/* Two triangles of one flat side of a straight prism, after one Catmull-Clark level (xylem's
+ * own stem_up hard case at k = 4): they share one corner and lie in one plane but for 1e-18 in
+ * x. A far corner of one then falls within the error bound of the other's plane while its
+ * partner does not, and the line through them was tested for piercing the other triangle with
+ * volumes all within their bounds too, so "on every side" read as a hit: 27 such pairs on that
+ * stem. The corner on the plane is now tested for lying in the triangle, as coplanar points are. */
+static void self_intersections_of_nearly_coplanar_neighbours_are_none(void **state)
+{
+    (void)state;
+    builder b = {0};
+    uint32_t v40 = add_vertex(&b, 0x1.1db9ap-4f, 0x1p-1f, -0x1.1db9ap-4f);
+    uint32_t v5 = add_vertex(&b, 0x1.90b6c6p-59f, 0x1p-1f, -0x1.9f99a2p-4f);
+    uint32_t v50 = add_vertex(&b, 0x1.c71c72p-60f, 0x1.8p-1f, -0x1.9f99a2p-4f);
+    uint32_t v24 = add_vertex(&b, 0x1.1db9ap-4f, 0x1.8p-1f, -0x1.1db9ap-4f);
+    uint32_t v9 = add_vertex(&b, 0x1.90b6c6p-59f, 0x1p+0f, -0x1.9f99a2p-4f);
+    add_tri(&b, v40, v5, v50);
+    add_tri(&b, v24, v50, v9);
+    assert_int_equal(intersections(&b, NULL, 0), 0);
+    builder_free(&b);
+}
+
 /* Two triangles sharing the edge (0,0,0)-(1,0,0), with third corners c and d. */
 static size_t shared_edge_pair(xyl_vec3 c, xyl_vec3 d)
 {
@@ -1434,6 +1455,7 @@ int main(void)
         cmocka_unit_test(self_intersections_of_separate_cubes_are_none),
         cmocka_unit_test(self_intersections_find_a_fold_between_triangles_that_share_a_vertex),
         cmocka_unit_test(self_intersections_with_one_shared_vertex_look_beyond_it),
+        cmocka_unit_test(self_intersections_of_nearly_coplanar_neighbours_are_none),
         cmocka_unit_test(self_intersections_with_a_shared_edge_count_only_a_flat_fold),
         cmocka_unit_test(self_intersections_count_distinct_triangles_that_touch),
         cmocka_unit_test(self_intersections_count_coplanar_overlap),

@@ -156,6 +156,7 @@ static bool segment_meets_triangle(xyl__dvec3 p, xyl__dvec3 q, int sp, int sq,
 {
     if (sp * sq > 0) return false;
     if (sp == 0 && sq == 0) return segment_meets_triangle_2d(p, q, t);
+    if (sp == 0 || sq == 0) return segment_meets_triangle_2d(sp == 0 ? p : q, sp == 0 ? p : q, t);
     return same_side_or_on(orient3d(p, q, t[0], t[1]), orient3d(p, q, t[1], t[2]),
                            orient3d(p, q, t[2], t[0]));
 }

@@ -1543,9 +1543,9 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
  * pair at a joint raises one lateral's level (stems_joints.c): it starts a node later, then
  * another, then is left out with all that grows from it; and builds again, until a mesh has no
  * pair at a joint. Each round raises at least one level, levels only rise, and a branch left
- * out has no faces to blame again, so this ends within XYL__JOINT_DROP rounds per lateral. The test runs on the mesh before
- * subdivision, at the skeleton's radii; a subdivided mesh is then built once more, leaving out
- * the same branches. */
+ * out has no faces to blame again, so this ends within XYL__JOINT_DROP rounds per lateral.
+ * The test runs on the mesh before subdivision, at the skeleton's radii; a subdivided mesh is
+ * then built once more with the same levels. */
 static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                                 xyl_mesh **out, xyl_stems_stats *st, xyl_diag *diag)
 {

@@ -134,21 +134,19 @@ void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3
 /* Per skeleton branch, what checked joints ask of it (stems_joints.c): levels 1 ..
  * XYL__JOINT_DROP - 1 start the lateral that many nodes later than the placement would,
  * XYL__JOINT_DROP leaves it out with all that grows from it. */
-#ifndef XYL__JOINT_DROP
 #define XYL__JOINT_DROP 3
-#endif
 
 /* What xyl__stems_judge_joints found in one mesh. */
 typedef struct xyl__joint_tally {
     size_t joint;   /* intersecting pairs at joints */
     size_t own;     /* intersecting pairs that the skeleton's own overlaps explain */
     size_t stuck;   /* pairs at joints with no lateral to leave out (a root's own tube) */
-    uint32_t marked; /* branches newly marked in drop */
+    uint32_t marked; /* levels raised in drop (at most one per branch and round) */
 } xyl__joint_tally;
 
 /* Sorts the intersecting pairs of mesh m, built from sk, into those at joints and those where
- * the skeleton overlaps itself (docs/stems.md, "Checked joints"), and marks in drop (one entry
- * per skeleton branch) a lateral branch to leave out for each pair at a joint (stems_joints.c).
+ * the skeleton overlaps itself (docs/stems.md, "Checked joints"), and raises in drop (one level
+ * per skeleton branch) the level of a lateral blamed for each pair at a joint (stems_joints.c).
  * pairs: i << 32 | j triangle indices of m's triangulated view. Errors: XYL_ERR_OUT_OF_MEMORY. */
 xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
                                    const uint64_t *pairs, size_t count, uint8_t *drop,

@@ -1,5 +1,5 @@
 /* Checked joints (docs/stems.md, "Checked joints"): which intersecting triangle pairs of a stem
- * mesh lie at joints, and which lateral to leave out for each.
+ * mesh lie at joints, and which lateral to blame for each (to start later, or leave out).
  *
  * A pair is the skeleton's own, and no mesher's to remove, on two branches that are unrelated
  * (neither one forks from the other nor do both fork from one node) and have segments closer
@@ -97,7 +97,7 @@ static bool skeletons_overlap(const judge *j, uint32_t a, uint32_t b)
     return false;
 }
 
-/* The branch to leave out for a pair at a joint between branches a and b (a != b), or
+/* The branch to blame for a pair at a joint between branches a and b (a != b), or
  * UINT32_MAX if neither can go: of a child and the branch it forks from, the child; of
  * siblings, and of branches the placement brought together, the one with less grown from it
  * (the later on a tie). */
@@ -113,8 +113,8 @@ static uint32_t blame_two(const judge *j, uint32_t a, uint32_t b)
 }
 
 /* For a pair on one branch a, near point c: a fork's rings crowd the tube there, so the lateral
- * with least grown from it of a's node nearest to c that has laterals still meshed before this
- * round, if c is within three of that node's radii; else a itself, unless it is a root's. */
+ * with least grown from it of a's node nearest to c that has laterals with faces in this mesh,
+ * if c is within three of that node's radii; else a itself, unless it is a root's. */
 static uint32_t blame_one(const judge *j, uint32_t a, xyl__dvec3 c)
 {
     const xyl_skel_node *nodes = j->sk->nodes;
