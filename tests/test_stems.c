@@ -521,6 +521,36 @@ static void presets_are_free_of_intersections_at_joints_k8(void **state)
     assert_presets_free_of_joint_intersections(8);
 }
 
+/* Two roots whose stems cross: both are roots' branches, which the check never moves, so the
+ * pairs between them stay, and the build says so (stats and a warning) instead of failing. */
+static void crossing_roots_are_left_and_reported(void **state)
+{
+    (void)state;
+    xyl_skel_node nodes[4];
+    memset(nodes, 0, sizeof nodes);
+    nodes[0] = (xyl_skel_node){{-1, 0, 0}, 0.1f, -1, 0, 0};
+    nodes[1] = (xyl_skel_node){{1, 0, 0}, 0.1f, 0, 0, 0};
+    nodes[2] = (xyl_skel_node){{0, -1, 0.01f}, 0.1f, -1, 0, 0};
+    nodes[3] = (xyl_skel_node){{0, 1, 0.01f}, 0.1f, 2, 0, 0};
+    xyl_skeleton *sk = skeleton_of(nodes, 4);
+    xyl_stems_desc d = {0};
+    xyl_stems_stats st;
+    d.stats = &st;
+    xyl_diag diag = {0};
+    xyl_mesh *m = NULL;
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_OK);
+    so_tally t = joint_tally(sk, m);
+    assert_true(t.joint > 0);
+    assert_int_equal(st.joint_pairs_left, t.joint);
+    assert_int_equal(st.builds, 1);
+    assert_int_equal(st.laterals_started_later + st.branches_dropped, 0);
+    assert_int_equal(diag.warning_count, 1);
+    assert_non_null(strstr(diag.warning, "root"));
+    assert_closed(m, sk, "crossing roots");
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+}
+
 /* A child that leaves its parent sideways and then curls back behind its bridge ring keeps its
  * later nodes: only the nodes at the start of a child's chain that are still inside the parent
  * may be absorbed, not its tip. */
@@ -1417,6 +1447,7 @@ int main(void)
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k6),
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k7),
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k8),
+        cmocka_unit_test(crossing_roots_are_left_and_reported),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(a_twig_of_one_segment_ends_at_its_tip),
         cmocka_unit_test(siblings_that_never_part_become_one_tube),

@@ -1594,8 +1594,8 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
     }
     xyl__diag_ok(diag);
     if (st->joint_pairs_left)
-        xyl__warn(diag, "%zu intersecting triangle pairs at joints are left on a root's own tube",
-                  st->joint_pairs_left);
+        xyl__warn(diag, "%zu intersecting triangle pairs at joints are left where only a root's "
+                  "tube could give way (the check moves laterals only)", st->joint_pairs_left);
     *out = m;
     return XYL_OK;
 }

@@ -295,8 +295,9 @@ typedef struct xyl_stems_stats {
     size_t faces_first;        /* faces of the first mesh built */
     size_t faces_checked;      /* faces of the mesh that passed, to compare */
     size_t joint_pairs_first;  /* intersecting pairs at joints in the first mesh */
-    size_t joint_pairs_left;   /* in the mesh that passed: 0, unless a root's own tube has some
-                                  (then diag gets a warning) */
+    size_t joint_pairs_left;   /* in the mesh that passed: 0, unless only a root could give way
+                                  (a root's own tube, two roots that cross; then diag gets a
+                                  warning) */
     size_t skeleton_pairs;     /* intersecting pairs of the mesh that passed that the skeleton's
                                   own overlaps explain */
 } xyl_stems_stats;
