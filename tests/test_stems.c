@@ -6,18 +6,6 @@
 #include "test_util.h"
 #include "mesh_internal.h"
 
-/* ASan and UBSan builds (scripts/test.sh stage 2) run the checked presets at k = 4 and 5 only. */
-#if defined(__SANITIZE_ADDRESS__)
-#define SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SANITIZED 1
-#endif
-#endif
-#ifndef SANITIZED
-#define SANITIZED 0
-#endif
-
 /* Checked or not (docs/stems.md, "Checked joints"); st may be NULL. */
 static xyl_mesh *build_with(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
                             xyl_normal_mode normals, xyl_joint_check joints, xyl_stems_stats *st)

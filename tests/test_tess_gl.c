@@ -15,17 +15,7 @@
  * by realloc, which ASan always copies to fresh pages) run 20-50x slower: the GPU = CPU matrix
  * then stops at level 3, and the hardware path (5.7 of its 7.5 minutes there) is captured on
  * the mixed quad / triangle mesh only, with one variant, so the sanitizer suite stays within
- * minutes. Release runs the full matrix. */
-#if defined(__SANITIZE_ADDRESS__)
-#define SANITIZED 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define SANITIZED 1
-#endif
-#endif
-#ifndef SANITIZED
-#define SANITIZED 0
-#endif
+ * minutes. Release runs the full matrix (SANITIZED: test_util.h). */
 #define MAX_LEVEL 16u /* adaptive views stay under it; keeps llvmpipe captures small */
 #define SIDE 256u
 

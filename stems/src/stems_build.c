@@ -585,6 +585,18 @@ static xyl__dvec3 blend(xyl__dvec3 a, xyl__dvec3 b, double f)
     return xyl__d3_normalize_or(m, b);
 }
 
+/* The spacing of `count` rings that turn in even steps through a half bend of sine sin_half on
+ * a segment seg long, from spacing d: neighbouring rings are a step apart in angle and cross
+ * each other unless spaced by at least rr sin(step) (64 thin laterals on a bend: 1e-4 apart,
+ * steps of 2 degrees on a ring 0.1 wide), so they take that spacing where the segment has the
+ * room (0.45 of it over the rings). */
+static double turned_spacing(double d, double rr, double sin_half, size_t count, double seg)
+{
+    if (!count || !(seg > 0.0)) return d;
+    double step = asin(fmin(sin_half, 1.0)) / (double)count;
+    return fmin(fmax(d, rr * sin(step)), fmax(d, 0.45 * seg / (double)count));
+}
+
 /* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
  * delta, so the bands between them offer patches to the lateral children. */
 static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
@@ -614,15 +626,8 @@ static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, 
     double sin_in = xyl__d3_len(xyl__d3_cross(t_in, t)), sin_out = xyl__d3_len(xyl__d3_cross(t, t_out));
     bool turn_in = d_in < rr * sin_in;
     bool turn_out = d_out < rr * sin_out;
-    /* turned in even steps, neighbouring rings are a step apart in angle and cross each other
-     * unless they are spaced by at least rr sin(step) (64 thin laterals on a bend: 1e-4 apart,
-     * steps of 2 degrees on a ring 0.1 wide); they take that spacing where the segment has the
-     * room */
-    if (turn_in) d_in = fmin(fmax(d_in, rr * sin(asin(fmin(sin_in, 1.0)) / (double)behind)),
-                             fmax(d_in, 0.45 * seg_in / (double)behind));
-    if (turn_out && seg_out > 0.0)
-        d_out = fmin(fmax(d_out, rr * sin(asin(fmin(sin_out, 1.0)) / (double)ahead)),
-                     fmax(d_out, 0.45 * seg_out / (double)ahead));
+    if (turn_in) d_in = turned_spacing(d_in, rr, sin_in, behind, seg_in);
+    if (turn_out) d_out = turned_spacing(d_out, rr, sin_out, ahead, seg_out);
     for (size_t m = behind; m >= 1 && !r; --m) {
         xyl__dvec3 tm = turn_in ? blend(t_in, t, (double)(behind - m) / (double)behind) : t_in;
         r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), tm, st->r);
@@ -1507,7 +1512,7 @@ static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
     return XYL_OK;
 }
 
-/* One mesh of the skeleton, leaving out the branches marked in drop (NULL: none). */
+/* One mesh of the skeleton, with checked joints' levels per branch in drop (NULL: none). */
 static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                              const uint8_t *drop, xyl_mesh **out, xyl_diag *diag)
 {

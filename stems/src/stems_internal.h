@@ -140,7 +140,6 @@ void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3
 typedef struct xyl__joint_tally {
     size_t joint;   /* intersecting pairs at joints */
     size_t own;     /* intersecting pairs that the skeleton's own overlaps explain */
-    size_t stuck;   /* pairs at joints with no lateral to leave out (a root's own tube) */
     uint32_t marked; /* levels raised in drop (at most one per branch and round) */
 } xyl__joint_tally;
 

@@ -97,10 +97,15 @@ static bool skeletons_overlap(const judge *j, uint32_t a, uint32_t b)
     return false;
 }
 
+/* Whether branch x has less grown from it than branch y (the later of two equal ones). */
+static bool less_grown(const judge *j, uint32_t x, uint32_t y)
+{
+    return j->grown[x] < j->grown[y] || (j->grown[x] == j->grown[y] && x > y);
+}
+
 /* The branch to blame for a pair at a joint between branches a and b (a != b), or
  * UINT32_MAX if neither can go: of a child and the branch it forks from, the child; of
- * siblings, and of branches the placement brought together, the one with less grown from it
- * (the later on a tie). */
+ * siblings, and of branches the placement brought together, the one with less grown from it. */
 static uint32_t blame_two(const judge *j, uint32_t a, uint32_t b)
 {
     const xyl_skel_node *nodes = j->sk->nodes;
@@ -108,40 +113,38 @@ static uint32_t blame_two(const judge *j, uint32_t a, uint32_t b)
     uint32_t pick;
     if (fb >= 0 && nodes[fb].branch == a) pick = b;
     else if (fa >= 0 && nodes[fa].branch == b) pick = a;
-    else pick = j->grown[a] < j->grown[b] || (j->grown[a] == j->grown[b] && a > b) ? a : b;
+    else pick = less_grown(j, a, b) ? a : b;
     return fork_of(j, pick) >= 0 ? pick : UINT32_MAX;
 }
 
-/* For a pair on one branch a, near point c: a fork's rings crowd the tube there, so the lateral
- * with least grown from it of a's node nearest to c that has laterals with faces in this mesh,
- * if c is within three of that node's radii; else a itself, unless it is a root's. */
-static uint32_t blame_one(const judge *j, uint32_t a, xyl__dvec3 c)
+/* Of node n's laterals (children on other branches than a) with faces in this mesh, the one
+ * with least grown from it, or UINT32_MAX. */
+static uint32_t least_grown_lateral(const judge *j, uint32_t n, uint32_t a)
 {
-    const xyl_skel_node *nodes = j->sk->nodes;
-    uint32_t best = UINT32_MAX;
-    double best_d = INFINITY;
-    for (uint32_t u = j->start[a]; u < j->start[a + 1]; ++u) {
-        uint32_t n = j->nodes[u];
-        double d = xyl__d3_len(xyl__d3_sub(at(j, n), c));
-        if (d >= best_d || d > 3.0 * nodes[n].radius) continue;
-        for (uint32_t v = j->child_start[n]; v < j->child_start[n + 1]; ++v) {
-            uint32_t x = nodes[j->child_list[v]].branch;
-            if (x != a && j->faces[x]) {
-                best = n, best_d = d;
-                break;
-            }
-        }
-    }
-    if (best == UINT32_MAX) return fork_of(j, a) >= 0 ? a : UINT32_MAX;
     uint32_t pick = UINT32_MAX;
-    for (uint32_t v = j->child_start[best]; v < j->child_start[best + 1]; ++v) {
-        uint32_t x = nodes[j->child_list[v]].branch;
-        if (x == a || !j->faces[x]) continue;
-        if (pick == UINT32_MAX || j->grown[x] < j->grown[pick] ||
-            (j->grown[x] == j->grown[pick] && x > pick))
-            pick = x;
+    for (uint32_t v = j->child_start[n]; v < j->child_start[n + 1]; ++v) {
+        uint32_t x = j->sk->nodes[j->child_list[v]].branch;
+        if (x != a && j->faces[x] && (pick == UINT32_MAX || less_grown(j, x, pick))) pick = x;
     }
     return pick;
+}
+
+/* For a pair on one branch a, near point c: a fork's rings crowd the tube there, so the
+ * least_grown_lateral of a's node nearest to c that has one, if c is within three of that
+ * node's radii; else a itself, unless it is a root's. */
+static uint32_t blame_one(const judge *j, uint32_t a, xyl__dvec3 c)
+{
+    uint32_t pick = UINT32_MAX;
+    double best_d = INFINITY;
+    for (uint32_t u = j->start[a]; u < j->start[a + 1]; ++u) {
+        uint32_t n = j->nodes[u], x;
+        double d = xyl__d3_len(xyl__d3_sub(at(j, n), c));
+        if (d < best_d && d <= 3.0 * j->sk->nodes[n].radius &&
+            (x = least_grown_lateral(j, n, a)) != UINT32_MAX)
+            pick = x, best_d = d;
+    }
+    if (pick != UINT32_MAX) return pick;
+    return fork_of(j, a) >= 0 ? a : UINT32_MAX;
 }
 
 /* The centre of the six corners of triangles t0 and t1 of m's triangulated view. */
@@ -216,6 +219,15 @@ static void judge_free(judge *j, const xyl_allocator *alloc)
     xyl__free(alloc, j->bumped);
 }
 
+/* Raises the level of blamed branch b (UINT32_MAX: none can go) once per round. */
+static void raise_level(judge *j, uint8_t *drop, uint32_t b, xyl__joint_tally *t)
+{
+    if (b == UINT32_MAX || j->bumped[b] || drop[b] >= XYL__JOINT_DROP) return;
+    j->bumped[b] = 1;
+    ++drop[b];
+    ++t->marked;
+}
+
 /* Pairs at joints, each branch pair judged once (sorted keys, a verdict per run); pairs on one
  * branch are blamed one by one, by where they are. A blamed branch's level rises by one per
  * round, however many pairs blame it. */
@@ -251,21 +263,13 @@ xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
             continue;
         }
         t->joint += run;
+        if (a != b) { /* one verdict for the run */
+            raise_level(&j, drop, blame_two(&j, a, b), t);
+            continue;
+        }
         for (size_t p = i; p < i + run; ++p) {
-            uint32_t out;
-            if (a != b) {
-                out = blame_two(&j, a, b);
-            } else {
-                uint32_t t0 = (uint32_t)(keys[p].pair >> 32), t1 = (uint32_t)keys[p].pair;
-                out = blame_one(&j, a, pair_centre(m, t0, t1));
-            }
-            if (out == UINT32_MAX) ++t->stuck;
-            else if (!j.bumped[out] && drop[out] < XYL__JOINT_DROP)
-                j.bumped[out] = 1, ++drop[out], ++t->marked;
-            if (a != b) { /* one verdict for the run */
-                if (out == UINT32_MAX) t->stuck += run - 1;
-                break;
-            }
+            uint32_t t0 = (uint32_t)(keys[p].pair >> 32), t1 = (uint32_t)keys[p].pair;
+            raise_level(&j, drop, blame_one(&j, a, pair_centre(m, t0, t1)), t);
         }
     }
 done:

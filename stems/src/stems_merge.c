@@ -320,8 +320,9 @@ static bool inside(const stems *s, const placing *pl, uint32_t x, uint32_t h, ui
 }
 
 /* Hides the nodes of a chain of fork p (placed at h) from x on while they lie inside a tube,
- * recording each one's tube; *last and *in become the last hidden node and its tube (unchanged
- * if none is hidden). Returns the first node that is clear, or UINT32_MAX. */
+ * and `extra` clear nodes more (checked joints: the lateral starts later, from the parent's
+ * tube), recording each one's tube; *last and *in become the last hidden node and its tube
+ * (unchanged if none is hidden). Returns the first node that is clear, or UINT32_MAX. */
 static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, uint32_t h,
                          uint32_t *last, uint32_t *in, uint32_t extra)
 {
@@ -329,7 +330,7 @@ static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, ui
     for (; x != UINT32_MAX; x = s->main[x]) {
         if (!inside(s, pl, x, h, &t)) {
             if (!extra) break;
-            --extra, t = UINT32_MAX; /* checked joints: start one node later, from the parent */
+            --extra, t = UINT32_MAX;
         }
         *last = x, *in = t, pl->tube[x] = t;
     }
