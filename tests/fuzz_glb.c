@@ -1,4 +1,4 @@
-/* libFuzzer target for the .glb reader of `xylem render --mesh` (samples/glb_read.cpp, tinygltf
+/* libFuzzer target for the .glb reader of `xylem render --mesh` (samples/cli/glb_read.cpp, tinygltf
  * underneath): any input gives a result code, never a crash or a leak; a mesh that comes back
  * is one xyl_mesh_create accepted, and it is checked for index and count consistency. */
 #include <stdint.h>

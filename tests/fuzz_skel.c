@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "mesh_internal.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_skeleton.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -100,7 +100,7 @@ static void check_mesh(const xyl_skeleton *sk, uint32_t sides)
     memset(&d, 0, sizeof d);
     d.sides = sides;
     xyl_mesh *m = NULL;
-    xyl_result r = xyl_stems_build(sk, &d, &m, NULL);
+    xyl_result r = xyl_stems_build(sk, &d, &m, NULL, NULL);
     if (r == XYL_ERR_LIMIT_EXCEEDED) return;
     check(r == XYL_OK);
     xyl_mesh_report rep;

@@ -11,7 +11,7 @@
 
 #include <cmocka.h>
 
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_mesh.h"
 
 #define PI 3.14159265358979323846
 

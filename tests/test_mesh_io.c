@@ -867,7 +867,7 @@ static xyl_mesh *long_stem(void)
     xyl_stems_desc d = {0};
     d.sides = 5;
     xyl_mesh *m = NULL;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL), XYL_OK);
+    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL, NULL), XYL_OK);
     xyl_skeleton_destroy(sk);
     return m;
 }

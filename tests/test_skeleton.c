@@ -18,7 +18,7 @@
 
 #include <cmocka.h>
 
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_skeleton.h"
 #include "test_util.h"
 
 #define SKEL_DIR XYL_TEST_DATA "/skel/"

@@ -15,10 +15,9 @@ static xyl_mesh *build_with(const xyl_skeleton *sk, uint32_t k, xyl_subdivision 
     d.subdivision = sub;
     d.normals = normals;
     d.joints = joints;
-    d.stats = st;
     xyl_mesh *m = NULL;
     xyl_diag diag = {0};
-    xyl_result r = xyl_stems_build(sk, &d, &m, &diag);
+    xyl_result r = xyl_stems_build(sk, &d, &m, st, &diag);
     if (r != XYL_OK) fail_msg("build: %s: %s", xyl_result_string(r), diag.message);
     return m;
 }
@@ -523,10 +522,9 @@ static void crossing_roots_are_left_and_reported(void **state)
     xyl_skeleton *sk = skeleton_of(nodes, 4);
     xyl_stems_desc d = {0};
     xyl_stems_stats st;
-    d.stats = &st;
     xyl_diag diag = {0};
     xyl_mesh *m = NULL;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_OK);
+    assert_int_equal(xyl_stems_build(sk, &d, &m, &st, &diag), XYL_OK);
     so_tally t = joint_tally(sk, m);
     assert_true(t.joint > 0);
     assert_int_equal(st.joint_pairs_left, t.joint);
@@ -847,7 +845,7 @@ static void subdivision_limit_keeps_the_skeleton_radius(void **state)
             sd.subdivision = schemes[s];
             sd.keep_control_points = true;
             xyl_mesh *m = NULL;
-            assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL), XYL_OK);
+            assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL, NULL), XYL_OK);
             for (int level = 0; level < 5; ++level) {
                 xyl_subdivide_desc fd = {0};
                 fd.scheme = schemes[s];
@@ -883,7 +881,7 @@ static void subdivided_vertices_sit_on_the_limit_surface(void **state)
             sd.subdivision = XYL_SUBDIVIDE_CATMARK;
             sd.keep_control_points = control != 0;
             xyl_mesh *m = NULL;
-            assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL), XYL_OK);
+            assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL, NULL), XYL_OK);
             double worst = 0.0;
             for (size_t v = 0; v < m->vertex_count; ++v) {
                 xyl_vec3 p = m->positions[v];
@@ -1259,7 +1257,7 @@ static void identical_input_gives_identical_meshes(void **state)
 
 /* tests/stems_scalar.c: xyl_stems_build compiled with its scalar loops only. */
 xyl_result xyl__stems_build_scalar(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                                   xyl_mesh **out, xyl_diag *diag);
+                                   xyl_mesh **out, xyl_stems_stats *stats, xyl_diag *diag);
 
 /* The SSE2 loops (ring vertices, band normals, unit normals, triangulated view) give the bits
  * of the scalar loops they stand for, which other targets run: the library's mesher against a
@@ -1282,7 +1280,7 @@ static void simd_loops_give_the_scalar_bits(void **state)
                 d.normals = mode;
                 d.joints = XYL_JOINTS_UNCHECKED; /* as build() */
                 xyl_diag diag = {0};
-                xyl_result r = xyl__stems_build_scalar(sk, &d, &plain, &diag);
+                xyl_result r = xyl__stems_build_scalar(sk, &d, &plain, NULL, &diag);
                 if (r != XYL_OK) fail_msg("scalar build: %s: %s", xyl_result_string(r), diag.message);
                 char what[96];
                 snprintf(what, sizeof what, "%s k = %u %s normals", name, ks[ki],
@@ -1306,16 +1304,16 @@ static void bad_options_and_limits_return_their_codes(void **state)
     xyl_mesh *m = (xyl_mesh *)(uintptr_t)1;
     xyl_diag diag = {0};
     d.sides = 2;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
     d.sides = 33;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
     d.sides = 4;
     d.limits.max_vertices = 1000;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL, &diag), XYL_ERR_LIMIT_EXCEEDED);
     d.limits.max_vertices = 0;
     d.normals = (xyl_normal_mode)7;
-    assert_int_equal(xyl_stems_build(sk, &d, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_stems_build(NULL, NULL, &m, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_stems_build(sk, &d, &m, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_stems_build(NULL, NULL, &m, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
     assert_ptr_equal(m, (xyl_mesh *)(uintptr_t)1);
     xyl_skeleton_destroy(sk);
 }
@@ -1354,9 +1352,9 @@ static void meshes_return_every_mapped_block(void **state)
     xyl_mesh *plain = NULL, *cc = NULL;
     xyl_stems_desc d = {0};
     d.sides = 8;
-    assert_int_equal(xyl_stems_build(sk, &d, &plain, NULL), XYL_OK);
+    assert_int_equal(xyl_stems_build(sk, &d, &plain, NULL, NULL), XYL_OK);
     d.subdivision = XYL_SUBDIVIDE_CATMARK;
-    assert_int_equal(xyl_stems_build(sk, &d, &cc, NULL), XYL_OK);
+    assert_int_equal(xyl_stems_build(sk, &d, &cc, NULL, NULL), XYL_OK);
 #if defined(XYL__LARGE_BLOCKS)
     assert_true(xyl__alloc_blocks_in_use() > before); /* the test sees the blocks */
 #endif
@@ -1392,7 +1390,7 @@ static void build_survives_every_allocation_failure(void **state)
             d.joints = modes[i].joints;
             d.alloc = (xyl_allocator){count_alloc, count_free, &c};
             xyl_mesh *m = (xyl_mesh *)(uintptr_t)1;
-            xyl_result r = xyl_stems_build(sk, &d, &m, NULL);
+            xyl_result r = xyl_stems_build(sk, &d, &m, NULL, NULL);
             if (r == XYL_OK) {
                 xyl_mesh_destroy(m);
                 assert_int_equal(c.allocs, c.frees);

@@ -12,7 +12,7 @@
 #include <cmocka.h>
 
 #include "subdivide.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_mesh.h"
 
 #define PI 3.14159265358979323846
 

@@ -72,7 +72,7 @@ static xyl_mesh *skel_mesh(const char *name, uint32_t sides)
     xyl_stems_desc sd = {0};
     sd.sides = sides;
     xyl_mesh *m = NULL;
-    expect(xyl_stems_build(sk, &sd, &m, &d), XYL_OK, &d);
+    expect(xyl_stems_build(sk, &sd, &m, NULL, &d), XYL_OK, &d);
     xyl_skeleton_destroy(sk);
     return m;
 }

@@ -15,6 +15,7 @@
 #include <cmocka.h>
 
 #include <xylem/xyl_lsystem.h>
+#include <xylem/xyl_stems.h>
 
 /* 1 in AddressSanitizer builds (scripts/test.sh stage 2), where suites that run 10-50x slower
  * trim their slowest matrices; Release runs them whole. */
@@ -141,7 +142,7 @@ static inline xyl_mesh *tu_tree_mesh(uint32_t depth, uint32_t sides, xyl_subdivi
     sd.sides = sides;
     sd.subdivision = subdivision;
     xyl_mesh *m = NULL;
-    assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL), XYL_OK);
+    assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL, NULL), XYL_OK);
     xyl_skeleton_destroy(sk);
     xyl_lstring_destroy(s);
     xyl_grammar_destroy(g);

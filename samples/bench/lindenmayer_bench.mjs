@@ -1,4 +1,4 @@
-// Peer benchmark for samples/bench_lsystem: derives a deterministic, non-parametric L-system with
+// Peer benchmark for samples/bench/bench_lsystem.c: derives a deterministic, non-parametric L-system with
 // the npm package `lindenmayer` and prints one parseable line.
 //
 //   node lindenmayer_bench.mjs <axiom> <depth> <repeats> <pred>=<successor> [...]

@@ -1606,7 +1606,7 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
 }
 
 xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                           xyl_mesh **out, xyl_diag *diag)
+                           xyl_mesh **out, xyl_stems_stats *stats, xyl_diag *diag)
 {
     static const xyl_stems_desc zero;
     if (!desc) desc = &zero;
@@ -1620,6 +1620,6 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     } else {
         r = build_checked(skeleton, desc, out, &st, diag);
     }
-    if (!r && desc->stats) *desc->stats = st;
+    if (!r && stats) *stats = st;
     return r;
 }

@@ -3,6 +3,7 @@
 #define XYL_STEMS_INTERNAL_H
 
 #include "mesh_internal.h"
+#include "xylem/xyl_stems.h"
 
 /* One ring of a branch tube, and the patch bookkeeping of the band that follows it. */
 typedef struct stems_ring {

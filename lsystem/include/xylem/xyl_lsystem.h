@@ -29,8 +29,8 @@
 
 #include <stdbool.h>
 
-#include <xylem/xyl_common.h>
-#include <xylem/xyl_stems.h>
+#include <xylem/xyl_core.h>
+#include <xylem/xyl_skeleton.h>
 
 #ifdef __cplusplus
 extern "C" {

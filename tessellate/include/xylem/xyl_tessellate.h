@@ -23,8 +23,8 @@
 #ifndef XYL_TESSELLATE_H
 #define XYL_TESSELLATE_H
 
-#include "xylem/xyl_common.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_core.h"
+#include "xylem/xyl_mesh.h"
 #include "xyl_tess_shared.h" /* shaders/ in the source tree, next to this file once installed */
 
 #ifdef __cplusplus

@@ -3,9 +3,9 @@
 #define XYL_SKELETON_INTERNAL_H
 
 #include "xyl_internal.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_skeleton.h"
 
-/* Documented defaults of xyl_skeleton_limits (xyl_stems.h), shared by every producer. */
+/* Documented defaults of xyl_skeleton_limits (xyl_skeleton.h), shared by every producer. */
 #define XYL__SKEL_DEFAULT_MAX_NODES (UINT64_C(1) << 24)
 #define XYL__SKEL_DEFAULT_MAX_LEAVES (UINT64_C(1) << 24)
 

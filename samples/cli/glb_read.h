@@ -5,7 +5,7 @@
 
 #include <stddef.h>
 
-#include <xylem/xyl_stems.h>
+#include <xylem/xyl_mesh.h>
 
 #ifdef __cplusplus
 extern "C" {

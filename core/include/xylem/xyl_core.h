@@ -1,4 +1,4 @@
-/* xyl_common.h: the types every xylem module shares.
+/* xyl_core.h: the types every xylem module shares.
  *
  * How to use
  *   - Every fallible call returns an xyl_result; XYL_OK is 0. xyl_result_string() names a code.
@@ -10,8 +10,8 @@
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
  */
-#ifndef XYL_COMMON_H
-#define XYL_COMMON_H
+#ifndef XYL_CORE_H
+#define XYL_CORE_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -93,4 +93,4 @@ typedef struct xyl_vec3 {
 }
 #endif
 
-#endif /* XYL_COMMON_H */
+#endif /* XYL_CORE_H */

@@ -2,7 +2,7 @@
 #include <string.h>
 
 #include "skeleton_internal.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_skeleton.h"
 
 
 static xyl_result validate(const xyl_skeleton_desc *d, xyl_diag *diag)

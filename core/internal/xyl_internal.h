@@ -9,7 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "xylem/xyl_common.h"
+#include "xylem/xyl_core.h"
 
 /* Scale-relative tolerances, in one place. */
 #define XYL__EPS_REL 1e-12       /* relative tolerance on double lengths */

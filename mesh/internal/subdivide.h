@@ -1,4 +1,4 @@
-/* One uniform level of subdivision through OpenSubdiv Far (stems/src/subdivide.cpp, one of two C++
+/* One uniform level of subdivision through OpenSubdiv Far (mesh/src/subdivide.cpp, one of two C++
  * files of the library). Not installed. See docs/subdivision.md. */
 #ifndef XYL_SUBDIVIDE_H
 #define XYL_SUBDIVIDE_H

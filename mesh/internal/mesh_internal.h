@@ -5,7 +5,7 @@
 #include <math.h>
 
 #include "xyl_internal.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_mesh.h"
 
 #define XYL__MESH_DEFAULT_MAX_VERTICES (UINT64_C(1) << 26)
 #define XYL__MESH_DEFAULT_MAX_FACES (UINT64_C(1) << 26)

@@ -15,6 +15,7 @@
 #include <time.h>
 
 #include <xylem/xyl_lsystem.h>
+#include <xylem/xyl_stems.h>
 #include <xylem/xyl_tess_gl.h>
 #include <xylem/xyl_tess_vk.h>
 #include <xylem/xyl_tessellate.h>
@@ -539,9 +540,8 @@ static int cmd_mesh(const options *o)
     xyl_diag d = {0};
     xyl_stems_stats st = {0};
     xyl_stems_desc desc = o->stems;
-    desc.stats = &st;
     if (!rc) {
-        xyl_result r = xyl_stems_build(sk, &desc, &m, &d);
+        xyl_result r = xyl_stems_build(sk, &desc, &m, &st, &d);
         if (r) rc = report(source, r, &d);
     }
     double t2 = now_seconds();
@@ -767,7 +767,7 @@ static int load_mesh(const options *o, xyl_mesh **mesh, const char **source)
     int rc = load_skeleton(o, &sk, source);
     if (rc) return rc;
     xyl_diag d = {0};
-    xyl_result r = xyl_stems_build(sk, &o->stems, mesh, &d);
+    xyl_result r = xyl_stems_build(sk, &o->stems, mesh, NULL, &d);
     xyl_skeleton_destroy(sk);
     return r ? report(*source, r, &d) : 0;
 }

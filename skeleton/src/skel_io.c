@@ -10,13 +10,13 @@
 
 #include "float_text.h"
 #include "skeleton_internal.h"
-#include "xylem/xyl_stems.h"
+#include "xylem/xyl_skeleton.h"
 
 #define SKEL_VERSION 1
 /* A .skel file of the default limits' size is far below this; larger files are refused before
  * they are read into memory. */
 #define MAX_FILE_BYTES ((size_t)1 << 30)
-/* The defaults xyl_stems.h documents for xyl_skeleton_limits (skeleton.c applies the same). */
+/* The defaults xyl_skeleton.h documents for xyl_skeleton_limits (skeleton.c applies the same). */
 /* The shortest records with their line break ("n 0 -1 0 0 0 1\n"): the remaining text bounds
  * how many records it can hold, so an announced count never reserves more memory than that. */
 #define MIN_NODE_RECORD_BYTES 14

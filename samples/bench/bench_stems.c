@@ -121,6 +121,7 @@ typedef struct mesh_job {
     const xyl_skeleton *sk;
     xyl_stems_desc desc;
     size_t vertices, triangles; /* of the last mesh built */
+    xyl_stems_stats stats;      /* of the last mesh built */
 } mesh_job;
 
 static xyl_result mesh_once(void *ctx, double *seconds, xyl_diag *diag)
@@ -128,7 +129,7 @@ static xyl_result mesh_once(void *ctx, double *seconds, xyl_diag *diag)
     mesh_job *j = ctx;
     xyl_mesh *m = NULL;
     double t0 = now_s();
-    xyl_result r = xyl_stems_build(j->sk, &j->desc, &m, diag);
+    xyl_result r = xyl_stems_build(j->sk, &j->desc, &m, &j->stats, diag);
     *seconds = now_s() - t0;
     if (r) return r;
     j->vertices = m->vertex_count;
@@ -153,7 +154,7 @@ static xyl_result pipeline_once(void *ctx, double *seconds, xyl_diag *diag)
     double t0 = now_s();
     xyl_result r = derive_at(j->g, j->depth, &s, diag);
     if (!r) r = interpret(j->g, s, &sk, diag);
-    if (!r) r = xyl_stems_build(sk, &unchecked, &m, diag);
+    if (!r) r = xyl_stems_build(sk, &unchecked, &m, NULL, diag);
     *seconds = now_s() - t0;
     if (!r) j->triangles = m->tri_view_count;
     xyl_mesh_destroy(m);
@@ -316,8 +317,6 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
         desc.sides = variants[i].sides;
         desc.subdivision = variants[i].scheme;
         desc.joints = variants[i].joints;
-        xyl_stems_stats st = {0};
-        desc.stats = &st;
         mesh_job j = {0};
         timing t = {0};
         if ((r = measure_mesh(o, sk, &desc, &j, &t, &diag))) {
@@ -328,9 +327,9 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
         print_mesh_row(variants[i].label, segments_of(sk), j.vertices, j.triangles, &t);
         if (desc.joints == XYL_JOINTS_CHECKED)
             printf("%-14s %u builds, %zu pairs at joints, %u laterals start later, %u left out, "
-                   "%zu of %zu faces kept\n", "", st.builds, st.joint_pairs_first,
-                   st.laterals_started_later, st.branches_dropped, st.faces_checked,
-                   st.faces_first);
+                   "%zu of %zu faces kept\n", "", j.stats.builds, j.stats.joint_pairs_first,
+                   j.stats.laterals_started_later, j.stats.branches_dropped,
+                   j.stats.faces_checked, j.stats.faces_first);
     }
     xyl_skeleton_destroy(sk);
     return failures;
@@ -453,7 +452,7 @@ static xyl_result triangles_at(const xyl_grammar *g, uint32_t depth, tri_counts 
     xyl_skeleton *sk = NULL;
     xyl_mesh *m = NULL;
     xyl_result r = grow(g, depth, &sk, diag);
-    if (!r) r = xyl_stems_build(sk, &unchecked, &m, diag);
+    if (!r) r = xyl_stems_build(sk, &unchecked, &m, NULL, diag);
     if (!r) tc->by_depth[depth] = m->tri_view_count;
     xyl_mesh_destroy(m);
     xyl_skeleton_destroy(sk);

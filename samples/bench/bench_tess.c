@@ -21,6 +21,7 @@
 
 #include "bench_common.h"
 #include <xylem/xyl_lsystem.h>
+#include <xylem/xyl_stems.h>
 #include <xylem/xyl_tess_gl.h>
 #include <xylem/xyl_tess_vk.h>
 #include <xylem/xyl_tessellate.h>
@@ -107,7 +108,7 @@ static xyl_mesh *mesh_of(const xyl_skeleton *sk, uint32_t k, uint32_t subdiv)
     sd.subdivision = (xyl_subdivision)subdiv;
     xyl_mesh *m = NULL;
     xyl_diag d = {0};
-    xyl_result r = xyl_stems_build(sk, &sd, &m, &d);
+    xyl_result r = xyl_stems_build(sk, &sd, &m, NULL, &d);
     if (r) die("stems", r, &d);
     return m;
 }
