@@ -11,7 +11,7 @@
 
 #include <cmocka.h>
 
-#include "xylem/xyl_mesh.h"
+#include "xylem/xyl_stems.h"
 
 #define PI 3.14159265358979323846
 
@@ -1416,6 +1416,42 @@ static void bounds_cover_every_position(void **state)
     builder_free(&b);
 }
 
+#ifndef XYL_HAVE_OPENSUBDIV
+/* A build without OpenSubdiv (XYL_WITH_OPENSUBDIV=OFF) says so instead of subdividing, both in
+ * xyl_mesh_subdivide and in a stem build that asks for pre-subdivision. */
+static void subdivision_says_it_is_not_built(void **state)
+{
+    (void)state;
+    builder b = {0};
+    add_cube(&b, 0, 0, 0, 1);
+    xyl_mesh *m = make_mesh(&b), *out = NULL;
+    xyl_subdivide_desc sd = {0};
+    sd.scheme = XYL_SUBDIVIDE_CATMARK;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_mesh_subdivide(m, &sd, &out, &diag), XYL_ERR_UNSUPPORTED);
+    assert_null(out);
+    assert_non_null(strstr(diag.message, "XYL_WITH_OPENSUBDIV=OFF"));
+    xyl_skel_node nodes[2] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0}};
+    xyl_skeleton_desc skd = {0};
+    skd.nodes = nodes;
+    skd.node_count = 2;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&skd, &sk, NULL), XYL_OK);
+    xyl_stems_desc md = {0};
+    md.subdivision = XYL_SUBDIVIDE_LOOP;
+    memset(&diag, 0, sizeof diag);
+    assert_int_equal(xyl_stems_build(sk, &md, &out, NULL, &diag), XYL_ERR_UNSUPPORTED);
+    assert_null(out);
+    assert_non_null(strstr(diag.message, "XYL_WITH_OPENSUBDIV=OFF"));
+    md.subdivision = XYL_SUBDIVIDE_NONE;
+    assert_int_equal(xyl_stems_build(sk, &md, &out, NULL, &diag), XYL_OK);
+    xyl_mesh_destroy(out);
+    xyl_skeleton_destroy(sk);
+    xyl_mesh_destroy(m);
+    builder_free(&b);
+}
+#endif
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1467,6 +1503,9 @@ int main(void)
         cmocka_unit_test(self_intersections_count_every_pair_of_a_stack_of_overlapping_triangles),
         cmocka_unit_test(self_intersections_reject_bad_arguments),
         cmocka_unit_test(a_bumpy_sphere_of_100k_triangles_is_closed_and_free_of_intersections),
+#ifndef XYL_HAVE_OPENSUBDIV
+        cmocka_unit_test(subdivision_says_it_is_not_built),
+#endif
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

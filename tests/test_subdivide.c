@@ -701,10 +701,10 @@ static void catmark_ring_radius_follows_the_vertex_rule(void **state)
     }
 }
 
-/* ARCHITECTURE §5: a k-sided ring of a long tube shrinks to (4 + 2 cos(2 pi / k)) / 6 of its
- * radius on the limit surface (the cubic B-spline limit rule (1, 4, 1) / 6 around the ring, the
- * axial direction being constant). The mesher inflates rings by the inverse, so the factor is
- * checked against OpenSubdiv's own limit evaluation. */
+/* A k-sided ring of a long tube shrinks to (4 + 2 cos(2 pi / k)) / 6 of its radius at a ring
+ * vertex of the limit surface (the cubic B-spline limit rule (1, 4, 1) / 6 around the ring, the
+ * axial direction being constant): the closed form is checked against OpenSubdiv's own limit
+ * evaluation. */
 static void limit_radius_factor_matches_opensubdiv(void **state)
 {
     (void)state;

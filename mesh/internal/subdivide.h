@@ -39,8 +39,9 @@ xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bo
 
 /* Measures, with OpenSubdiv's own limit evaluation (Far::PrimvarRefiner::Limit after one
  * Catmark level), the limit radius of a mid-section ring vertex of a long capped prism whose
- * k-gon rings have radius 1, and writes it to *factor. ARCHITECTURE §5 predicts
- * (4 + 2 cos(2π/k)) / 6; the mesher inflates rings by the inverse. k in 3..32, else
+ * k-gon rings have radius 1, and writes it to *factor. The cubic B-spline limit rule predicts
+ * (4 + 2 cos(2π/k)) / 6 (docs/subdivision.md); the mesher inflates rings by the inverse of the
+ * MEAN limit radius (xyl__subdivide_mean_limit_radius), not of this vertex factor. k in 3..32, else
  * XYL_ERR_INVALID_ARGUMENT; XYL_ERR_OUT_OF_MEMORY, XYL_ERR_UNSUPPORTED as above. */
 xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor);
 

@@ -109,6 +109,7 @@ static xyl_mesh *mesh_of(const xyl_skeleton *sk, uint32_t k, uint32_t subdiv)
     xyl_mesh *m = NULL;
     xyl_diag d = {0};
     xyl_result r = xyl_stems_build(sk, &sd, &m, NULL, &d);
+    if (r == XYL_ERR_UNSUPPORTED && subdiv) return NULL; /* a build without OpenSubdiv */
     if (r) die("stems", r, &d);
     return m;
 }
@@ -489,6 +490,13 @@ int main(int argc, char **argv)
         if (o.quick && ks[ki] != 4) continue;
         for (uint32_t sdv = 0; sdv < 3; ++sdv) {
             xyl_mesh *am = mesh_of(arc, ks[ki], sdv), *tm = mesh_of(tree, ks[ki], sdv);
+            if (!am || !tm) {
+                printf("| %u | %s | skipped: this xylem is built without OpenSubdiv |\n", ks[ki],
+                       subdiv_name[sdv]);
+                xyl_mesh_destroy(am);
+                xyl_mesh_destroy(tm);
+                continue;
+            }
             float lo[3], hi[3];
             xyl_mesh_bounds(tm, lo, hi);
             xyl_tess_camera cam;
