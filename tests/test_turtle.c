@@ -271,7 +271,7 @@ static void frame_stays_orthonormal_after_a_million_random_turns(void **state)
     for (int i = 0; i < 1000000; ++i) {
         uint64_t r = splitmix64(&seed);
         double angle = ((double)(r >> 11) * 0x1p-53 - 0.5) * 2.0 * XYL__PI;
-        assert_true(lsys_turtle_rotate(&f, symbols[r % 6], angle));
+        assert_true(xyl__lsys_turtle_rotate(&f, symbols[r % 6], angle));
         double e = xyl__frame_error(&f);
         if (e > worst) worst = e;
     }
@@ -279,7 +279,7 @@ static void frame_stays_orthonormal_after_a_million_random_turns(void **state)
     print_message("worst frame error over 10^6 turns: %.3g\n", worst);
     assert_true(worst < 1e-9);
     assert_true(handed < 1e-9);
-    assert_false(lsys_turtle_rotate(&f, 'F', 1.0));
+    assert_false(xyl__lsys_turtle_rotate(&f, 'F', 1.0));
 }
 
 /* ---- radii --------------------------------------------------------------------------------- */

@@ -324,7 +324,7 @@ static xyl_result emit_successor(deriver *d, const lsys_prod *pr)
         for (uint32_t k = 0; k < m->nparam; ++k) {
             const lsys_expr *e = &g->exprs[m->expr + k];
             double v = e->constant ? g->code[e->first].k
-                                   : lsys_eval(g, e, d->vars, d->stack, &d->rng);
+                                   : xyl__lsys_eval(g, e, d->vars, d->stack, &d->rng);
             if (!isfinite(v))
                 return xyl__fail(d->diag, XYL_ERR_NON_FINITE, pr->line, 0, -1,
                                  "production on line %u gave parameter %u of '%c' the value %g at "
@@ -349,7 +349,7 @@ static xyl_result choose(deriver *d, const lsys_prod *pr, const lsys_prod **chos
     double total = 0.0;
     size_t n = 0;
     for (const lsys_prod *q = pr;; q = &g->prods[q->group_next]) {
-        double w = lsys_eval(g, &g->exprs[q->weight], d->vars, d->stack, &d->rng);
+        double w = xyl__lsys_eval(g, &g->exprs[q->weight], d->vars, d->stack, &d->rng);
         d->weights[n++] = w;
         if (!isfinite(w))
             return xyl__fail(d->diag, XYL_ERR_NON_FINITE, q->line, 0, -1,
@@ -385,7 +385,7 @@ static xyl_result rewrite_general(deriver *d, size_t i, bool *done)
         if (pr->left_count && !match_left(d, pr, i, d->vars)) continue;
         if (pr->right_count && !match_right(d, pr, i, d->vars)) continue;
         bind(d->cur, i, pr->pred_var, d->vars);
-        if (pr->cond >= 0 && lsys_eval(g, &g->exprs[pr->cond], d->vars, d->stack, &d->rng) == 0.0)
+        if (pr->cond >= 0 && xyl__lsys_eval(g, &g->exprs[pr->cond], d->vars, d->stack, &d->rng) == 0.0)
             continue;
         if (pr->is_constant) {
             *done = true;
@@ -639,7 +639,7 @@ xyl_result xyl_lsystem_derive(const xyl_grammar *g, const xyl_derive_desc *desc,
     d.g = g;
     d.diag = diag;
     d.limits = desc->limits;
-    lsys_resolve_limits(&d.limits, &g->limits);
+    xyl__lsys_resolve_limits(&d.limits, &g->limits);
     uint32_t depth = desc->has_depth ? desc->depth : g->info.depth;
     if (depth > d.limits.max_depth)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,

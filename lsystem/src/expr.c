@@ -6,7 +6,7 @@
 
 #include "lsys_parse.h"
 
-bool lsys_is_symbol(char c)
+bool xyl__lsys_is_symbol(char c)
 {
     if (lsys_is_alpha(c) || lsys_is_digit(c)) return true;
     return c != '\0' && strchr("+-&^\\/|[]!$%'\".~?*@_={}`", c) != NULL;
@@ -16,7 +16,7 @@ bool lsys_is_symbol(char c)
 
 /* Rewrites the literal as "<digits>e<exp>" without a radix character, so strtod gives the
  * correctly rounded value whatever the process locale is. */
-xyl_result lsys_parse_number(lsys_parser *p, size_t *pos, size_t end, double *out)
+xyl_result xyl__lsys_parse_number(lsys_parser *p, size_t *pos, size_t end, double *out)
 {
     const char *s = p->src;
     size_t start = *pos, i = *pos;
@@ -34,13 +34,13 @@ xyl_result lsys_parse_number(lsys_parser *p, size_t *pos, size_t end, double *ou
                 --exp10;
             }
     }
-    if (!any) return lsys_error_at(p, start, XYL_ERR_INVALID_GRAMMAR, "expected a number");
+    if (!any) return xyl__lsys_error_at(p, start, XYL_ERR_INVALID_GRAMMAR, "expected a number");
     if (i < end && (s[i] == 'e' || s[i] == 'E')) {
         size_t j = i + 1;
         bool neg = false;
         if (j < end && (s[j] == '+' || s[j] == '-')) neg = s[j++] == '-';
         if (j >= end || !lsys_is_digit(s[j]))
-            return lsys_error_at(p, j, XYL_ERR_INVALID_GRAMMAR, "expected digits after the exponent");
+            return xyl__lsys_error_at(p, j, XYL_ERR_INVALID_GRAMMAR, "expected digits after the exponent");
         long e = 0;
         for (; j < end && lsys_is_digit(s[j]); ++j)
             if (e < 100000) e = e * 10 + (s[j] - '0');
@@ -48,11 +48,11 @@ xyl_result lsys_parse_number(lsys_parser *p, size_t *pos, size_t end, double *ou
         i = j;
     }
     if (i - start > LSYS_MAX_NUMBER_CHARS)
-        return lsys_error_at(p, start, XYL_ERR_INVALID_GRAMMAR, "number literal is too long");
+        return xyl__lsys_error_at(p, start, XYL_ERR_INVALID_GRAMMAR, "number literal is too long");
     snprintf(buf + n, sizeof buf - n, "e%ld", exp10);
     double v = strtod(buf, NULL);
     if (!isfinite(v))
-        return lsys_error_at(p, start, XYL_ERR_NON_FINITE, "number '%.*s' is out of range",
+        return xyl__lsys_error_at(p, start, XYL_ERR_NON_FINITE, "number '%.*s' is out of range",
                              (int)(i - start), s + start);
     *pos = i;
     *out = v;
@@ -74,7 +74,7 @@ static xyl_result emit(compiler *c, uint32_t op, uint32_t arg, double k, int pus
     xyl_grammar *g = c->p->g;
     if (!xyl__grow(&g->alloc, (void **)&g->code, &c->p->code_cap, g->code_count,
                    g->code_count + 1, sizeof *g->code))
-        return lsys_error_at(c->p, c->pos, XYL_ERR_OUT_OF_MEMORY, "out of memory");
+        return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_OUT_OF_MEMORY, "out of memory");
     lsys_insn in = {op, arg, k};
     g->code[g->code_count++] = in;
     c->height = (uint32_t)((int)c->height + push);
@@ -116,17 +116,17 @@ static xyl_result parse_binary(compiler *c, int min_prec, uint32_t depth);
 static xyl_result parse_call(compiler *c, const func_def *f, size_t at, uint32_t depth)
 {
     if (!accept(c, "("))
-        return lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR, "expected '(' after %s",
+        return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR, "expected '(' after %s",
                              f->name);
     for (uint32_t i = 0; i < f->arity; ++i) {
         if (i > 0 && !accept(c, ","))
-            return lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR,
+            return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR,
                                  "%s takes %u arguments", f->name, f->arity);
         xyl_result r = parse_binary(c, 1, depth + 1);
         if (r) return r;
     }
     if (!accept(c, ")"))
-        return lsys_error_at(c->p, at, XYL_ERR_INVALID_GRAMMAR, "%s takes %u argument%s", f->name,
+        return xyl__lsys_error_at(c->p, at, XYL_ERR_INVALID_GRAMMAR, "%s takes %u argument%s", f->name,
                              f->arity, f->arity == 1 ? "" : "s");
     if (f->op == OP_RAND) c->has_var = true; /* never folded */
     return emit(c, f->op, 0, 0.0, 1 - (int)f->arity);
@@ -152,7 +152,7 @@ static xyl_result parse_name(compiler *c, uint32_t depth)
     for (size_t f = 0; f < sizeof funcs / sizeof funcs[0]; ++f)
         if (strlen(funcs[f].name) == n && memcmp(funcs[f].name, s + at, n) == 0)
             return parse_call(c, &funcs[f], at, depth);
-    return lsys_error_at(c->p, at, XYL_ERR_INVALID_GRAMMAR,
+    return xyl__lsys_error_at(c->p, at, XYL_ERR_INVALID_GRAMMAR,
                          "unknown name '%.*s' (not a parameter, #define or function)", (int)n,
                          s + at);
 }
@@ -160,15 +160,15 @@ static xyl_result parse_name(compiler *c, uint32_t depth)
 static xyl_result parse_primary(compiler *c, uint32_t depth)
 {
     if (depth > c->max_depth)
-        return lsys_error_at(c->p, c->pos, XYL_ERR_LIMIT_EXCEEDED,
+        return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_LIMIT_EXCEEDED,
                              "expression nests deeper than the limit of %u", c->max_depth);
     skip(c);
     if (c->pos >= c->end)
-        return lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR, "expected a value");
+        return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR, "expected a value");
     char ch = c->p->src[c->pos];
     if (lsys_is_digit(ch) || ch == '.') {
         double v;
-        xyl_result r = lsys_parse_number(c->p, &c->pos, c->end, &v);
+        xyl_result r = xyl__lsys_parse_number(c->p, &c->pos, c->end, &v);
         return r ? r : emit(c, OP_CONST, 0, v, 1);
     }
     if (lsys_is_alpha(ch) || ch == '_') return parse_name(c, depth);
@@ -177,10 +177,10 @@ static xyl_result parse_primary(compiler *c, uint32_t depth)
         xyl_result r = parse_binary(c, 1, depth + 1);
         if (r) return r;
         if (!accept(c, ")"))
-            return lsys_error_at(c->p, at, XYL_ERR_INVALID_GRAMMAR, "'(' is never closed");
+            return xyl__lsys_error_at(c->p, at, XYL_ERR_INVALID_GRAMMAR, "'(' is never closed");
         return XYL_OK;
     }
-    return lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c' in expression",
+    return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c' in expression",
                          ch);
 }
 
@@ -199,7 +199,7 @@ static xyl_result parse_power(compiler *c, uint32_t depth)
 static xyl_result parse_unary(compiler *c, uint32_t depth)
 {
     if (depth > c->max_depth)
-        return lsys_error_at(c->p, c->pos, XYL_ERR_LIMIT_EXCEEDED,
+        return xyl__lsys_error_at(c->p, c->pos, XYL_ERR_LIMIT_EXCEEDED,
                              "expression nests deeper than the limit of %u", c->max_depth);
     skip(c);
     if (c->pos < c->end) {
@@ -258,7 +258,7 @@ static xyl_result parse_binary(compiler *c, int min_prec, uint32_t depth)
     }
 }
 
-xyl_result lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr *out)
+xyl_result xyl__lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr *out)
 {
     xyl_grammar *g = p->g;
     compiler c = {p, *pos, end, 0, 0, g->limits.max_expr_depth, false};
@@ -267,7 +267,7 @@ xyl_result lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr 
     if (r) return r;
     skip(&c);
     if (c.pos < end && p->src[c.pos] != ',' && p->src[c.pos] != ')')
-        return lsys_error_at(p, c.pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c' in expression",
+        return xyl__lsys_error_at(p, c.pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c' in expression",
                              p->src[c.pos]);
     lsys_expr e = {first, (uint32_t)g->code_count - first, c.max_height, !c.has_var};
     if (e.constant) {
@@ -276,10 +276,10 @@ xyl_result lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr 
         double *heap = NULL;
         if (e.stack > sizeof stack / sizeof stack[0]) {
             heap = xyl__calloc(&g->alloc, e.stack, sizeof *heap);
-            if (!heap) return lsys_error_at(p, *pos, XYL_ERR_OUT_OF_MEMORY, "out of memory");
+            if (!heap) return xyl__lsys_error_at(p, *pos, XYL_ERR_OUT_OF_MEMORY, "out of memory");
             st = heap;
         }
-        double v = lsys_eval(g, &e, NULL, st, NULL);
+        double v = xyl__lsys_eval(g, &e, NULL, st, NULL);
         xyl__free(&g->alloc, heap);
         g->code_count = first + 1;
         g->code[first].op = OP_CONST;
@@ -293,22 +293,22 @@ xyl_result lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr 
     return XYL_OK;
 }
 
-xyl_result lsys_const_expr(lsys_parser *p, size_t *pos, size_t end, double *out)
+xyl_result xyl__lsys_const_expr(lsys_parser *p, size_t *pos, size_t end, double *out)
 {
     uint32_t saved_vars = p->var_count;
     lsys_skip_space(p->src, pos, end);
     size_t at = *pos;
     p->var_count = 0;
     lsys_expr e;
-    xyl_result r = lsys_compile_expr(p, pos, end, &e);
+    xyl_result r = xyl__lsys_compile_expr(p, pos, end, &e);
     p->var_count = saved_vars;
     if (r) return r;
     if (!e.constant)
-        return lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "expected a constant expression");
+        return xyl__lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "expected a constant expression");
     *out = p->g->code[e.first].k;
     p->g->code_count = e.first; /* constants need no code */
     if (!isfinite(*out))
-        return lsys_error_at(p, at, XYL_ERR_NON_FINITE, "expression evaluates to %g", *out);
+        return xyl__lsys_error_at(p, at, XYL_ERR_NON_FINITE, "expression evaluates to %g", *out);
     return XYL_OK;
 }
 
@@ -319,7 +319,7 @@ static inline double truth(bool b)
     return b ? 1.0 : 0.0;
 }
 
-double lsys_eval(const xyl_grammar *g, const lsys_expr *e, const double *vars, double *stack,
+double xyl__lsys_eval(const xyl_grammar *g, const lsys_expr *e, const double *vars, double *stack,
                  lsys_rng *rng)
 {
     const lsys_insn *in = g->code + e->first;

@@ -10,7 +10,7 @@
 #define DEFAULT_DEPTH 4u
 #define DEFAULT_ANGLE_DEG 25.0
 
-void lsys_resolve_limits(xyl_lsystem_limits *l, const xyl_lsystem_limits *base)
+void xyl__lsys_resolve_limits(xyl_lsystem_limits *l, const xyl_lsystem_limits *base)
 {
     static const xyl_lsystem_limits defaults = {
         LSYS_DEFAULT_MAX_DEPTH, LSYS_DEFAULT_MAX_MODULES, LSYS_DEFAULT_MAX_BYTES,
@@ -28,7 +28,7 @@ void lsys_resolve_limits(xyl_lsystem_limits *l, const xyl_lsystem_limits *base)
     }
 }
 
-xyl_result lsys_error_at(lsys_parser *p, size_t at, xyl_result code, const char *fmt, ...)
+xyl_result xyl__lsys_error_at(lsys_parser *p, size_t at, xyl_result code, const char *fmt, ...)
 {
     if (!p->diag) return code;
     char msg[XYL_DIAG_MESSAGE_SIZE];
@@ -48,7 +48,7 @@ xyl_result lsys_error_at(lsys_parser *p, size_t at, xyl_result code, const char 
 
 static xyl_result oom(lsys_parser *p, size_t at)
 {
-    return lsys_error_at(p, at, XYL_ERR_OUT_OF_MEMORY, "out of memory");
+    return xyl__lsys_error_at(p, at, XYL_ERR_OUT_OF_MEMORY, "out of memory");
 }
 
 /* ---- small lexing helpers ------------------------------------------------------------------ */
@@ -111,14 +111,14 @@ static xyl_result parse_list(lsys_parser *p, size_t *pos, size_t end, list_item_
             ++*pos;
             return XYL_OK;
         }
-        return lsys_error_at(p, open, XYL_ERR_INVALID_GRAMMAR, "'(' is never closed");
+        return xyl__lsys_error_at(p, open, XYL_ERR_INVALID_GRAMMAR, "'(' is never closed");
     }
 }
 
 static xyl_result check_arity(lsys_parser *p, size_t at, char sym, uint32_t nparam)
 {
     if (nparam < p->g->limits.max_params) return XYL_OK;
-    return lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "module '%c' has more than %u parameters",
+    return xyl__lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "module '%c' has more than %u parameters",
                          sym, p->g->limits.max_params);
 }
 
@@ -129,7 +129,7 @@ static xyl_result param_expr_item(lsys_parser *p, size_t *pos, size_t end, void 
     if (r) return r;
     if (!GROW(p, exprs, expr_count, expr_cap, p->g->expr_count + 1)) return oom(p, *pos);
     lsys_expr e;
-    r = lsys_compile_expr(p, pos, end, &e);
+    r = xyl__lsys_compile_expr(p, pos, end, &e);
     if (r) return r;
     p->g->exprs[p->g->expr_count++] = e;
     ++m->nparam;
@@ -147,11 +147,11 @@ static xyl_result parse_successor(lsys_parser *p, size_t pos, size_t end, uint32
     uint32_t depth = 0;
     for (lsys_skip_space(s, &pos, end); pos < end; lsys_skip_space(s, &pos, end)) {
         char c = s[pos];
-        if (!lsys_is_symbol(c))
-            return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "'%c' is not a module symbol",
+        if (!xyl__lsys_is_symbol(c))
+            return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "'%c' is not a module symbol",
                                  c >= 32 && c < 127 ? c : '?');
         if (c == ']' && depth == 0)
-            return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "']' without a matching '['");
+            return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "']' without a matching '['");
         if (c == '[') {
             if (depth < 64) open_at[depth] = pos;
             ++depth;
@@ -169,7 +169,7 @@ static xyl_result parse_successor(lsys_parser *p, size_t pos, size_t end, uint32
         g->succs[g->succ_count++] = m;
     }
     if (depth > 0)
-        return lsys_error_at(p, open_at[depth - 1 < 64 ? depth - 1 : 63], XYL_ERR_INVALID_GRAMMAR,
+        return xyl__lsys_error_at(p, open_at[depth - 1 < 64 ? depth - 1 : 63], XYL_ERR_INVALID_GRAMMAR,
                              "'[' is never closed");
     *count = (uint32_t)g->succ_count - *first;
     return XYL_OK;
@@ -178,7 +178,7 @@ static xyl_result parse_successor(lsys_parser *p, size_t pos, size_t end, uint32
 static xyl_result parse_axiom(lsys_parser *p, size_t pos, size_t end)
 {
     xyl_grammar *g = p->g;
-    if (g->axiom) return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "a second axiom");
+    if (g->axiom) return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "a second axiom");
     p->var_count = 0;
     uint32_t first, count;
     size_t succ_base = g->succ_count, expr_base = g->expr_count;
@@ -195,7 +195,7 @@ static xyl_result parse_axiom(lsys_parser *p, size_t pos, size_t end)
         for (uint32_t k = 0; k < m->nparam; ++k) {
             const lsys_expr *e = &g->exprs[m->expr + k];
             if (!e->constant)
-                return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
+                return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
                                      "axiom parameters must be constant");
             g->axiom_params[g->axiom_nparams++] = g->code[e->first].k;
         }
@@ -212,10 +212,10 @@ static xyl_result declare_var(lsys_parser *p, size_t at, size_t n)
 {
     for (uint32_t v = 0; v < p->var_count; ++v)
         if (p->vars[v].n == n && memcmp(p->vars[v].s, p->src + at, n) == 0)
-            return lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "parameter '%.*s' is named twice",
+            return xyl__lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "parameter '%.*s' is named twice",
                                  (int)n, p->src + at);
     if (p->var_count >= LSYS_MAX_VARS)
-        return lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "more than %u parameters in a production",
+        return xyl__lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "more than %u parameters in a production",
                              LSYS_MAX_VARS);
     lsys_name nm = {p->src + at, n};
     p->vars[p->var_count++] = nm;
@@ -227,7 +227,7 @@ static xyl_result formal_item(lsys_parser *p, size_t *pos, size_t end, void *ctx
     lsys_pat *m = ctx;
     lsys_skip_space(p->src, pos, end);
     size_t n = ident_len(p->src, *pos, end);
-    if (n == 0) return lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR, "expected a parameter name");
+    if (n == 0) return xyl__lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR, "expected a parameter name");
     xyl_result r = check_arity(p, *pos, (char)m->sym, m->nparam);
     if (!r) r = declare_var(p, *pos, n);
     if (r) return r;
@@ -246,11 +246,11 @@ static xyl_result parse_pattern(lsys_parser *p, size_t *pos, size_t end, bool br
     for (lsys_skip_space(s, pos, end); *pos < end; lsys_skip_space(s, pos, end)) {
         char c = s[*pos];
         if (c == '<' || c == '>') break;
-        if (!lsys_is_symbol(c))
-            return lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR, "'%c' is not a module symbol",
+        if (!xyl__lsys_is_symbol(c))
+            return xyl__lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR, "'%c' is not a module symbol",
                                  c >= 32 && c < 127 ? c : '?');
         if (!brackets && (c == '[' || c == ']'))
-            return lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR,
+            return xyl__lsys_error_at(p, *pos, XYL_ERR_INVALID_GRAMMAR,
                                  "brackets are allowed only in a right context");
         if (!GROW(p, pats, pat_count, pat_cap, g->pat_count + 1)) return oom(p, *pos);
         lsys_pat m = {(uint8_t)c, 0, (uint16_t)p->var_count};
@@ -278,13 +278,13 @@ static xyl_result parse_head(lsys_parser *p, size_t pos, size_t end, lsys_prod *
         pr->left_first = first;
         pr->left_count = count;
         if (count == 0)
-            return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "empty left context before '<'");
+            return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "empty left context before '<'");
         start = ++pos;
         r = parse_pattern(p, &pos, end, false, &first, &count);
         if (r) return r;
     }
     if (count != 1)
-        return lsys_error_at(p, start, XYL_ERR_INVALID_GRAMMAR,
+        return xyl__lsys_error_at(p, start, XYL_ERR_INVALID_GRAMMAR,
                              count ? "the predecessor must be a single module"
                                    : "missing predecessor");
     const lsys_pat *pred = &p->g->pats[first];
@@ -297,11 +297,11 @@ static xyl_result parse_head(lsys_parser *p, size_t pos, size_t end, lsys_prod *
         r = parse_pattern(p, &pos, end, true, &pr->right_first, &pr->right_count);
         if (r) return r;
         if (pr->right_count == 0)
-            return lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "empty right context after '>'");
+            return xyl__lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "empty right context after '>'");
         if (pos < end)
-            return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", s[pos]);
+            return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", s[pos]);
     } else if (pos < end) {
-        return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", s[pos]);
+        return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", s[pos]);
     }
     return XYL_OK;
 }
@@ -316,10 +316,10 @@ static xyl_result parse_weight(lsys_parser *p, size_t *pos, size_t end, lsys_pro
     size_t open = (*pos)++;
     if (!GROW(p, exprs, expr_count, expr_cap, p->g->expr_count + 1)) return oom(p, *pos);
     lsys_expr e;
-    xyl_result r = lsys_compile_expr(p, pos, end, &e);
+    xyl_result r = xyl__lsys_compile_expr(p, pos, end, &e);
     if (r) return r;
     if (*pos >= end || s[*pos] != ')')
-        return lsys_error_at(p, open, XYL_ERR_INVALID_GRAMMAR, "'(' of the weight is never closed");
+        return xyl__lsys_error_at(p, open, XYL_ERR_INVALID_GRAMMAR, "'(' of the weight is never closed");
     ++*pos;
     pr->weight = (int32_t)p->g->expr_count;
     p->g->exprs[p->g->expr_count++] = e;
@@ -340,7 +340,7 @@ static xyl_result parse_production(lsys_parser *p, size_t pos, size_t end)
     xyl_grammar *g = p->g;
     size_t arrow = find_arrow(s, pos, end);
     if (arrow == end)
-        return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
+        return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
                              "expected a production 'pred -> successor', an 'axiom:' or a "
                              "'#' directive");
     if (!GROW(p, prods, prod_count, prod_cap, g->prod_count + 1)) return oom(p, pos);
@@ -363,10 +363,10 @@ static xyl_result parse_production(lsys_parser *p, size_t pos, size_t end)
         size_t cpos = colon + 1;
         if (!GROW(p, exprs, expr_count, expr_cap, g->expr_count + 1)) return oom(p, cpos);
         lsys_expr e;
-        r = lsys_compile_expr(p, &cpos, arrow, &e);
+        r = xyl__lsys_compile_expr(p, &cpos, arrow, &e);
         if (r) return r;
         if (cpos < arrow)
-            return lsys_error_at(p, cpos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c' in condition",
+            return xyl__lsys_error_at(p, cpos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c' in condition",
                                  s[cpos]);
         pr.cond = (int32_t)g->expr_count;
         g->exprs[g->expr_count++] = e;
@@ -391,28 +391,28 @@ static xyl_result parse_unsigned(lsys_parser *p, size_t pos, size_t end, uint64_
     const char *s = p->src;
     lsys_skip_space(s, &pos, end);
     if (pos >= end || !lsys_is_digit(s[pos]))
-        return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "expected a whole number");
+        return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "expected a whole number");
     uint64_t v = 0;
     size_t at = pos;
     for (; pos < end && lsys_is_digit(s[pos]); ++pos) {
         unsigned d = (unsigned)(s[pos] - '0');
         if (v > (max - d) / 10)
-            return lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "number is larger than %llu",
+            return xyl__lsys_error_at(p, at, XYL_ERR_LIMIT_EXCEEDED, "number is larger than %llu",
                                  (unsigned long long)max);
         v = v * 10 + d;
     }
     lsys_skip_space(s, &pos, end);
-    if (pos < end) return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", s[pos]);
+    if (pos < end) return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", s[pos]);
     *out = v;
     return XYL_OK;
 }
 
 static xyl_result parse_const_line(lsys_parser *p, size_t pos, size_t end, double *out)
 {
-    xyl_result r = lsys_const_expr(p, &pos, end, out);
+    xyl_result r = xyl__lsys_const_expr(p, &pos, end, out);
     lsys_skip_space(p->src, &pos, end);
     if (!r && pos < end)
-        return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", p->src[pos]);
+        return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", p->src[pos]);
     return r;
 }
 
@@ -421,7 +421,7 @@ static xyl_result parse_define(lsys_parser *p, size_t pos, size_t end)
     const char *s = p->src;
     lsys_skip_space(s, &pos, end);
     size_t n = ident_len(s, pos, end);
-    if (n == 0) return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "#define needs a name");
+    if (n == 0) return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "#define needs a name");
     lsys_define d = {{s + pos, n}, 0.0};
     xyl_result r = parse_const_line(p, pos + n, end, &d.value);
     if (r) return r;
@@ -436,8 +436,8 @@ static xyl_result parse_ignore(lsys_parser *p, size_t pos, size_t end)
 {
     for (lsys_skip_space(p->src, &pos, end); pos < end; lsys_skip_space(p->src, &pos, end)) {
         char c = p->src[pos];
-        if (!lsys_is_symbol(c) || c == '[' || c == ']')
-            return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
+        if (!xyl__lsys_is_symbol(c) || c == '[' || c == ']')
+            return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
                                  "#ignore takes module symbols other than brackets");
         p->g->ignore[(uint8_t)c] = 1;
         ++pos;
@@ -454,7 +454,7 @@ static xyl_result parse_tropism(lsys_parser *p, size_t pos, size_t end)
         /* values are separated by spaces or commas; a value may be "-1" */
         while (stop < end && !lsys_is_space(p->src[stop]) && p->src[stop] != ',') ++stop;
         if (stop == pos)
-            return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
+            return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR,
                                  "#tropism takes four numbers: x y z elasticity");
         xyl_result r = parse_const_line(p, pos, stop, &v[i]);
         if (r) return r;
@@ -463,7 +463,7 @@ static xyl_result parse_tropism(lsys_parser *p, size_t pos, size_t end)
         if (pos < end && p->src[pos] == ',') ++pos;
     }
     lsys_skip_space(p->src, &pos, end);
-    if (pos < end) return lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", p->src[pos]);
+    if (pos < end) return xyl__lsys_error_at(p, pos, XYL_ERR_INVALID_GRAMMAR, "unexpected '%c'", p->src[pos]);
     xyl_grammar_info *in = &p->g->info;
     in->tropism[0] = v[0];
     in->tropism[1] = v[1];
@@ -496,7 +496,7 @@ static xyl_result parse_directive(lsys_parser *p, size_t pos, size_t end)
     if (word_is(s, pos, n, "width")) {
         r = parse_const_line(p, arg, end, &in->width);
         if (!r && !(in->width > 0.0))
-            return lsys_error_at(p, arg, XYL_ERR_INVALID_GRAMMAR, "#width must be > 0");
+            return xyl__lsys_error_at(p, arg, XYL_ERR_INVALID_GRAMMAR, "#width must be > 0");
         return r;
     }
     if (word_is(s, pos, n, "depth")) {
@@ -505,7 +505,7 @@ static xyl_result parse_directive(lsys_parser *p, size_t pos, size_t end)
         return r;
     }
     if (word_is(s, pos, n, "seed")) return parse_unsigned(p, arg, end, UINT64_MAX, &in->seed);
-    return lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "unknown directive '#%.*s'", (int)n,
+    return xyl__lsys_error_at(p, at, XYL_ERR_INVALID_GRAMMAR, "unknown directive '#%.*s'", (int)n,
                          s + pos);
 }
 
@@ -553,7 +553,7 @@ static xyl_result parse_lines(lsys_parser *p)
         while (eol < p->len && s[eol] != '\n') {
             if (s[eol] == '\0') {
                 p->line_start = pos;
-                return lsys_error_at(p, eol, XYL_ERR_INVALID_GRAMMAR, "NUL byte in grammar text");
+                return xyl__lsys_error_at(p, eol, XYL_ERR_INVALID_GRAMMAR, "NUL byte in grammar text");
             }
             ++eol;
         }
@@ -611,7 +611,7 @@ static xyl_result build_groups(lsys_parser *p)
             p->line = b->line;
             p->line_start = (size_t)(p->heads[i].s - p->src);
             for (size_t k = p->line_start; k > 0 && p->src[k - 1] != '\n'; --k) p->line_start = k - 1;
-            r = lsys_error_at(p, (size_t)(p->heads[i].s - p->src), XYL_ERR_INVALID_GRAMMAR,
+            r = xyl__lsys_error_at(p, (size_t)(p->heads[i].s - p->src), XYL_ERR_INVALID_GRAMMAR,
                               "same predecessor, context and condition as line %u; weight both "
                               "(stochastic) or remove one",
                               a->line);
@@ -722,7 +722,7 @@ static xyl_result finalize(lsys_parser *p)
     xyl_grammar *g = p->g;
     if (!g->axiom) {
         p->line_start = p->len;
-        return lsys_error_at(p, p->len, XYL_ERR_INVALID_GRAMMAR, "the grammar has no 'axiom:' line");
+        return xyl__lsys_error_at(p, p->len, XYL_ERR_INVALID_GRAMMAR, "the grammar has no 'axiom:' line");
     }
     xyl_result r = build_groups(p);
     if (r) return r;
@@ -769,7 +769,7 @@ static xyl_result check_desc(const xyl_grammar_desc *desc, xyl_grammar **out, xy
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "desc, desc->source and out must not be NULL");
     *limits = desc->limits;
-    lsys_resolve_limits(limits, NULL);
+    xyl__lsys_resolve_limits(limits, NULL);
     if (limits->max_expr_depth > HARD_MAX_EXPR_DEPTH || limits->max_params > LSYS_HARD_MAX_PARAMS)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "max_expr_depth must be <= %u and max_params <= %u", HARD_MAX_EXPR_DEPTH,

@@ -50,7 +50,7 @@ static inline const double *lsys_par(const xyl_lstring *s, size_t i)
 }
 
 /* Fills limits' zero fields from base, then from the built-in defaults. */
-void lsys_resolve_limits(xyl_lsystem_limits *limits, const xyl_lsystem_limits *base);
+void xyl__lsys_resolve_limits(xyl_lsystem_limits *limits, const xyl_lsystem_limits *base);
 
 /* ---- expressions --------------------------------------------------------------------------- */
 
@@ -181,7 +181,7 @@ static inline double lsys_rng_unit(lsys_rng *r)
 
 /* Evaluates e with variables vars and a stack of at least e->stack doubles. rng may be NULL
  * when the expression has no rand(). */
-double lsys_eval(const xyl_grammar *g, const lsys_expr *e, const double *vars, double *stack,
+double xyl__lsys_eval(const xyl_grammar *g, const lsys_expr *e, const double *vars, double *stack,
                  lsys_rng *rng);
 
 /* The grammar parser's state (lsys_parse.h). */

@@ -40,7 +40,7 @@ struct lsys_parser {
 };
 
 /* Reports an error at byte offset at of the source (line/column from the current line). */
-xyl_result lsys_error_at(lsys_parser *p, size_t at, xyl_result code, const char *fmt, ...)
+xyl_result xyl__lsys_error_at(lsys_parser *p, size_t at, xyl_result code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
 #endif
@@ -64,7 +64,7 @@ static inline bool lsys_is_ident_char(char c)
 }
 /* Module symbols: letters, digits (ABOP 1.31 uses 0 and 1) and the ABOP punctuation.
  * Parentheses, ',', ':', ';', '#', '<', '>' and whitespace are syntax. */
-bool lsys_is_symbol(char c);
+bool xyl__lsys_is_symbol(char c);
 
 /* Skips spaces and tabs in [*pos, end). */
 static inline void lsys_skip_space(const char *s, size_t *pos, size_t end)
@@ -73,13 +73,13 @@ static inline void lsys_skip_space(const char *s, size_t *pos, size_t end)
 }
 
 /* Parses a decimal literal (no sign) at *pos; locale-independent and correctly rounded. */
-xyl_result lsys_parse_number(lsys_parser *p, size_t *pos, size_t end, double *out);
+xyl_result xyl__lsys_parse_number(lsys_parser *p, size_t *pos, size_t end, double *out);
 
 /* Compiles an expression from [*pos, end) into the grammar's code array, stopping at a top-level
  * ',' or ')' (or end). Variables are looked up in p->vars, then the #defines. */
-xyl_result lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr *out);
+xyl_result xyl__lsys_compile_expr(lsys_parser *p, size_t *pos, size_t end, lsys_expr *out);
 
 /* Evaluates a constant expression (used for #define and header values). */
-xyl_result lsys_const_expr(lsys_parser *p, size_t *pos, size_t end, double *out);
+xyl_result xyl__lsys_const_expr(lsys_parser *p, size_t *pos, size_t end, double *out);
 
 #endif

@@ -318,7 +318,7 @@ static void solve_all(murray *m, uint32_t *forks, uint32_t *clamped)
     }
 }
 
-xyl_result lsys_turtle_murray(lsys_tnode *nodes, size_t count, lsys_tleaf *leaves,
+xyl_result xyl__lsys_turtle_murray(lsys_tnode *nodes, size_t count, lsys_tleaf *leaves,
                               size_t leaf_count, const double *radius, const lsys_turtle_opts *o,
                               uint32_t *forks, uint32_t *clamped)
 {

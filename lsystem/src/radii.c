@@ -23,7 +23,7 @@ static void pipe_radii(const lsys_tnode *nodes, size_t count, double exponent, d
         radius[i] = radius[i] == 1.0 ? tip : tip * pow(radius[i], inv);
 }
 
-void lsys_turtle_radii(const lsys_tnode *nodes, size_t count, const lsys_turtle_opts *o,
+void xyl__lsys_turtle_radii(const lsys_tnode *nodes, size_t count, const lsys_turtle_opts *o,
                        double *radius)
 {
     if (o->radius_mode == XYL_RADIUS_PIPE) {

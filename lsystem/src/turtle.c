@@ -60,7 +60,7 @@ static void roll_horizontal(xyl__frame *f)
     f->l = xyl__d3_scale(l, 1.0 / sqrt(l2));
 }
 
-/* lsys_turtle_rotate with the angle's cosine and sine given: sin(-a) = -sin(a) exactly, and
+/* xyl__lsys_turtle_rotate with the angle's cosine and sine given: sin(-a) = -sin(a) exactly, and
  * cos(-a) = cos(a), so the negative turns need no second evaluation. */
 static bool rotate_cs(xyl__frame *f, char symbol, double c, double s)
 {
@@ -82,7 +82,7 @@ static bool rotate_cs(xyl__frame *f, char symbol, double c, double s)
     return true;
 }
 
-bool lsys_turtle_rotate(xyl__frame *f, char symbol, double angle)
+bool xyl__lsys_turtle_rotate(xyl__frame *f, char symbol, double angle)
 {
     return rotate_cs(f, symbol, cos(angle), sin(angle));
 }
@@ -426,7 +426,7 @@ static xyl_result step(turtle *t, size_t i, size_t *next)
     case 'T': return set_elasticity(t, i);
     case 'L': return add_leaf(t, i);
     case '%': *next = skip_branch(t->s, i); return XYL_OK;
-    case '|': case '$': lsys_turtle_rotate(&t->st.frame, (char)t->s->sym[i], 0.0);
+    case '|': case '$': xyl__lsys_turtle_rotate(&t->st.frame, (char)t->s->sym[i], 0.0);
         return XYL_OK;
     case '+': case '-': case '&': case '^': case '\\': case '/': return turn(t, i);
     default: return XYL_OK;
@@ -516,11 +516,11 @@ static xyl_result finish(turtle *t, xyl_skeleton **out)
     const xyl_allocator *a = &t->o->alloc;
     double *radius = xyl__calloc(a, t->node_count ? t->node_count : 1, sizeof *radius);
     if (!radius) return xyl__fail(t->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
-    lsys_turtle_radii(t->nodes, t->node_count, t->o, radius);
+    xyl__lsys_turtle_radii(t->nodes, t->node_count, t->o, radius);
     uint32_t forks = 0, clamped = 0;
     xyl_result r = check_radii(t, radius);
     if (r == XYL_OK && t->o->angle_mode == XYL_ANGLES_MURRAY &&
-        lsys_turtle_murray(t->nodes, t->node_count, t->leaves, t->leaf_count, radius, t->o,
+        xyl__lsys_turtle_murray(t->nodes, t->node_count, t->leaves, t->leaf_count, radius, t->o,
                            &forks, &clamped) != XYL_OK)
         r = xyl__fail(t->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for Murray angles");
     xyl_skeleton *sk = NULL;

@@ -42,16 +42,16 @@ typedef struct lsys_turtle_opts {
 
 /* Applies one turtle rotation symbol (+ - & ^ \ / | $) to f by angle radians (ignored by '|'
  * and '$') and re-orthonormalises it. Returns false, leaving f alone, for any other symbol. */
-bool lsys_turtle_rotate(xyl__frame *f, char symbol, double angle);
+bool xyl__lsys_turtle_rotate(xyl__frame *f, char symbol, double angle);
 
 /* radius[i] for every node under o's radius rule (pipe model or grammar widths). */
-void lsys_turtle_radii(const lsys_tnode *nodes, size_t count, const lsys_turtle_opts *o,
+void xyl__lsys_turtle_radii(const lsys_tnode *nodes, size_t count, const lsys_turtle_opts *o,
                        double *radius);
 
 /* Murray fork angles: rotates every child subtree (nodes and the leaves hanging from them)
  * rigidly about its fork. *forks receives the number of forks, *clamped those where a child's
  * angle was clamped to [min_angle, max_angle]. Fails only with XYL_ERR_OUT_OF_MEMORY. */
-xyl_result lsys_turtle_murray(lsys_tnode *nodes, size_t count, lsys_tleaf *leaves,
+xyl_result xyl__lsys_turtle_murray(lsys_tnode *nodes, size_t count, lsys_tleaf *leaves,
                               size_t leaf_count, const double *radius, const lsys_turtle_opts *o,
                               uint32_t *forks, uint32_t *clamped);
 
