@@ -5,6 +5,7 @@
 #include <math.h>
 
 #include "test_util.h"
+#include "tess_util.h"
 #include "../tessellate/src/vk_internal.h" /* the device handle, to provoke the layer directly */
 #include <xylem/xyl_tess_vk.h>
 
@@ -145,23 +146,23 @@ static void capture_matches_cpu_reference(void **state)
             assert_int_equal(xyl_tess_patches_create(m, &pd, &tp, NULL), XYL_OK);
             xyl_diag d = {0};
             expect_ok(xyl_tess_vk_set_patches(vk, tp, &d), &d, "set_patches");
-            xyl_tess_batches b = {0};
+            xyl_tess_batches *b = tu_batches_create();
             for (size_t li = 0; li < 4; ++li) {
                 xyl_tess_view view;
                 close_view(tp, lo, hi, &view);
                 view.fixed_level = fixed[li];
-                assert_int_equal(xyl_tess_select(tp, pat, &view, &b, NULL), XYL_OK);
-                if (!fixed[li]) assert_true(b.cmd_count >= 3);
+                assert_int_equal(xyl_tess_select(tp, pat, &view, b, NULL), XYL_OK);
+                if (!fixed[li]) assert_true(b->cmd_count >= 3);
                 deviation worst = {0, 0};
-                compare_capture(vk, tp, &b, variants[vi], &worst);
+                compare_capture(vk, tp, b, variants[vi], &worst);
                 char level[16];
                 snprintf(level, sizeof level, fixed[li] ? "%u" : "adaptive", fixed[li]);
                 printf("k %u %-7s level %-8s %2zu cmds %8llu vertices: worst |dp| %.3g "
                        "(%.3g of size), |dn| %.3g\n",
-                       sides[si], variant_names[vi], level, b.cmd_count, (unsigned long long)b.vertices, worst.pos,
+                       sides[si], variant_names[vi], level, b->cmd_count, (unsigned long long)b->vertices, worst.pos,
                        worst.pos / tp->size, worst.nrm);
             }
-            xyl_tess_batches_free(&b);
+            xyl_tess_batches_destroy(b);
             xyl_tess_patches_destroy(tp);
         }
         printf("k %u: %zu quads, %zu triangles\n", sides[si], m->quad_count, m->triangle_count);
@@ -177,7 +178,7 @@ typedef struct scene {
     xyl_mesh *mesh;
     xyl_tess_patches *patches;
     xyl_tess_patterns *patterns;
-    xyl_tess_batches batches;
+    xyl_tess_batches *batches;
     float lo[3], hi[3];
     xyl_tess_vk *vk;
 } scene;
@@ -189,6 +190,7 @@ static void scene_open(scene *s, uint32_t sides, uint32_t depth)
     xyl_mesh_bounds(s->mesh, s->lo, s->hi);
     assert_int_equal(xyl_tess_patterns_create(0, NULL, &s->patterns, NULL), XYL_OK);
     assert_int_equal(xyl_tess_patches_create(s->mesh, NULL, &s->patches, NULL), XYL_OK);
+    s->batches = tu_batches_create();
     s->vk = open_vk(s->patterns);
     xyl_diag d = {0};
     expect_ok(xyl_tess_vk_set_patches(s->vk, s->patches, &d), &d, "set_patches");
@@ -197,7 +199,7 @@ static void scene_open(scene *s, uint32_t sides, uint32_t depth)
 static void scene_close(scene *s)
 {
     close_vk(s->vk);
-    xyl_tess_batches_free(&s->batches);
+    xyl_tess_batches_destroy(s->batches);
     xyl_tess_patches_destroy(s->patches);
     xyl_tess_patterns_destroy(s->patterns);
     xyl_mesh_destroy(s->mesh);
@@ -227,11 +229,11 @@ static void scene_view(scene *s, float azimuth, float elevation, float zoom, uin
     v.fovy = cam.fovy;
     v.viewport_height = size;
     v.max_level = 16;
-    assert_int_equal(xyl_tess_select(s->patches, s->patterns, &v, &s->batches, NULL), XYL_OK);
+    assert_int_equal(xyl_tess_select(s->patches, s->patterns, &v, s->batches, NULL), XYL_OK);
 }
 
-static uint8_t *render(scene *s, const xyl_tess_frame *f, uint32_t size, bool wireframe,
-                       uint32_t samples)
+static uint8_t *render(scene *s, const xyl_tess_batches *b, const xyl_tess_frame *f,
+                       uint32_t size, bool wireframe, uint32_t samples)
 {
     xyl_tess_image_desc img = {0};
     img.width = size;
@@ -241,7 +243,7 @@ static uint8_t *render(scene *s, const xyl_tess_frame *f, uint32_t size, bool wi
     uint8_t *rgba = malloc(4u * size * size);
     assert_non_null(rgba);
     xyl_diag d = {0};
-    expect_ok(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, &img, rgba, &d), &d, "render");
+    expect_ok(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d), &d, "render");
     return rgba;
 }
 
@@ -294,25 +296,28 @@ static void adaptive_levels_show_no_cracks(void **state)
             float az = 1.6f * (float)(view / 2), el = view % 2 ? 0.5f : -0.1f;
             xyl_tess_frame f;
             scene_view(&s, az, el, 0.35f, size, XYL_TESS_FLAG_BACKFACES, &f);
-            uint8_t *rgba = render(&s, &f, size, false, 1);
+            uint8_t *rgba = render(&s, s.batches, &f, size, false, 1);
             pixel_counts c = count_pixels(rgba, size);
             size_t cracks = crack_pixels(rgba, size);
             free(rgba);
-            for (size_t i = 0; i < s.batches.instance_count; i += 2) {
-                xyl_tess_instance *in = &s.batches.instances[i];
+            tu_batches broken;
+            tu_batches_copy(s.batches, &broken);
+            for (size_t i = 0; i < broken.view.instance_count; i += 2) {
+                xyl_tess_instance *in = &broken.instances[i];
                 in->edge_levels = 0;
                 for (uint32_t e = 0; e < in->kind; ++e)
                     in->edge_levels |= in->level << (XYL_TESS_EDGE_LEVEL_BITS * e);
             }
-            rgba = render(&s, &f, size, false, 1);
+            rgba = render(&s, &broken.view, &f, size, false, 1);
+            tu_batches_free(&broken);
             pixel_counts cc = count_pixels(rgba, size);
             size_t ccracks = crack_pixels(rgba, size);
             free(rgba);
             printf("k %u view %d: %2zu cmds, %6llu triangles, %5zu covered, %2zu red, %zu in "
                    "cracks; corrupted: %3zu red, %2zu in cracks\n",
-                   sides, view, s.batches.cmd_count, (unsigned long long)s.batches.triangles,
+                   sides, view, s.batches->cmd_count, (unsigned long long)s.batches->triangles,
                    c.covered, c.red, cracks, cc.red, ccracks);
-            assert_true(c.covered > 0 && s.batches.cmd_count >= 2);
+            assert_true(c.covered > 0 && s.batches->cmd_count >= 2);
             assert_int_equal(cracks, 0);
             red += c.red;
             corrupted_red += cc.red;
@@ -333,7 +338,7 @@ static void renders_cover_the_tree_with_lit_front_faces(void **state)
     scene_open(&s, 4, 0);
     xyl_tess_frame f;
     scene_view(&s, 0.6f, 0.2f, 1.0f, size, 0, &f);
-    uint8_t *plain = render(&s, &f, size, false, 1);
+    uint8_t *plain = render(&s, s.batches, &f, size, false, 1);
     pixel_counts c = count_pixels(plain, size);
     double gpu_ms = xyl_tess_vk_last_gpu_ms(s.vk);
     printf("%zu of %u pixels covered, GPU %.3f ms\n", c.covered, size * size, gpu_ms);
@@ -341,20 +346,20 @@ static void renders_cover_the_tree_with_lit_front_faces(void **state)
     assert_true(gpu_ms >= 0.0);
     assert_int_equal(c.red, 0);
     /* the wireframe overlay changes pixels */
-    uint8_t *wire = render(&s, &f, size, true, 1);
+    uint8_t *wire = render(&s, s.batches, &f, size, true, 1);
     size_t changed = 0;
     for (size_t p = 0; p < 4u * size * size; p += 4) changed += memcmp(plain + p, wire + p, 4) != 0;
     printf("wireframe changed %zu pixels\n", changed);
     assert_true(changed > c.covered / 20);
     /* with nothing culled and back faces red, what is seen is the outside: front faces */
     f.flags = XYL_TESS_FLAG_BACKFACES;
-    uint8_t *back = render(&s, &f, size, false, 1);
+    uint8_t *back = render(&s, s.batches, &f, size, false, 1);
     pixel_counts cb = count_pixels(back, size);
     printf("back-face view: %zu covered, %zu red\n", cb.covered, cb.red);
     assert_true(cb.covered == c.covered && cb.red * 100 < cb.covered);
     /* 4x MSAA resolves to about the same coverage */
     f.flags = 0;
-    uint8_t *msaa = render(&s, &f, size, false, 4);
+    uint8_t *msaa = render(&s, s.batches, &f, size, false, 4);
     pixel_counts cm = count_pixels(msaa, size);
     printf("4x MSAA: %zu covered\n", cm.covered);
     assert_true(cm.covered >= c.covered * 9 / 10);
@@ -373,37 +378,37 @@ static void bad_render_calls(scene *s, const xyl_tess_frame *f)
     xyl_tess_image_desc img = {0};
     uint8_t *rgba = malloc(4u * 512 * 512);
     assert_non_null(rgba);
-    assert_int_equal(xyl_tess_vk_render_rgba(NULL, &s->batches, f, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(NULL, s->batches, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(xyl_tess_vk_render_rgba(s->vk, NULL, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, NULL, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, NULL, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, NULL, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, f, NULL, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, &img, NULL, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, f, &img, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     /* size 0 is the documented default, 512 x 512 */
-    expect_ok(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, &img, rgba, &d), &d, "512 x 512");
+    expect_ok(xyl_tess_vk_render_rgba(s->vk, s->batches, f, &img, rgba, &d), &d, "512 x 512");
     img.width = 9000;
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, f, &img, rgba, &d),
                      XYL_ERR_LIMIT_EXCEEDED);
     img.width = 64;
     img.height = 8193;
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, f, &img, rgba, &d),
                      XYL_ERR_LIMIT_EXCEEDED);
     img.height = 64;
     img.samples = 3;
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, f, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     img.samples = 1;
     xyl_tess_frame bad = *f;
     bad.variant = 9;
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, &bad, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, &bad, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     bad = *f;
     bad.view_proj[5] = NAN;
-    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, &s->batches, &bad, &img, rgba, &d),
+    assert_int_equal(xyl_tess_vk_render_rgba(s->vk, s->batches, &bad, &img, rgba, &d),
                      XYL_ERR_NON_FINITE);
     free(rgba);
 }
@@ -416,27 +421,29 @@ static void bad_batches(scene *s, const xyl_tess_frame *f)
     img.width = img.height = 64;
     uint8_t rgba[4 * 64 * 64];
     size_t count = 0;
-    xyl_tess_batches *b = &s->batches;
+    tu_batches e; /* a copy the test may break */
+    tu_batches_copy(s->batches, &e);
+    const xyl_tess_batches *b = &e.view;
     xyl_tess_instance keep = b->instances[0];
-    b->instances[0].patch = (uint32_t)s->patches->count; /* one past the uploaded set */
+    e.instances[0].patch = (uint32_t)s->patches->count; /* one past the uploaded set */
     assert_int_equal(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(d.index, 0);
     assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    b->instances[0] = keep;
-    b->instances[0].level = 65; /* above the patterns' 64 */
+    e.instances[0] = keep;
+    e.instances[0].level = 65; /* above the patterns' 64 */
     assert_int_equal(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    b->instances[0] = keep;
-    b->cmds[0].instance_count += 1u << 20; /* past the instance records */
+    e.instances[0] = keep;
+    e.cmds[0].instance_count += 1u << 20; /* past the instance records */
     assert_int_equal(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    b->cmds[0].instance_count -= 1u << 20;
-    b->cmds[0].first_index += 3; /* not its pattern */
+    e.cmds[0].instance_count -= 1u << 20;
+    e.cmds[0].first_index += 3; /* not its pattern */
     assert_int_equal(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    b->cmds[0].first_index -= 3;
+    e.cmds[0].first_index -= 3;
     /* the patches uploaded are fewer than the batches name */
     xyl_tess_patches few = *s->patches;
     few.count = 10;
@@ -448,10 +455,10 @@ static void bad_batches(scene *s, const xyl_tess_frame *f)
     expect_ok(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d), &d, "render after errors");
     /* a patch drawn twice has no single capture slot */
     xyl_tess_instance second = b->instances[1];
-    b->instances[1].patch = b->instances[0].patch;
+    e.instances[1].patch = b->instances[0].patch;
     assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    b->instances[1] = second;
+    e.instances[1] = second;
     assert_int_equal(xyl_tess_vk_capture(s->vk, b, (xyl_tess_variant)5, NULL, 0, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, NULL, &d),
@@ -460,6 +467,7 @@ static void bad_batches(scene *s, const xyl_tess_frame *f)
                      XYL_ERR_INVALID_ARGUMENT);
     expect_ok(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d), &d, "count only");
     assert_int_equal(count, b->vertices);
+    tu_batches_free(&e);
 }
 
 static void bad_input_gets_exact_codes(void **state)

@@ -140,27 +140,33 @@ typedef struct xyl_tess_batch {
     uint32_t kind, level; /* pattern drawn */
 } xyl_tess_batch;
 
-/* Per-frame output, reused from frame to frame (grows, never shrinks). */
+/* What xyl_tess_select chose for one frame, read only: instance records and indirect draw
+ * commands ready to upload. A xyl_tess_batches made by xyl_tess_batches_create owns these arrays
+ * and refills them at each select (they stay valid until the next select or destroy; storage
+ * grows, never shrinks). The backends take any xyl_tess_batches, so a caller may also fill one
+ * on the stack with arrays of its own (after culling, say): they check every record. */
 typedef struct xyl_tess_batches {
-    xyl_tess_instance *instances; /* sorted by (kind, level); upload as a per-instance buffer */
+    const xyl_tess_instance *instances; /* sorted by (kind, level); a per-instance buffer */
     size_t instance_count;
-    xyl_tess_draw_cmd *cmds;      /* one per non-empty (kind, level) */
-    xyl_tess_batch *batches;      /* what each command draws */
+    const xyl_tess_draw_cmd *cmds;      /* one per non-empty (kind, level) */
+    const xyl_tess_batch *batches;      /* what each command draws */
     size_t cmd_count;
-    uint8_t *edge_levels;         /* level of each unique edge */
-    uint64_t triangles;           /* triangles the commands draw */
-    uint64_t vertices;            /* pattern vertices they evaluate */
-    /* internal storage */
-    size_t instance_cap, edge_cap;
-    uint8_t *patch_levels;
-    size_t patch_cap;
-    xyl_allocator alloc;
+    const uint8_t *edge_levels;         /* level of each unique edge (select only) */
+    uint64_t triangles;                 /* triangles the commands draw */
+    uint64_t vertices;                  /* pattern vertices they evaluate */
 } xyl_tess_batches;
 
-/* Zero-fill a xyl_tess_batches (optionally setting .alloc) before the first call; free with
- * xyl_tess_batches_free. Errors: XYL_ERR_INVALID_ARGUMENT (NULL, non-finite eye, levels out of
- * range, patterns with a smaller max level than asked), XYL_ERR_OUT_OF_MEMORY (batches keep their
- * previous content). */
+/* An empty batches object whose storage comes from alloc (NULL or zero-filled: malloc / free).
+ * Errors: XYL_ERR_INVALID_ARGUMENT (out NULL), XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_tess_batches_create(const xyl_allocator *alloc, xyl_tess_batches **out,
+                                           xyl_diag *diag);
+/* Only for objects from xyl_tess_batches_create (NULL is a no-op). */
+XYL_API void xyl_tess_batches_destroy(xyl_tess_batches *batches);
+
+/* Chooses the levels for the view and refills batches (from xyl_tess_batches_create). Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL, levels out of range, patterns with a smaller max level than
+ * asked), XYL_ERR_NON_FINITE (eye), XYL_ERR_OUT_OF_MEMORY (batches keep their previous
+ * content). */
 XYL_API xyl_result xyl_tess_select(const xyl_tess_patches *patches,
                                    const xyl_tess_patterns *patterns, const xyl_tess_view *view,
                                    xyl_tess_batches *batches, xyl_diag *diag);
