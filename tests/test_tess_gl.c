@@ -6,6 +6,7 @@
 #include <math.h>
 
 #include "test_util.h"
+#include "tess_debug.h"
 #include "tess_util.h"
 #include <xylem/xyl_tess_gl.h>
 #include <xylem/xyl_tessellate.h>
@@ -147,11 +148,16 @@ typedef struct deviation {
 } deviation;
 
 static void compare_one(const xyl_tess_patches *tp, xyl_tess_variant v, bool hw,
-                        const xyl_tess_captured *c, uint32_t edge_levels, deviation *worst,
+                        const xyl__tess_captured *c, uint32_t edge_levels, deviation *worst,
                         size_t slot)
 {
     float pos[3], nrm[3];
-    xyl_tess_reference(&tp->records[c->patch], v, c, hw, edge_levels, pos, nrm);
+    const xyl_tess_patch *rec = &tp->records[c->patch];
+    if (hw)
+        xyl__tess_reference_hardware(rec, v, c->coord, edge_levels, pos, nrm);
+    else
+        xyl_tess_eval_lattice(rec, v, (uint32_t)c->coord[2], edge_levels, (uint32_t)c->coord[0],
+                              (uint32_t)c->coord[1], pos, nrm);
     double dp = 0.0, dn = 0.0;
     for (int k = 0; k < 3; ++k) {
         dp = fmax(dp, fabs((double)c->position[k] - pos[k]));
@@ -185,13 +191,13 @@ static seen_table seen_create(size_t count)
     return t;
 }
 
-static bool same_key(const xyl_tess_captured *a, const xyl_tess_captured *b)
+static bool same_key(const xyl__tess_captured *a, const xyl__tess_captured *b)
 {
     return a->patch == b->patch && memcmp(a->coord, b->coord, sizeof a->coord) == 0;
 }
 
 /* True when cap[k] repeats an earlier vertex exactly, key and value. */
-static bool seen_repeats(seen_table *t, const xyl_tess_captured *cap, size_t k)
+static bool seen_repeats(seen_table *t, const xyl__tess_captured *cap, size_t k)
 {
     uint32_t w[4];
     memcpy(w, cap[k].coord, sizeof cap[k].coord);
@@ -203,7 +209,7 @@ static bool seen_repeats(seen_table *t, const xyl_tess_captured *cap, size_t k)
             t->slots[at] = (uint32_t)k + 1;
             return false;
         }
-        const xyl_tess_captured *first = &cap[t->slots[at] - 1];
+        const xyl__tess_captured *first = &cap[t->slots[at] - 1];
         if (same_key(first, &cap[k]))
             return memcmp(first->position, cap[k].position, sizeof first->position) == 0 &&
                    memcmp(first->normal, cap[k].normal, sizeof first->normal) == 0;
@@ -217,10 +223,10 @@ static void check_capture(suite *s, const xyl_tess_patches *tp, const xyl_tess_b
     size_t count = 0;
     xyl_diag d = {0};
     /* count first (capacity 0), then fill */
-    expect(xyl_tess_gl_capture(s->gl, b, v, path, NULL, 0, &count, &d), XYL_OK, &d);
-    xyl_tess_captured *cap = malloc((count ? count : 1) * sizeof *cap);
+    expect(xyl__tess_gl_capture(s->gl, b, v, path, NULL, 0, &count, &d), XYL_OK, &d);
+    xyl__tess_captured *cap = malloc((count ? count : 1) * sizeof *cap);
     size_t again = 0;
-    expect(xyl_tess_gl_capture(s->gl, b, v, path, cap, count, &again, &d), XYL_OK, &d);
+    expect(xyl__tess_gl_capture(s->gl, b, v, path, cap, count, &again, &d), XYL_OK, &d);
     assert_int_equal(again, count);
     uint32_t *inst_of = malloc(tp->count * sizeof *inst_of);
     for (size_t p = 0; p < tp->count; ++p) inst_of[p] = UINT32_MAX;
@@ -246,7 +252,7 @@ static void check_capture(suite *s, const xyl_tess_patches *tp, const xyl_tess_b
     assert_int_equal(count, hw ? expect : b->vertices);
     seen_table seen = seen_create(count);
     for (size_t k = 0; k < count; ++k) {
-        const xyl_tess_captured *c = &cap[k];
+        const xyl__tess_captured *c = &cap[k];
         if (c->patch >= tp->count || inst_of[c->patch] == UINT32_MAX)
             fail_msg("captured vertex %zu names patch %u of %zu", k, c->patch, tp->count);
         if (!seen_repeats(&seen, cap, k))
@@ -324,7 +330,7 @@ static size_t red_over_views(suite *s, const xyl_mesh *m, const xyl_tess_patches
         xyl_tess_camera cam;
         xyl_tess_frame frame;
         make_view(m, az[i], el[i], 0.45f, &cam, &frame);
-        frame.flags = XYL_TESS_FLAG_BACKFACES;
+        frame.flags = XYL__TESS_FLAG_BACKFACES;
         xyl_tess_view view = {0};
         memcpy(view.eye, cam.eye, sizeof view.eye);
         view.fovy = cam.fovy;
@@ -399,12 +405,12 @@ static void bad_draw_arguments_get_result_codes(suite *s, const xyl_tess_batches
     bad.variant = 9;
     expect(xyl_tess_gl_draw(s->gl, b, &bad, XYL_TESS_PATH_INSTANCED, d), XYL_ERR_INVALID_ARGUMENT, d);
     size_t n = 0;
-    xyl_tess_captured one;
-    expect(xyl_tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 0, NULL, d),
+    xyl__tess_captured one;
+    expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 0, NULL, d),
            XYL_ERR_INVALID_ARGUMENT, d);
-    expect(xyl_tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 5, &n, d),
+    expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 5, &n, d),
            XYL_ERR_INVALID_ARGUMENT, d);
-    expect(xyl_tess_gl_capture(s->gl, b, (xyl_tess_variant)3, XYL_TESS_PATH_HARDWARE, &one, 1, &n, d),
+    expect(xyl__tess_gl_capture(s->gl, b, (xyl_tess_variant)3, XYL_TESS_PATH_HARDWARE, &one, 1, &n, d),
            XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl_tess_gl_set_patches(s->gl, NULL, d), XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl_tess_gl_set_patches(NULL, NULL, d), XYL_ERR_INVALID_ARGUMENT, d);
@@ -425,8 +431,8 @@ static void refuse_batches(suite *s, const xyl_tess_batches *b, const xyl_tess_f
         assert_int_equal(rgba[0], 0xab);
         assert_int_equal(rgba[4 * 16 * 16 - 1], 0xab);
         size_t n = 12345;
-        xyl_tess_captured c;
-        expect(xyl_tess_gl_capture(s->gl, b, XYL_TESS_PN, p, &c, 1, &n, d), XYL_ERR_INVALID_ARGUMENT, d);
+        xyl__tess_captured c;
+        expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, p, &c, 1, &n, d), XYL_ERR_INVALID_ARGUMENT, d);
         assert_int_equal(n, 12345);
     }
 }

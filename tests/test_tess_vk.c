@@ -6,7 +6,7 @@
 
 #include "test_util.h"
 #include "tess_util.h"
-#include "../tessellate/src/vk_internal.h" /* the device handle, to provoke the layer directly */
+#include "vk_internal.h" /* the device handle, to provoke the layer directly; capture */
 #include <xylem/xyl_tess_vk.h>
 
 static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE};
@@ -87,21 +87,22 @@ static void compare_capture(xyl_tess_vk *vk, const xyl_tess_patches *tp,
                             const xyl_tess_batches *b, xyl_tess_variant variant, deviation *worst)
 {
     size_t n = (size_t)b->vertices, count = 0;
-    xyl_tess_captured *cap = calloc(n ? n : 1, sizeof *cap);
+    xyl__tess_captured *cap = calloc(n ? n : 1, sizeof *cap);
     uint32_t *edge_levels = calloc(tp->count, sizeof *edge_levels);
     assert_true(cap && edge_levels);
     for (size_t i = 0; i < b->instance_count; ++i)
         edge_levels[b->instances[i].patch] = b->instances[i].edge_levels;
     xyl_diag d = {0};
-    expect_ok(xyl_tess_vk_capture(vk, b, variant, cap, n, &count, &d), &d, "capture");
+    expect_ok(xyl__tess_vk_capture(vk, b, variant, cap, n, &count, &d), &d, "capture");
     assert_int_equal(count, b->vertices);
     const double tol_pos = 1e-5 * tp->size, tol_nrm = 1e-4;
     for (size_t v = 0; v < n; ++v) {
-        const xyl_tess_captured *c = &cap[v];
+        const xyl__tess_captured *c = &cap[v];
         assert_true(c->patch < tp->count);
         float p[3], nr[3];
-        xyl_tess_reference(&tp->records[c->patch], variant, c, false, edge_levels[c->patch], p,
-                           nr);
+        xyl_tess_eval_lattice(&tp->records[c->patch], variant, (uint32_t)c->coord[2],
+                              edge_levels[c->patch], (uint32_t)c->coord[0], (uint32_t)c->coord[1],
+                              p, nr);
         for (int k = 0; k < 3; ++k) {
             double dp = fabs((double)c->position[k] - p[k]);
             double dn = fabs((double)c->normal[k] - nr[k]);
@@ -295,7 +296,7 @@ static void adaptive_levels_show_no_cracks(void **state)
         for (int view = 0; view < 8; ++view) {
             float az = 1.6f * (float)(view / 2), el = view % 2 ? 0.5f : -0.1f;
             xyl_tess_frame f;
-            scene_view(&s, az, el, 0.35f, size, XYL_TESS_FLAG_BACKFACES, &f);
+            scene_view(&s, az, el, 0.35f, size, XYL__TESS_FLAG_BACKFACES, &f);
             uint8_t *rgba = render(&s, s.batches, &f, size, false, 1);
             pixel_counts c = count_pixels(rgba, size);
             size_t cracks = crack_pixels(rgba, size);
@@ -352,7 +353,7 @@ static void renders_cover_the_tree_with_lit_front_faces(void **state)
     printf("wireframe changed %zu pixels\n", changed);
     assert_true(changed > c.covered / 20);
     /* with nothing culled and back faces red, what is seen is the outside: front faces */
-    f.flags = XYL_TESS_FLAG_BACKFACES;
+    f.flags = XYL__TESS_FLAG_BACKFACES;
     uint8_t *back = render(&s, s.batches, &f, size, false, 1);
     pixel_counts cb = count_pixels(back, size);
     printf("back-face view: %zu covered, %zu red\n", cb.covered, cb.red);
@@ -429,7 +430,7 @@ static void bad_batches(scene *s, const xyl_tess_frame *f)
     assert_int_equal(xyl_tess_vk_render_rgba(s->vk, b, f, &img, rgba, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(d.index, 0);
-    assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d),
+    assert_int_equal(xyl__tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     e.instances[0] = keep;
     e.instances[0].level = 65; /* above the patterns' 64 */
@@ -456,16 +457,16 @@ static void bad_batches(scene *s, const xyl_tess_frame *f)
     /* a patch drawn twice has no single capture slot */
     xyl_tess_instance second = b->instances[1];
     e.instances[1].patch = b->instances[0].patch;
-    assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d),
+    assert_int_equal(xyl__tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     e.instances[1] = second;
-    assert_int_equal(xyl_tess_vk_capture(s->vk, b, (xyl_tess_variant)5, NULL, 0, &count, &d),
+    assert_int_equal(xyl__tess_vk_capture(s->vk, b, (xyl_tess_variant)5, NULL, 0, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, NULL, &d),
+    assert_int_equal(xyl__tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 5, &count, &d),
+    assert_int_equal(xyl__tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 5, &count, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    expect_ok(xyl_tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d), &d, "count only");
+    expect_ok(xyl__tess_vk_capture(s->vk, b, XYL_TESS_PN, NULL, 0, &count, &d), &d, "count only");
     assert_int_equal(count, b->vertices);
     tu_batches_free(&e);
 }

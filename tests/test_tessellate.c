@@ -6,6 +6,7 @@
 #define PI 3.14159265358979323846
 
 #include "test_util.h"
+#include "tess_debug.h"
 #include "tess_util.h"
 #include <xylem/xyl_tessellate.h>
 
@@ -427,15 +428,15 @@ static void levels_rise_as_the_camera_approaches(void **state)
     xyl_tess_view v = {0};
     uint32_t prev = 0;
     for (float d = 1000.0f; d >= 0.01f; d *= 0.5f) {
-        uint32_t l = xyl_tess_level_for(0.1f, d, &v, 64);
+        uint32_t l = xyl__tess_level_for(0.1f, d, &v, 64);
         assert_true(l >= prev && l >= 1 && l <= 64);
         prev = l;
     }
     assert_int_equal(prev, 64);
-    assert_int_equal(xyl_tess_level_for(0.0f, 1.0f, &v, 64), 1);
+    assert_int_equal(xyl__tess_level_for(0.0f, 1.0f, &v, 64), 1);
     /* the chosen level meets the budget, one less does not */
     for (float d = 0.5f; d < 500.0f; d *= 1.7f) {
-        uint32_t l = xyl_tess_level_for(0.1f, d, &v, 64);
+        uint32_t l = xyl__tess_level_for(0.1f, d, &v, 64);
         float scale = 1080.0f / (2.0f * tanf(0.4f));
         if (l < 64) assert_true(0.1f / (float)(l * l) * scale / d <= 0.5f * 1.0001f);
         if (l > 1) assert_true(0.1f / (float)((l - 1) * (l - 1)) * scale / d > 0.5f);

@@ -2,6 +2,7 @@
 #include <float.h>
 #include <string.h>
 
+#include "tess_debug.h"
 #include "tess_internal.h"
 #include "xyl_internal.h"
 
@@ -29,8 +30,8 @@ static uint32_t level_from(float coef, float distance, float scale, float error_
     return (uint32_t)ceil(need);
 }
 
-uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
-                            uint32_t max_level)
+uint32_t xyl__tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
+                             uint32_t max_level)
 {
     if (max_level == 0 || max_level > XYL_TESS_MAX_LEVEL) max_level = XYL_TESS_MAX_LEVEL;
     float budget = view && view->error_px > 0.0f ? view->error_px : 0.5f;

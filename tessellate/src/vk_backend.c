@@ -549,7 +549,7 @@ xyl_result xyl_tess_vk_render_rgba(xyl_tess_vk *vk, const xyl_tess_batches *batc
     if (r == XYL_OK) r = check_frame(frame, diag);
     if (r == XYL_OK) r = check_image(vk, image, &p, diag);
     if (r != XYL_OK) return r;
-    p.backfaces = (frame->flags & XYL_TESS_FLAG_BACKFACES) != 0;
+    p.backfaces = (frame->flags & XYL__TESS_FLAG_BACKFACES) != 0;
     r = prepare_render(vk, batches, frame, &p, diag);
     if (r == XYL_OK) r = record_render(vk, &p, batches->cmd_count, diag);
     if (r != XYL_OK) return r;
@@ -631,7 +631,7 @@ static xyl_result record_capture(xyl_tess_vk *vk, size_t cmd_count, xyl_diag *di
 /* GPU positions and normals at their slots, coordinates (i, j, level) and patch from the
  * instance records and patterns. */
 static void read_captured(const xyl_tess_vk *vk, const xyl_tess_batches *b,
-                          xyl_tess_captured *out, size_t n)
+                          xyl__tess_captured *out, size_t n)
 {
     const float *slots = vk->capture_out.map;
     const uint32_t *off = vk->offsets.map;
@@ -642,7 +642,7 @@ static void read_captured(const xyl_tess_vk *vk, const xyl_tess_batches *b,
             uint32_t pk = vk->lattice[r->first_vertex + v];
             size_t slot = (size_t)off[in->patch] + (pk >> XYL_TESS_PATTERN_SHIFT_LOCAL);
             if (slot >= n) continue;
-            xyl_tess_captured *c = &out[slot];
+            xyl__tess_captured *c = &out[slot];
             memcpy(c->position, slots + 8 * slot, sizeof c->position);
             memcpy(c->normal, slots + 8 * slot + 4, sizeof c->normal);
             c->coord[0] = (float)(pk & 0xffu);
@@ -653,8 +653,8 @@ static void read_captured(const xyl_tess_vk *vk, const xyl_tess_batches *b,
     }
 }
 
-xyl_result xyl_tess_vk_capture(xyl_tess_vk *vk, const xyl_tess_batches *batches,
-                               xyl_tess_variant variant, xyl_tess_captured *out, size_t capacity,
+xyl_result xyl__tess_vk_capture(xyl_tess_vk *vk, const xyl_tess_batches *batches,
+                               xyl_tess_variant variant, xyl__tess_captured *out, size_t capacity,
                                size_t *count, xyl_diag *diag)
 {
     if (!vk || !batches || !count || (capacity && !out))

@@ -5,6 +5,7 @@
 
 #include <vulkan/vulkan.h>
 
+#include "tess_debug.h"
 #include "xyl_internal.h"
 #include "xylem/xyl_tess_vk.h"
 

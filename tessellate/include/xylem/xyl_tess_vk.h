@@ -5,9 +5,8 @@
  *     no surface; lavapipe on machines without a GPU), with the Khronos validation layer when
  *     desc.validation is set; xyl_tess_vk_validation_messages() counts what it reported.
  *   - xyl_tess_vk_set_patches(), then per frame (after xyl_tess_select()) render into an
- *     offscreen image with xyl_tess_vk_render_rgba(), or read back the evaluated vertices with
- *     xyl_tess_vk_capture(). The draws are vkCmdDrawIndexedIndirect, one command per
- *     (kind, level), instance records as a per-instance vertex buffer.
+ *     offscreen image with xyl_tess_vk_render_rgba(). The draws are vkCmdDrawIndexedIndirect,
+ *     one command per (kind, level), instance records as a per-instance vertex buffer.
  * Shaders are the same GLSL as the GL backend's, compiled to SPIR-V by glslang at build time.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
@@ -44,11 +43,6 @@ XYL_API xyl_result xyl_tess_vk_render_rgba(xyl_tess_vk *vk, const xyl_tess_batch
                                            const xyl_tess_frame *frame,
                                            const xyl_tess_image_desc *image, uint8_t *rgba,
                                            xyl_diag *diag);
-
-/* As xyl_tess_gl_capture for the instanced path. */
-XYL_API xyl_result xyl_tess_vk_capture(xyl_tess_vk *vk, const xyl_tess_batches *batches,
-                                       xyl_tess_variant variant, xyl_tess_captured *out,
-                                       size_t capacity, size_t *count, xyl_diag *diag);
 
 /* Milliseconds of GPU time of the last render (timestamp queries), negative if unknown. */
 XYL_API double xyl_tess_vk_last_gpu_ms(const xyl_tess_vk *vk);

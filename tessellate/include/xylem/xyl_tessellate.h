@@ -170,13 +170,6 @@ XYL_API void xyl_tess_batches_destroy(xyl_tess_batches *batches);
 XYL_API xyl_result xyl_tess_select(const xyl_tess_patches *patches,
                                    const xyl_tess_patterns *patterns, const xyl_tess_view *view,
                                    xyl_tess_batches *batches, xyl_diag *diag);
-XYL_API void xyl_tess_batches_free(xyl_tess_batches *batches);
-
-/* Level that keeps a world error coefficient (world units * L^2) under error_px when seen from
- * distance d with the view's projection: ceil(sqrt(coef * scale / (d * error_px))), clamped to
- * [1, max_level]. Exposed for tests and tools. */
-XYL_API uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
-                                    uint32_t max_level);
 
 /* ---- CPU tessellation ---------------------------------------------------------------------- */
 
@@ -228,22 +221,6 @@ typedef struct xyl_tess_image_desc {
     bool wireframe;          /* overlay the triangle edges in frame->line_color */
     uint32_t samples;        /* MSAA samples; default (0): 1 */
 } xyl_tess_image_desc;
-
-/* One vertex as a GPU evaluated it, for comparison with the CPU reference. Instanced path:
- * coord = (i, j, level) of the lattice point. Hardware path: coord = gl_TessCoord. */
-typedef struct xyl_tess_captured {
-    float position[3];
-    float normal[3];
-    float coord[3];
-    uint32_t patch;
-} xyl_tess_captured;
-
-/* The CPU reference of a captured vertex: xyl_tess_eval_lattice for the instanced path; for the
- * hardware path the tessellation evaluation shader's rule (points on a side snapped to k / le of
- * that side's level, the rest by xyl_tess_eval). edge_levels is the patch's instance record. */
-XYL_API void xyl_tess_reference(const xyl_tess_patch *patch, xyl_tess_variant variant,
-                                const xyl_tess_captured *captured, bool hardware,
-                                uint32_t edge_levels, float pos[3], float normal[3]);
 
 #ifdef __cplusplus
 }
