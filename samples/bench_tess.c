@@ -22,7 +22,9 @@
 #include "bench_common.h"
 #include <xylem/xyl_lsystem.h>
 #include <xylem/xyl_tess_gl.h>
-#include <xylem/xyl_tess_vk.h>
+#ifdef XYL_HAVE_VULKAN
+#include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
+#endif
 #include <xylem/xyl_tessellate.h>
 
 #define PI 3.14159265358979323846
@@ -259,7 +261,9 @@ static void refine_fixed(const xyl_mesh *m, uint32_t variant, uint32_t level,
 typedef struct gpu {
     xyl_gl_context *ctx;
     xyl_tess_gl *gl;
+#ifdef XYL_HAVE_VULKAN
     xyl_tess_vk *vk;
+#endif
     uint8_t *rgba;
 } gpu;
 

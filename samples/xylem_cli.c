@@ -16,7 +16,9 @@
 
 #include <xylem/xyl_lsystem.h>
 #include <xylem/xyl_tess_gl.h>
-#include <xylem/xyl_tess_vk.h>
+#ifdef XYL_HAVE_VULKAN
+#include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
+#endif
 #include <xylem/xyl_tessellate.h>
 
 #include "glb_read.h"

@@ -51,4 +51,32 @@ static inline void tu_batches_free(tu_batches *t)
     memset(t, 0, sizeof *t);
 }
 
+/* An allocator that counts its live blocks and can be told to refuse. */
+typedef struct tu_counting_alloc {
+    size_t live, calls;
+    bool refuse;
+} tu_counting_alloc;
+
+static inline void *tu_counted_alloc(size_t size, void *user)
+{
+    tu_counting_alloc *c = user;
+    if (c->refuse) return NULL;
+    void *p = malloc(size);
+    if (p) ++c->live, ++c->calls;
+    return p;
+}
+
+static inline void tu_counted_free(void *p, void *user)
+{
+    tu_counting_alloc *c = user;
+    if (p) --c->live;
+    free(p);
+}
+
+static inline xyl_allocator tu_counting_allocator(tu_counting_alloc *c)
+{
+    xyl_allocator a = {tu_counted_alloc, tu_counted_free, c};
+    return a;
+}
+
 #endif /* XYL_TESS_UTIL_H */

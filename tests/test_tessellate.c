@@ -499,28 +499,6 @@ static void select_buckets_every_patch_once(void **state)
 }
 
 
-/* A counting allocator that can be told to refuse. */
-typedef struct counting_alloc {
-    size_t live, calls;
-    bool refuse;
-} counting_alloc;
-
-static void *counted_alloc(size_t size, void *user)
-{
-    counting_alloc *c = user;
-    if (c->refuse) return NULL;
-    void *p = malloc(size);
-    if (p) ++c->live, ++c->calls;
-    return p;
-}
-
-static void counted_free(void *p, void *user)
-{
-    counting_alloc *c = user;
-    if (p) --c->live;
-    free(p);
-}
-
 /* Every allocation goes through the caller's allocator, and a select that cannot grow the
  * arrays for a bigger patch set fails with the previous frame's batches intact. */
 static void batches_use_their_allocator_and_survive_a_failed_select(void **state)
@@ -533,8 +511,8 @@ static void batches_use_their_allocator_and_survive_a_failed_select(void **state
     xyl_tess_patches *tp_small = NULL, *tp_big = NULL;
     assert_int_equal(xyl_tess_patches_create(small, NULL, &tp_small, NULL), XYL_OK);
     assert_int_equal(xyl_tess_patches_create(big, NULL, &tp_big, NULL), XYL_OK);
-    counting_alloc c = {0, 0, false};
-    xyl_allocator a = {counted_alloc, counted_free, &c};
+    tu_counting_alloc c = {0, 0, false};
+    xyl_allocator a = tu_counting_allocator(&c);
     xyl_tess_batches *b = NULL;
     assert_int_equal(xyl_tess_batches_create(&a, &b, NULL), XYL_OK);
     assert_int_equal(b->instance_count, 0);
