@@ -6,12 +6,15 @@
  *      mesh's unique edges and per-patch / per-edge error coefficients for the chosen variant.
  *   2. xyl_tess_patterns_create(max_level, ...): the (i, j) lattice and indices of every level,
  *      built once and shared by all meshes.
- *   3. Each frame: xyl_tess_select(patches, patterns, &view, batches): per-edge and per-patch
- *      levels from a camera and a pixel budget (or one fixed level), patches bucketed by
- *      (kind, level) into instance records and indirect draw commands, ready to upload.
+ *   3. xyl_tess_batches_create(alloc, &batches) once; each frame xyl_tess_select(patches,
+ *      patterns, &view, batches): per-edge and per-patch levels from a camera and a pixel
+ *      budget (or one fixed level), patches bucketed by (kind, level) into instance records and
+ *      indirect draw commands, ready to upload, in batches' read-only arrays.
  *   4. Draw: per command, the level's pattern instanced over its instance records; the vertex
- *      shader evaluates shaders/xyl_tess_eval.glsl. xyl_tess_eval_lattice() is the CPU
- *      reference of exactly that evaluation.
+ *      shader evaluates shaders/xyl_tess_eval.glsl. The backends do it for you
+ *      (xylem/xyl_tess_gl.h, xylem/xyl_tess_vk.h: into your own framebuffer or command buffer,
+ *      or offscreen); xyl_tess_eval_lattice() is the CPU reference of exactly that evaluation,
+ *      and xyl_tess_refine() the whole CPU tessellation.
  *
  * Crack-freedom: a shared edge gets one level (computed once per unique edge); each side snaps
  * its lattice points on that edge to it and evaluates the edge in a canonical direction, so both
@@ -184,7 +187,7 @@ XYL_API xyl_result xyl_tess_refine(const xyl_tess_patches *patches,
                                    const xyl_tess_batches *batches, const xyl_mesh_limits *limits,
                                    xyl_mesh **out, xyl_diag *diag);
 
-/* ---- cameras and GPU readback (shared by the GL and Vulkan backends) ------------------------ */
+/* ---- cameras and offscreen images (shared by the GL and Vulkan backends) ------------------- */
 
 typedef enum xyl_tess_clip {
     XYL_TESS_CLIP_GL = 0,    /* y up, depth -1..1 */
