@@ -1,6 +1,6 @@
 # GLSL in shaders/ -> complete stage sources (one prefix of #version and #defines, the shared
-# header and the debug flags' header, the evaluation code, the resources, the stage) -> embedded C arrays: GLSL text for the
-# GL backend, SPIR-V from glslangValidator for Vulkan. glslangValidator also validates every GL
+# header and the debug flags' header, the evaluation code, the resources, the stage) ->
+# embedded C arrays: GLSL text for the GL backend, SPIR-V from glslangValidator for Vulkan. glslangValidator also validates every GL
 # stage at build time, so a shader that does not compile fails the build, not a test run.
 find_program(XYL_GLSLANG glslangValidator REQUIRED)
 set(XYL_SHADER_DIR ${PROJECT_SOURCE_DIR}/shaders)

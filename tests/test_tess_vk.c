@@ -161,7 +161,8 @@ static void capture_matches_cpu_reference(void **state)
                 snprintf(level, sizeof level, fixed[li] ? "%u" : "adaptive", fixed[li]);
                 printf("k %u %-7s level %-8s %2zu cmds %8llu vertices: worst |dp| %.3g "
                        "(%.3g of size), |dn| %.3g\n",
-                       sides[si], variant_names[vi], level, b->cmd_count, (unsigned long long)b->vertices, worst.pos,
+                       sides[si], variant_names[vi], level, b->cmd_count,
+                       (unsigned long long)b->vertices, worst.pos,
                        worst.pos / tp->size, worst.nrm);
             }
             xyl_tess_batches_destroy(b);
@@ -946,7 +947,8 @@ static xyl_tess_vk *app_context(const app *a, bool dynamic, const xyl_tess_patte
 static size_t differing_pixels(const uint8_t *a, const uint8_t *b)
 {
     size_t n = 0;
-    for (size_t p = 0; p < (size_t)APP_SIDE * APP_SIDE; ++p) n += memcmp(a + 4 * p, b + 4 * p, 4) != 0;
+    for (size_t p = 0; p < (size_t)APP_SIDE * APP_SIDE; ++p)
+        n += memcmp(a + 4 * p, b + 4 * p, 4) != 0;
     return n;
 }
 

@@ -942,8 +942,9 @@ static xyl_result capture_hardware(xyl_tess_gl *gl, const xyl_tess_batches *b,
 }
 
 xyl_result xyl__tess_gl_capture(xyl_tess_gl *gl, const xyl_tess_batches *batches,
-                               xyl_tess_variant variant, xyl_tess_path path, xyl__tess_captured *out,
-                               size_t capacity, size_t *count, xyl_diag *diag)
+                                xyl_tess_variant variant, xyl_tess_path path,
+                                xyl__tess_captured *out, size_t capacity, size_t *count,
+                                xyl_diag *diag)
 {
     if (!count || (capacity && !out))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,

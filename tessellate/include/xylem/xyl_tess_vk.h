@@ -95,7 +95,7 @@ typedef struct xyl_tess_vk_device_desc {
     uint32_t subpass;
     /* ...or, with render_pass VK_NULL_HANDLE, dynamic rendering (Vulkan 1.3 or
      * VK_KHR_dynamic_rendering, enabled) into one colour attachment of color_format and a
-     * depth attachment of depth_format. */
+     * depth attachment of depth_format (and no stencil attachment). */
     VkFormat color_format;
     VkFormat depth_format;
     VkSampleCountFlagBits samples; /* of those attachments; default (0): 1 */
