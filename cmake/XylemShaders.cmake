@@ -1,13 +1,13 @@
 # GLSL in shaders/ -> complete stage sources (one prefix of #version and #defines, the shared
-# header, the evaluation code, the resources, the stage) -> embedded C arrays: GLSL text for the
-# GL backend, SPIR-V from glslangValidator for Vulkan. glslangValidator also validates every GL
+# header and the debug flags' header, the evaluation code, the resources, the stage) ->
+# embedded C arrays: GLSL text for the GL backend, SPIR-V from glslangValidator for Vulkan. glslangValidator also validates every GL
 # stage at build time, so a shader that does not compile fails the build, not a test run.
 find_program(XYL_GLSLANG glslangValidator REQUIRED)
 set(XYL_SHADER_DIR ${PROJECT_SOURCE_DIR}/shaders)
 set(XYL_SHADER_OUT ${PROJECT_BINARY_DIR}/shaders)
 file(MAKE_DIRECTORY ${XYL_SHADER_OUT})
-set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_tess_eval.glsl
-    ${XYL_SHADER_DIR}/xyl_tess_io.glsl)
+set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_tess_debug.h
+    ${XYL_SHADER_DIR}/xyl_tess_eval.glsl ${XYL_SHADER_DIR}/xyl_tess_io.glsl)
 
 # xyl_shader(<name> <stage file> <gl|vulkan> [DEFINE...]): appends the generated C file to
 # XYL_GL_SHADER_SOURCES or XYL_VK_SHADER_SOURCES; the symbol is xyl__shader_<name>.

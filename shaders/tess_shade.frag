@@ -11,16 +11,12 @@ void main()
         out_color = xyl_frame.line_color;
         return;
     }
-    if ((xyl_frame.flags & XYL_TESS_FLAG_BACKFACES) != 0u && !gl_FrontFacing) {
+    if ((xyl_frame.flags & XYL__TESS_FLAG_BACKFACES) != 0u && !gl_FrontFacing) {
         out_color = vec4(1.0, 0.0, 0.0, 1.0);
         return;
     }
     vec3 n = xyl_normalize_or(v_normal, vec3(0.0, 1.0, 0.0));
     if (!gl_FrontFacing) n = -n;
-    if ((xyl_frame.flags & XYL_TESS_FLAG_NORMALS) != 0u) {
-        out_color = vec4(0.5 * n + 0.5, 1.0);
-        return;
-    }
     float diffuse = max(dot(n, xyl_frame.light_dir.xyz), 0.0);
     float hemi = 0.5 + 0.5 * n.y;
     vec3 rgb = xyl_frame.color.rgb * (0.65 * diffuse + 0.35 * mix(0.35, 1.0, hemi));

@@ -37,12 +37,9 @@
 #define XYL_TESS_BINDING_OFFSETS 3   /* storage: uint first capture slot per patch */
 #define XYL_TESS_BINDING_INSTANCES 4 /* storage: instance records (hardware path) */
 
-/* xyl_tess_frame.flags */
+/* xyl_tess_frame.flags; the other bits are reserved (0) */
 #define XYL_TESS_FLAG_WIREFRAME 1u  /* the fragment shader outputs the line colour (a draw
                                        call given it draws the surface, then the edges) */
-#define XYL_TESS_FLAG_NORMALS 2u    /* the fragment shader outputs the normal as a colour */
-#define XYL_TESS_FLAG_BACKFACES 4u  /* back-facing fragments are pure red (crack tests: a closed
-                                       surface shows a back face only through a hole) */
 
 /* Instance record bits: edge level e (1..64) in bits 8e .. 8e+7 of edge_levels. */
 #define XYL_TESS_EDGE_LEVEL_BITS 8u
@@ -66,7 +63,7 @@ struct xyl_tess_frame {
     vec4 color;      /* rgb: surface albedo; a: unused */
     vec4 line_color; /* wireframe overlay colour */
     uint variant;    /* XYL_TESS_VARIANT_* */
-    uint flags;      /* XYL_TESS_FLAG_* */
+    uint flags;      /* XYL_TESS_FLAG_*; other bits reserved (0) */
     uint base_instance; /* hardware path: first instance record of the draw */
     uint pad;
 };
@@ -93,7 +90,7 @@ typedef struct xyl_tess_frame {
     float color[4];
     float line_color[4];
     uint32_t variant;
-    uint32_t flags;
+    uint32_t flags; /* XYL_TESS_FLAG_*; other bits reserved (0) */
     uint32_t base_instance;
     uint32_t pad;
 } xyl_tess_frame;

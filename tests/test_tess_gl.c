@@ -6,6 +6,8 @@
 #include <math.h>
 
 #include "test_util.h"
+#include "tess_debug.h"
+#include "tess_util.h"
 #include <xylem/xyl_tess_gl.h>
 #include <xylem/xyl_tessellate.h>
 
@@ -146,11 +148,16 @@ typedef struct deviation {
 } deviation;
 
 static void compare_one(const xyl_tess_patches *tp, xyl_tess_variant v, bool hw,
-                        const xyl_tess_captured *c, uint32_t edge_levels, deviation *worst,
+                        const xyl__tess_captured *c, uint32_t edge_levels, deviation *worst,
                         size_t slot)
 {
     float pos[3], nrm[3];
-    xyl_tess_reference(&tp->records[c->patch], v, c, hw, edge_levels, pos, nrm);
+    const xyl_tess_patch *rec = &tp->records[c->patch];
+    if (hw)
+        xyl__tess_reference_hardware(rec, v, c->coord, edge_levels, pos, nrm);
+    else
+        xyl_tess_eval_lattice(rec, v, (uint32_t)c->coord[2], edge_levels, (uint32_t)c->coord[0],
+                              (uint32_t)c->coord[1], pos, nrm);
     double dp = 0.0, dn = 0.0;
     for (int k = 0; k < 3; ++k) {
         dp = fmax(dp, fabs((double)c->position[k] - pos[k]));
@@ -184,13 +191,13 @@ static seen_table seen_create(size_t count)
     return t;
 }
 
-static bool same_key(const xyl_tess_captured *a, const xyl_tess_captured *b)
+static bool same_key(const xyl__tess_captured *a, const xyl__tess_captured *b)
 {
     return a->patch == b->patch && memcmp(a->coord, b->coord, sizeof a->coord) == 0;
 }
 
 /* True when cap[k] repeats an earlier vertex exactly, key and value. */
-static bool seen_repeats(seen_table *t, const xyl_tess_captured *cap, size_t k)
+static bool seen_repeats(seen_table *t, const xyl__tess_captured *cap, size_t k)
 {
     uint32_t w[4];
     memcpy(w, cap[k].coord, sizeof cap[k].coord);
@@ -202,7 +209,7 @@ static bool seen_repeats(seen_table *t, const xyl_tess_captured *cap, size_t k)
             t->slots[at] = (uint32_t)k + 1;
             return false;
         }
-        const xyl_tess_captured *first = &cap[t->slots[at] - 1];
+        const xyl__tess_captured *first = &cap[t->slots[at] - 1];
         if (same_key(first, &cap[k]))
             return memcmp(first->position, cap[k].position, sizeof first->position) == 0 &&
                    memcmp(first->normal, cap[k].normal, sizeof first->normal) == 0;
@@ -216,10 +223,10 @@ static void check_capture(suite *s, const xyl_tess_patches *tp, const xyl_tess_b
     size_t count = 0;
     xyl_diag d = {0};
     /* count first (capacity 0), then fill */
-    expect(xyl_tess_gl_capture(s->gl, b, v, path, NULL, 0, &count, &d), XYL_OK, &d);
-    xyl_tess_captured *cap = malloc((count ? count : 1) * sizeof *cap);
+    expect(xyl__tess_gl_capture(s->gl, b, v, path, NULL, 0, &count, &d), XYL_OK, &d);
+    xyl__tess_captured *cap = malloc((count ? count : 1) * sizeof *cap);
     size_t again = 0;
-    expect(xyl_tess_gl_capture(s->gl, b, v, path, cap, count, &again, &d), XYL_OK, &d);
+    expect(xyl__tess_gl_capture(s->gl, b, v, path, cap, count, &again, &d), XYL_OK, &d);
     assert_int_equal(again, count);
     uint32_t *inst_of = malloc(tp->count * sizeof *inst_of);
     for (size_t p = 0; p < tp->count; ++p) inst_of[p] = UINT32_MAX;
@@ -245,7 +252,7 @@ static void check_capture(suite *s, const xyl_tess_patches *tp, const xyl_tess_b
     assert_int_equal(count, hw ? expect : b->vertices);
     seen_table seen = seen_create(count);
     for (size_t k = 0; k < count; ++k) {
-        const xyl_tess_captured *c = &cap[k];
+        const xyl__tess_captured *c = &cap[k];
         if (c->patch >= tp->count || inst_of[c->patch] == UINT32_MAX)
             fail_msg("captured vertex %zu names patch %u of %zu", k, c->patch, tp->count);
         if (!seen_repeats(&seen, cap, k))
@@ -262,7 +269,7 @@ static void gpu_vertices_match_the_cpu_reference_on_both_paths(void **state)
     const struct { uint32_t sides; xyl_subdivision sub; } meshes[] = {
         {3, XYL_SUBDIVIDE_NONE}, {4, XYL_SUBDIVIDE_NONE}, {4, XYL_SUBDIVIDE_CATMARK}};
     deviation worst[2] = {{0, 0}, {0, 0}};
-    xyl_tess_batches b = {0};
+    xyl_tess_batches *b = tu_batches_create();
     for (size_t mi = 0; mi < 3; ++mi) {
         xyl_mesh *m = tu_tree_mesh(0, meshes[mi].sides, meshes[mi].sub);
         xyl_tess_patches *tp = patches_of(m);
@@ -280,13 +287,13 @@ static void gpu_vertices_match_the_cpu_reference_on_both_paths(void **state)
             view.fixed_level = fixed[li];
             view.eye[0] = 0.3f * tp->size; view.eye[1] = 0.2f * tp->size;
             view.max_level = adaptive_max;
-            assert_int_equal(xyl_tess_select(tp, s->pat, &view, &b, NULL), XYL_OK);
-            if (!fixed[li]) assert_true(b.cmd_count >= 3);
+            assert_int_equal(xyl_tess_select(tp, s->pat, &view, b, NULL), XYL_OK);
+            if (!fixed[li]) assert_true(b->cmd_count >= 3);
             for (size_t vi = 0; vi < 3; ++vi)
                 for (int path = 0; path < 2; ++path) {
                     bool hw_sampled = path == 0 || !SANITIZED || (mi == 0 && vi == 0);
                     if (hw_sampled)
-                        check_capture(s, tp, &b, variants[vi], (xyl_tess_path)path, &worst[path]);
+                        check_capture(s, tp, b, variants[vi], (xyl_tess_path)path, &worst[path]);
                 }
         }
         xyl_tess_patches_destroy(tp);
@@ -295,7 +302,7 @@ static void gpu_vertices_match_the_cpu_reference_on_both_paths(void **state)
     print_message("worst GPU - CPU: instanced %.3g x size (position), %.3g (normal); "
                   "hardware %.3g x size, %.3g\n", worst[0].pos, worst[0].nrm, worst[1].pos,
                   worst[1].nrm);
-    xyl_tess_batches_free(&b);
+    xyl_tess_batches_destroy(b);
 }
 
 /* ---- 3. cracks ------------------------------------------------------------------------------ */
@@ -317,32 +324,40 @@ static size_t red_over_views(suite *s, const xyl_mesh *m, const xyl_tess_patches
 {
     const float az[6] = {0.3f, 1.9f, 3.5f, 5.0f, 0.8f, 2.6f};
     const float el[6] = {0.25f, 0.1f, 0.35f, -0.1f, 1.35f, -1.35f};
-    xyl_tess_batches b = {0};
+    xyl_tess_batches *b = tu_batches_create();
     size_t total = 0;
     for (int i = 0; i < 6; ++i) {
         xyl_tess_camera cam;
         xyl_tess_frame frame;
         make_view(m, az[i], el[i], 0.45f, &cam, &frame);
-        frame.flags = XYL_TESS_FLAG_BACKFACES;
+        frame.flags = XYL__TESS_FLAG_BACKFACES;
         xyl_tess_view view = {0};
         memcpy(view.eye, cam.eye, sizeof view.eye);
         view.fovy = cam.fovy;
         view.viewport_height = SIDE;
         view.error_px = 0.05f; /* a small budget: levels vary from 1 to MAX_LEVEL */
         view.fixed_level = fixed_level;
-        assert_int_equal(xyl_tess_select(tp, s->pat, &view, &b, NULL), XYL_OK);
-        if (!fixed_level) assert_true(b.cmd_count >= 3);
+        assert_int_equal(xyl_tess_select(tp, s->pat, &view, b, NULL), XYL_OK);
+        if (!fixed_level) assert_true(b->cmd_count >= 3);
         /* every other instance: all its edges at its own level, so an edge it shares with a
          * coarser neighbour gets points the neighbour lacks */
-        for (size_t k = 0; break_edges && k < b.instance_count; k += 2)
-            b.instances[k].edge_levels = b.instances[k].level * 0x01010101u;
+        tu_batches broken = {0};
+        const xyl_tess_batches *drawn = b;
+        if (break_edges) {
+            tu_batches_copy(b, &broken);
+            for (size_t k = 0; k < b->instance_count; k += 2)
+                broken.instances[k].edge_levels = broken.instances[k].level * 0x01010101u;
+            drawn = &broken.view;
+        }
         xyl_tess_image_desc img = {0};
         img.width = img.height = SIDE;
         xyl_diag d = {0};
-        assert_int_equal(xyl_tess_gl_render_rgba(s->gl, &b, &frame, path, &img, rgba, &d), XYL_OK);
+        assert_int_equal(xyl_tess_gl_render_rgba(s->gl, drawn, &frame, path, &img, rgba, &d),
+                         XYL_OK);
+        tu_batches_free(&broken);
         total += count_pixels(rgba, (size_t)SIDE * SIDE, red, true);
     }
-    xyl_tess_batches_free(&b);
+    xyl_tess_batches_destroy(b);
     return total;
 }
 
@@ -390,12 +405,12 @@ static void bad_draw_arguments_get_result_codes(suite *s, const xyl_tess_batches
     bad.variant = 9;
     expect(xyl_tess_gl_draw(s->gl, b, &bad, XYL_TESS_PATH_INSTANCED, d), XYL_ERR_INVALID_ARGUMENT, d);
     size_t n = 0;
-    xyl_tess_captured one;
-    expect(xyl_tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 0, NULL, d),
+    xyl__tess_captured one;
+    expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 0, NULL, d),
            XYL_ERR_INVALID_ARGUMENT, d);
-    expect(xyl_tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 5, &n, d),
+    expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 5, &n, d),
            XYL_ERR_INVALID_ARGUMENT, d);
-    expect(xyl_tess_gl_capture(s->gl, b, (xyl_tess_variant)3, XYL_TESS_PATH_HARDWARE, &one, 1, &n, d),
+    expect(xyl__tess_gl_capture(s->gl, b, (xyl_tess_variant)3, XYL_TESS_PATH_HARDWARE, &one, 1, &n, d),
            XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl_tess_gl_set_patches(s->gl, NULL, d), XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl_tess_gl_set_patches(NULL, NULL, d), XYL_ERR_INVALID_ARGUMENT, d);
@@ -416,8 +431,8 @@ static void refuse_batches(suite *s, const xyl_tess_batches *b, const xyl_tess_f
         assert_int_equal(rgba[0], 0xab);
         assert_int_equal(rgba[4 * 16 * 16 - 1], 0xab);
         size_t n = 12345;
-        xyl_tess_captured c;
-        expect(xyl_tess_gl_capture(s->gl, b, XYL_TESS_PN, p, &c, 1, &n, d), XYL_ERR_INVALID_ARGUMENT, d);
+        xyl__tess_captured c;
+        expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, p, &c, 1, &n, d), XYL_ERR_INVALID_ARGUMENT, d);
         assert_int_equal(n, 12345);
     }
 }
@@ -471,11 +486,11 @@ static void bad_input_gets_result_codes(void **state)
     make_view(m, 0.5f, 0.2f, 1.0f, &cam, &f);
     xyl_tess_view view = {0};
     view.fixed_level = 2;
-    xyl_tess_batches b = {0};
-    assert_int_equal(xyl_tess_select(tp, s->pat, &view, &b, NULL), XYL_OK);
+    xyl_tess_batches *b = tu_batches_create();
+    assert_int_equal(xyl_tess_select(tp, s->pat, &view, b, NULL), XYL_OK);
     assert_int_equal(xyl_tess_gl_set_patches(s->gl, tp, &d), XYL_OK);
-    bad_draw_arguments_get_result_codes(s, &b, &f, &d);
-    bad_images_get_result_codes(s, &b, &f, &d);
+    bad_draw_arguments_get_result_codes(s, b, &f, &d);
+    bad_images_get_result_codes(s, b, &f, &d);
 
     uint8_t *rgba = malloc(4 * 16 * 16);
     /* batches that reference patches beyond the uploaded set */
@@ -483,30 +498,31 @@ static void bad_input_gets_result_codes(void **state)
     half.count = tp->count / 2;
     half.quad_count = half.quad_count < half.count ? half.quad_count : half.count;
     assert_int_equal(xyl_tess_gl_set_patches(s->gl, &half, &d), XYL_OK);
-    refuse_batches(s, &b, &f, rgba, &d);
+    refuse_batches(s, b, &f, rgba, &d);
     assert_int_equal(xyl_tess_gl_set_patches(s->gl, tp, &d), XYL_OK);
     /* a level above the renderer's patterns (MAX_LEVEL) */
     xyl_tess_patterns *big = NULL;
     assert_int_equal(xyl_tess_patterns_create(MAX_LEVEL + 4, NULL, &big, NULL), XYL_OK);
     view.fixed_level = MAX_LEVEL + 1;
-    xyl_tess_batches high = {0};
-    assert_int_equal(xyl_tess_select(tp, big, &view, &high, NULL), XYL_OK);
-    refuse_batches(s, &high, &f, rgba, &d);
+    xyl_tess_batches *high = tu_batches_create();
+    assert_int_equal(xyl_tess_select(tp, big, &view, high, NULL), XYL_OK);
+    refuse_batches(s, high, &f, rgba, &d);
     /* an instance whose edge level is above its patch level, or a command that lies */
-    b.instances[0].edge_levels |= 0xffu;
-    refuse_batches(s, &b, &f, rgba, &d);
-    b.instances[0].edge_levels &= ~0xffu;
-    b.instances[0].edge_levels |= 2u;
-    b.cmds[0].index_count += 3;
-    refuse_batches(s, &b, &f, rgba, &d);
-    b.cmds[0].index_count -= 3;
-    expect(xyl_tess_gl_draw(s->gl, &b, &f, XYL_TESS_PATH_INSTANCED, &d),
+    tu_batches edited;
+    tu_batches_copy(b, &edited);
+    edited.instances[0].edge_levels |= 0xffu;
+    refuse_batches(s, &edited.view, &f, rgba, &d);
+    edited.instances[0] = b->instances[0];
+    edited.cmds[0].index_count += 3;
+    refuse_batches(s, &edited.view, &f, rgba, &d);
+    tu_batches_free(&edited);
+    expect(xyl_tess_gl_draw(s->gl, b, &f, XYL_TESS_PATH_INSTANCED, &d),
            XYL_ERR_UNSUPPORTED, &d); /* valid, but a surfaceless context has no framebuffer */
 
     free(rgba);
-    xyl_tess_batches_free(&high);
+    xyl_tess_batches_destroy(high);
     xyl_tess_patterns_destroy(big);
-    xyl_tess_batches_free(&b);
+    xyl_tess_batches_destroy(b);
     xyl_tess_patches_destroy(tp);
     xyl_mesh_destroy(m);
 }
@@ -611,13 +627,13 @@ static void default_tree_renders_with_coverage_and_wireframe(void **state)
     xyl_tess_view view = {0};
     memcpy(view.eye, cam.eye, sizeof view.eye);
     view.viewport_height = SIDE;
-    xyl_tess_batches b = {0};
-    assert_int_equal(xyl_tess_select(tp, s->pat, &view, &b, NULL), XYL_OK);
+    xyl_tess_batches *b = tu_batches_create();
+    assert_int_equal(xyl_tess_select(tp, s->pat, &view, b, NULL), XYL_OK);
     uint8_t *plain = malloc(4u * SIDE * SIDE), *other = malloc(4u * SIDE * SIDE);
-    for (int path = 0; path < 2; ++path) render_path(s, &b, &f, (xyl_tess_path)path, plain, other);
+    for (int path = 0; path < 2; ++path) render_path(s, b, &f, (xyl_tess_path)path, plain, other);
     free(plain);
     free(other);
-    xyl_tess_batches_free(&b);
+    xyl_tess_batches_destroy(b);
     xyl_tess_patches_destroy(tp);
     xyl_mesh_destroy(m);
 }

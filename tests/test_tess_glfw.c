@@ -7,6 +7,7 @@
 #include <GLFW/glfw3.h>
 
 #include "test_util.h"
+#include "tess_util.h"
 #include <xylem/xyl_tess_gl.h>
 
 #define SIDE 192
@@ -17,7 +18,7 @@ typedef struct suite {
     xyl_tess_gl *gl;
     xyl_mesh *mesh;
     xyl_tess_patches *patches;
-    xyl_tess_batches batches;
+    xyl_tess_batches *batches;
     xyl_tess_frame frame;
     uint8_t *window_rgba, *offscreen_rgba;
 } suite;
@@ -61,8 +62,9 @@ static void make_scene(suite *s)
     memcpy(view.eye, cam.eye, sizeof view.eye);
     view.fovy = cam.fovy;
     view.viewport_height = SIDE;
-    assert_int_equal(xyl_tess_select(s->patches, s->pat, &view, &s->batches, NULL), XYL_OK);
-    assert_true(s->batches.cmd_count >= 2); /* several levels */
+    s->batches = tu_batches_create();
+    assert_int_equal(xyl_tess_select(s->patches, s->pat, &view, s->batches, NULL), XYL_OK);
+    assert_true(s->batches->cmd_count >= 2); /* several levels */
 }
 
 static int setup(void **state)
@@ -87,7 +89,7 @@ static int setup(void **state)
 static int teardown(void **state)
 {
     suite *s = *state;
-    xyl_tess_batches_free(&s->batches);
+    xyl_tess_batches_destroy(s->batches);
     xyl_tess_patches_destroy(s->patches);
     xyl_mesh_destroy(s->mesh);
     xyl_tess_gl_destroy(s->gl);
@@ -109,7 +111,7 @@ static void draw_in_window(suite *s, const xyl_tess_frame *f, xyl_tess_path path
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     xyl_diag d = {0};
-    if (xyl_tess_gl_draw(s->gl, &s->batches, f, path, &d) != XYL_OK) fail_msg("draw: %s", d.message);
+    if (xyl_tess_gl_draw(s->gl, s->batches, f, path, &d) != XYL_OK) fail_msg("draw: %s", d.message);
     GLint fbo = -1, vp[4] = {0};
     glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &fbo);
     glGetIntegerv(GL_VIEWPORT, vp);
@@ -145,7 +147,7 @@ static void window_draw_matches_offscreen_render(void **state)
             draw_in_window(s, &f, (xyl_tess_path)path);
             img.wireframe = wire != 0;
             xyl_diag d = {0};
-            if (xyl_tess_gl_render_rgba(s->gl, &s->batches, &s->frame, (xyl_tess_path)path, &img,
+            if (xyl_tess_gl_render_rgba(s->gl, s->batches, &s->frame, (xyl_tess_path)path, &img,
                                         s->offscreen_rgba, &d) != XYL_OK)
                 fail_msg("render: %s", d.message);
             size_t differ = 0, covered = 0, dark = 0;

@@ -6,6 +6,8 @@
 #define PI 3.14159265358979323846
 
 #include "test_util.h"
+#include "tess_debug.h"
+#include "tess_util.h"
 #include <xylem/xyl_tessellate.h>
 
 static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE};
@@ -260,11 +262,11 @@ static void adaptive_levels_keep_shared_edges_bit_identical(void **state)
             xyl_tess_view view = {0};
             view.eye[0] = 0.3f * tp->size; view.eye[1] = 0.1f * tp->size; view.eye[2] = 0.05f * tp->size;
             view.error_px = 0.5f;
-            xyl_tess_batches b = {0};
-            assert_int_equal(xyl_tess_select(tp, pat, &view, &b, NULL), XYL_OK);
-            assert_true(b.cmd_count >= 3); /* really adaptive */
-            check_watertight(tp, pat, &b);
-            xyl_tess_batches_free(&b);
+            xyl_tess_batches *b = tu_batches_create();
+            assert_int_equal(xyl_tess_select(tp, pat, &view, b, NULL), XYL_OK);
+            assert_true(b->cmd_count >= 3); /* really adaptive */
+            check_watertight(tp, pat, b);
+            xyl_tess_batches_destroy(b);
             xyl_tess_patches_destroy(tp);
         }
         xyl_tess_patterns_destroy(pat);
@@ -426,15 +428,15 @@ static void levels_rise_as_the_camera_approaches(void **state)
     xyl_tess_view v = {0};
     uint32_t prev = 0;
     for (float d = 1000.0f; d >= 0.01f; d *= 0.5f) {
-        uint32_t l = xyl_tess_level_for(0.1f, d, &v, 64);
+        uint32_t l = xyl__tess_level_for(0.1f, d, &v, 64);
         assert_true(l >= prev && l >= 1 && l <= 64);
         prev = l;
     }
     assert_int_equal(prev, 64);
-    assert_int_equal(xyl_tess_level_for(0.0f, 1.0f, &v, 64), 1);
+    assert_int_equal(xyl__tess_level_for(0.0f, 1.0f, &v, 64), 1);
     /* the chosen level meets the budget, one less does not */
     for (float d = 0.5f; d < 500.0f; d *= 1.7f) {
-        uint32_t l = xyl_tess_level_for(0.1f, d, &v, 64);
+        uint32_t l = xyl__tess_level_for(0.1f, d, &v, 64);
         float scale = 1080.0f / (2.0f * tanf(0.4f));
         if (l < 64) assert_true(0.1f / (float)(l * l) * scale / d <= 0.5f * 1.0001f);
         if (l > 1) assert_true(0.1f / (float)((l - 1) * (l - 1)) * scale / d > 0.5f);
@@ -450,24 +452,24 @@ static void select_buckets_every_patch_once(void **state)
     xyl_tess_patches *tp = NULL;
     assert_int_equal(xyl_tess_patches_create(m, NULL, &tp, NULL), XYL_OK);
     assert_int_equal(tp->count, m->quad_count + m->triangle_count);
-    xyl_tess_batches b = {0};
+    xyl_tess_batches *b = tu_batches_create();
     uint64_t prev_tris = 0;
     for (float far = 4.0f; far >= 0.25f; far *= 0.5f) {
         xyl_tess_view view = {0};
         view.eye[0] = far * tp->size;
         view.eye[2] = 0.5f * tp->size;
-        assert_int_equal(xyl_tess_select(tp, pat, &view, &b, NULL), XYL_OK);
-        assert_int_equal(b.instance_count, tp->count);
+        assert_int_equal(xyl_tess_select(tp, pat, &view, b, NULL), XYL_OK);
+        assert_int_equal(b->instance_count, tp->count);
         unsigned char *seen = calloc(tp->count, 1);
         size_t total = 0;
         uint64_t tris = 0;
-        for (size_t c = 0; c < b.cmd_count; ++c) {
-            const xyl_tess_draw_cmd *cmd = &b.cmds[c];
+        for (size_t c = 0; c < b->cmd_count; ++c) {
+            const xyl_tess_draw_cmd *cmd = &b->cmds[c];
             assert_int_equal(cmd->base_instance, total);
             for (uint32_t i = 0; i < cmd->instance_count; ++i) {
-                const xyl_tess_instance *in = &b.instances[cmd->base_instance + i];
-                assert_int_equal(in->level, b.batches[c].level);
-                assert_int_equal(in->kind, b.batches[c].kind);
+                const xyl_tess_instance *in = &b->instances[cmd->base_instance + i];
+                assert_int_equal(in->level, b->batches[c].level);
+                assert_int_equal(in->kind, b->batches[c].kind);
                 assert_int_equal(in->kind, xyl_tess_patch_kind(&tp->records[in->patch]));
                 for (uint32_t e = 0; e < in->kind; ++e) {
                     uint32_t le = (in->edge_levels >> (8 * e)) & 0xffu;
@@ -480,7 +482,7 @@ static void select_buckets_every_patch_once(void **state)
             tris += (uint64_t)cmd->instance_count * cmd->index_count / 3;
         }
         assert_int_equal(total, tp->count);
-        assert_int_equal(tris, b.triangles);
+        assert_int_equal(tris, b->triangles);
         assert_true(tris >= prev_tris); /* closer: never fewer triangles */
         prev_tris = tris;
         free(seen);
@@ -488,14 +490,68 @@ static void select_buckets_every_patch_once(void **state)
     /* a fixed level draws everything at that level */
     xyl_tess_view fixed = {0};
     fixed.fixed_level = 7;
-    assert_int_equal(xyl_tess_select(tp, pat, &fixed, &b, NULL), XYL_OK);
-    assert_int_equal(b.triangles, (uint64_t)m->quad_count * 98 + (uint64_t)m->triangle_count * 49);
-    xyl_tess_batches_free(&b);
+    assert_int_equal(xyl_tess_select(tp, pat, &fixed, b, NULL), XYL_OK);
+    assert_int_equal(b->triangles, (uint64_t)m->quad_count * 98 + (uint64_t)m->triangle_count * 49);
+    xyl_tess_batches_destroy(b);
     xyl_tess_patches_destroy(tp);
     xyl_tess_patterns_destroy(pat);
     xyl_mesh_destroy(m);
 }
 
+
+/* Every allocation goes through the caller's allocator, and a select that cannot grow the
+ * arrays for a bigger patch set fails with the previous frame's batches intact. */
+static void batches_use_their_allocator_and_survive_a_failed_select(void **state)
+{
+    (void)state;
+    xyl_tess_patterns *pat = NULL;
+    assert_int_equal(xyl_tess_patterns_create(8, NULL, &pat, NULL), XYL_OK);
+    xyl_mesh *small = tu_tree_mesh(0, 3, XYL_SUBDIVIDE_NONE);
+    xyl_mesh *big = tu_tree_mesh(0, 6, XYL_SUBDIVIDE_NONE);
+    xyl_tess_patches *tp_small = NULL, *tp_big = NULL;
+    assert_int_equal(xyl_tess_patches_create(small, NULL, &tp_small, NULL), XYL_OK);
+    assert_int_equal(xyl_tess_patches_create(big, NULL, &tp_big, NULL), XYL_OK);
+    tu_counting_alloc c = {0, 0, false};
+    xyl_allocator a = tu_counting_allocator(&c);
+    xyl_tess_batches *b = NULL;
+    assert_int_equal(xyl_tess_batches_create(&a, &b, NULL), XYL_OK);
+    assert_int_equal(b->instance_count, 0);
+    assert_int_equal(b->cmd_count, 0);
+    xyl_tess_view view = {0};
+    view.eye[0] = 0.3f * tp_small->size;
+    assert_int_equal(xyl_tess_select(tp_small, pat, &view, b, NULL), XYL_OK);
+    assert_true(c.calls > 0 && b->instance_count == tp_small->count);
+    tu_batches before;
+    tu_batches_copy(b, &before);
+    c.refuse = true;
+    xyl_diag d = {0};
+    assert_int_equal(xyl_tess_select(tp_big, pat, &view, b, &d), XYL_ERR_OUT_OF_MEMORY);
+    assert_int_equal(b->instance_count, before.view.instance_count);
+    assert_int_equal(b->cmd_count, before.view.cmd_count);
+    assert_int_equal(b->triangles, before.view.triangles);
+    assert_memory_equal(b->instances, before.instances, b->instance_count * sizeof *b->instances);
+    assert_memory_equal(b->cmds, before.cmds, b->cmd_count * sizeof *b->cmds);
+    /* the same patch set needs nothing new */
+    assert_int_equal(xyl_tess_select(tp_small, pat, &view, b, NULL), XYL_OK);
+    c.refuse = false;
+    assert_int_equal(xyl_tess_select(tp_big, pat, &view, b, NULL), XYL_OK);
+    assert_int_equal(b->instance_count, tp_big->count);
+    xyl_tess_batches_destroy(b);
+    assert_int_equal(c.live, 0);
+    /* create itself fails cleanly */
+    c.refuse = true;
+    xyl_tess_batches *none = (xyl_tess_batches *)(uintptr_t)1;
+    assert_int_equal(xyl_tess_batches_create(&a, &none, NULL), XYL_ERR_OUT_OF_MEMORY);
+    assert_ptr_equal(none, (xyl_tess_batches *)(uintptr_t)1);
+    assert_int_equal(xyl_tess_batches_create(NULL, NULL, NULL), XYL_ERR_INVALID_ARGUMENT);
+    xyl_tess_batches_destroy(NULL);
+    tu_batches_free(&before);
+    xyl_tess_patches_destroy(tp_big);
+    xyl_tess_patches_destroy(tp_small);
+    xyl_mesh_destroy(big);
+    xyl_mesh_destroy(small);
+    xyl_tess_patterns_destroy(pat);
+}
 
 /* ---- CPU refinement ------------------------------------------------------------------------- */
 
@@ -564,22 +620,22 @@ static void refined_adaptive_mesh_welds_into_a_closed_surface(void **state)
         assert_int_equal(xyl_tess_patches_create(m, NULL, &tp, NULL), XYL_OK);
         xyl_tess_view view = {0};
         view.eye[0] = 0.3f * tp->size; view.eye[1] = 0.2f * tp->size;
-        xyl_tess_batches b = {0};
-        assert_int_equal(xyl_tess_select(tp, pat, &view, &b, NULL), XYL_OK);
-        assert_true(b.cmd_count >= 3);
+        xyl_tess_batches *b = tu_batches_create();
+        assert_int_equal(xyl_tess_select(tp, pat, &view, b, NULL), XYL_OK);
+        assert_true(b->cmd_count >= 3);
         xyl_mesh *r = NULL;
-        assert_int_equal(xyl_tess_refine(tp, pat, &b, NULL, &r, NULL), XYL_OK);
-        assert_int_equal(r->vertex_count, b.vertices);
-        assert_int_equal(r->triangle_count, b.triangles);
+        assert_int_equal(xyl_tess_refine(tp, pat, b, NULL, &r, NULL), XYL_OK);
+        assert_int_equal(r->vertex_count, b->vertices);
+        assert_int_equal(r->triangle_count, b->triangles);
         check_refined_is_closed(r);
         /* limits are honoured, not truncated */
         xyl_mesh_limits lim = {0};
-        lim.max_vertices = b.vertices - 1;
+        lim.max_vertices = b->vertices - 1;
         xyl_mesh *none = (xyl_mesh *)(uintptr_t)1;
-        assert_int_equal(xyl_tess_refine(tp, pat, &b, &lim, &none, NULL), XYL_ERR_LIMIT_EXCEEDED);
+        assert_int_equal(xyl_tess_refine(tp, pat, b, &lim, &none, NULL), XYL_ERR_LIMIT_EXCEEDED);
         assert_ptr_equal(none, (xyl_mesh *)(uintptr_t)1);
         xyl_mesh_destroy(r);
-        xyl_tess_batches_free(&b);
+        xyl_tess_batches_destroy(b);
         xyl_tess_patches_destroy(tp);
         xyl_mesh_destroy(m);
     }
@@ -683,21 +739,21 @@ static void bad_input_gets_result_codes(void **state)
 
     assert_int_equal(xyl_tess_patches_create(m, NULL, &tp, &d), XYL_OK);
     assert_int_equal(xyl_tess_patterns_create(8, NULL, &pat, &d), XYL_OK);
-    xyl_tess_batches b = {0};
+    xyl_tess_batches *b = tu_batches_create();
     xyl_tess_view v = {0};
     v.eye[1] = NAN;
-    assert_int_equal(xyl_tess_select(tp, pat, &v, &b, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(xyl_tess_select(tp, pat, &v, b, &d), XYL_ERR_NON_FINITE);
     v.eye[1] = 0.0f;
     v.fixed_level = 9; /* above the patterns' 8 */
-    assert_int_equal(xyl_tess_select(tp, pat, &v, &b, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_tess_select(tp, pat, &v, b, &d), XYL_ERR_INVALID_ARGUMENT);
     v.fixed_level = 0;
     v.fovy = -1.0f;
-    assert_int_equal(xyl_tess_select(tp, pat, &v, &b, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_tess_select(tp, pat, &v, b, &d), XYL_ERR_INVALID_ARGUMENT);
     v.fovy = 0.0f;
     v.error_px = NAN;
-    assert_int_equal(xyl_tess_select(tp, pat, &v, &b, &d), XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_tess_select(NULL, pat, &v, &b, &d), XYL_ERR_INVALID_ARGUMENT);
-    xyl_tess_batches_free(&b);
+    assert_int_equal(xyl_tess_select(tp, pat, &v, b, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_tess_select(NULL, pat, &v, b, &d), XYL_ERR_INVALID_ARGUMENT);
+    xyl_tess_batches_destroy(b);
     xyl_tess_patterns_destroy(pat);
     xyl_tess_patches_destroy(tp);
     xyl_mesh_destroy(m);
@@ -716,6 +772,7 @@ int main(void)
         cmocka_unit_test(patterns_tile_their_domain_counter_clockwise),
         cmocka_unit_test(levels_rise_as_the_camera_approaches),
         cmocka_unit_test(select_buckets_every_patch_once),
+        cmocka_unit_test(batches_use_their_allocator_and_survive_a_failed_select),
         cmocka_unit_test(refined_adaptive_mesh_welds_into_a_closed_surface),
         cmocka_unit_test(camera_maps_target_to_the_centre_in_both_conventions),
         cmocka_unit_test(bad_input_gets_result_codes),

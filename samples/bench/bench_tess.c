@@ -23,7 +23,9 @@
 #include <xylem/xyl_lsystem.h>
 #include <xylem/xyl_stems.h>
 #include <xylem/xyl_tess_gl.h>
-#include <xylem/xyl_tess_vk.h>
+#ifdef XYL_HAVE_VULKAN
+#include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
+#endif
 #include <xylem/xyl_tessellate.h>
 
 #define PI 3.14159265358979323846
@@ -261,7 +263,9 @@ static void refine_fixed(const xyl_mesh *m, uint32_t variant, uint32_t level,
 typedef struct gpu {
     xyl_gl_context *ctx;
     xyl_tess_gl *gl;
+#ifdef XYL_HAVE_VULKAN
     xyl_tess_vk *vk;
+#endif
     uint8_t *rgba;
 } gpu;
 
@@ -342,9 +346,12 @@ static void run_config(row *rw, const xyl_skeleton *arc, const xyl_mesh *arc_mes
                        const xyl_tess_camera *cam, const bench_opts *o)
 {
     xyl_tess_patches *tp = NULL;
-    xyl_tess_batches b = {0};
+    xyl_tess_batches *b = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_tess_batches_create(NULL, &b, &d);
+    if (r) die("batches", r, &d);
     xyl_mesh *refined = NULL;
-    refine_fixed(arc_mesh, rw->variant, rw->level, pat, &tp, &b, &refined);
+    refine_fixed(arc_mesh, rw->variant, rw->level, pat, &tp, b, &refined);
     err_acc a = {0};
     measure(arc, refined, &a);
     rw->max_err = 100.0 * a.max;
@@ -353,16 +360,16 @@ static void run_config(row *rw, const xyl_skeleton *arc, const xyl_mesh *arc_mes
     xyl_mesh_destroy(refined);
     xyl_tess_patches_destroy(tp);
     tp = NULL;
-    refine_fixed(tree_mesh, rw->variant, rw->level, pat, &tp, &b, NULL);
-    rw->triangles = b.triangles;
+    refine_fixed(tree_mesh, rw->variant, rw->level, pat, &tp, b, NULL);
+    rw->triangles = b->triangles;
     for (int p = 0; p < 3; ++p) rw->ms[p] = -1.0;
     /* The variants differ only in the handle rule (a square root and a division more for
      * circle): pn is timed at every level, the others at level 8 to show that difference;
      * and only what a CPU rasterizer draws in seconds rather than minutes. */
     bool timed = g && (rw->variant == XYL_TESS_PN || rw->level == 8) &&
                  (rw->k == 4 || !o->quick) && rw->triangles <= 8000000u;
-    for (int p = 0; timed && p < 3; ++p) rw->ms[p] = time_path(g, p, tp, &b, cam, rw->variant, o);
-    xyl_tess_batches_free(&b);
+    for (int p = 0; timed && p < 3; ++p) rw->ms[p] = time_path(g, p, tp, b, cam, rw->variant, o);
+    xyl_tess_batches_destroy(b);
     xyl_tess_patches_destroy(tp);
 }
 

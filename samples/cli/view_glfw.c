@@ -22,7 +22,7 @@ typedef struct viewer {
     GLFWwindow *window;
     xyl_tess_patterns *patterns;
     xyl_tess_patches *patches;
-    xyl_tess_batches batches;
+    xyl_tess_batches *batches;
     xyl_tess_gl *gl;
     float lo[3], hi[3];
     /* live settings */
@@ -140,22 +140,22 @@ static int draw_frame(viewer *v, int width, int height)
     f.variant = (uint32_t)v->variant;
     if (v->wireframe) f.flags |= XYL_TESS_FLAG_WIREFRAME;
     r = xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_GL, f.view_proj, &d);
-    if (r == XYL_OK) r = xyl_tess_select(v->patches, v->patterns, &view, &v->batches, &d);
+    if (r == XYL_OK) r = xyl_tess_select(v->patches, v->patterns, &view, v->batches, &d);
     if (r != XYL_OK) return fail("level selection", r, &d);
     const float *bg = v->req->background;
     glViewport(0, 0, width, height);
     glClearColor(bg[0], bg[1], bg[2], bg[3]);
     glClearDepth(1.0);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    r = xyl_tess_gl_draw(v->gl, &v->batches, &f, v->path, &d);
+    r = xyl_tess_gl_draw(v->gl, v->batches, &f, v->path, &d);
     return r == XYL_OK ? 0 : fail("draw", r, &d);
 }
 
 static void show_status(viewer *v)
 {
     uint32_t lo = XYL_TESS_MAX_LEVEL, hi = 0;
-    for (size_t c = 0; c < v->batches.cmd_count; ++c) {
-        uint32_t l = v->batches.batches[c].level;
+    for (size_t c = 0; c < v->batches->cmd_count; ++c) {
+        uint32_t l = v->batches->batches[c].level;
         lo = l < lo ? l : lo;
         hi = l > hi ? l : hi;
     }
@@ -165,7 +165,7 @@ static void show_status(viewer *v)
     else snprintf(level, sizeof level, "%.3g px budget, levels %u..%u", v->error_px, lo, hi);
     snprintf(title, sizeof title, "xylem view - %s, %s, %s, %llu triangles, GPU %.2f ms",
              v->path == XYL_TESS_PATH_HARDWARE ? "hardware" : "instanced", variants[v->variant],
-             level, (unsigned long long)v->batches.triangles, xyl_tess_gl_last_gpu_ms(v->gl));
+             level, (unsigned long long)v->batches->triangles, xyl_tess_gl_last_gpu_ms(v->gl));
     glfwSetWindowTitle(v->window, title);
 }
 
@@ -262,6 +262,7 @@ int xyl_view_run(const xyl_view_request *req)
     int rc = open_window(&v);
     if (!rc) {
         xyl_result r = xyl_tess_patterns_create(0, NULL, &v.patterns, &d);
+        if (r == XYL_OK) r = xyl_tess_batches_create(NULL, &v.batches, &d);
         if (r == XYL_OK) r = xyl_tess_gl_create(v.patterns, &v.gl, &d);
         if (r != XYL_OK) rc = fail("GL backend", r, &d);
         else {
@@ -272,9 +273,9 @@ int xyl_view_run(const xyl_view_request *req)
         }
     }
     if (!rc) rc = loop(&v);
-    if (!rc) printf("%llu triangles in the last frame\n", (unsigned long long)v.batches.triangles);
+    if (!rc) printf("%llu triangles in the last frame\n", (unsigned long long)v.batches->triangles);
     xyl_tess_gl_destroy(v.gl);
-    xyl_tess_batches_free(&v.batches);
+    xyl_tess_batches_destroy(v.batches);
     xyl_tess_patches_destroy(v.patches);
     xyl_tess_patterns_destroy(v.patterns);
     if (v.window) glfwDestroyWindow(v.window);

@@ -17,7 +17,9 @@
 #include <xylem/xyl_lsystem.h>
 #include <xylem/xyl_stems.h>
 #include <xylem/xyl_tess_gl.h>
-#include <xylem/xyl_tess_vk.h>
+#ifdef XYL_HAVE_VULKAN
+#include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
+#endif
 #include <xylem/xyl_tessellate.h>
 
 #include "glb_read.h"
@@ -574,7 +576,7 @@ typedef struct render_job {
     xyl_mesh *mesh, *refined;
     xyl_tess_patterns *patterns;
     xyl_tess_patches *patches, *drawn; /* drawn: patches, or the refined mesh's for --tess cpu */
-    xyl_tess_batches batches;
+    xyl_tess_batches *batches;
     xyl_tess_camera camera;
     xyl_tess_frame frame;
     xyl_tess_image_desc image;
@@ -586,7 +588,7 @@ typedef struct render_job {
 
 static void render_job_free(render_job *j)
 {
-    xyl_tess_batches_free(&j->batches);
+    xyl_tess_batches_destroy(j->batches);
     if (j->drawn != j->patches) xyl_tess_patches_destroy(j->drawn);
     xyl_tess_patches_destroy(j->patches);
     xyl_tess_patterns_destroy(j->patterns);
@@ -617,7 +619,7 @@ static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_
     view.error_px = (float)o->render.error_px;
     view.fixed_level = fixed;
     double t0 = now_seconds();
-    xyl_result r = xyl_tess_select(p, j->patterns, &view, &j->batches, d);
+    xyl_result r = xyl_tess_select(p, j->patterns, &view, j->batches, d);
     j->select_ms = (now_seconds() - t0) * 1e3;
     return r;
 }
@@ -626,7 +628,7 @@ static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_
  * level 1, where a patch shows exactly its three corners (a plain triangle). */
 static xyl_result refine_on_cpu(render_job *j, xyl_diag *d)
 {
-    xyl_result r = xyl_tess_refine(j->patches, j->patterns, &j->batches, NULL, &j->refined, d);
+    xyl_result r = xyl_tess_refine(j->patches, j->patterns, j->batches, NULL, &j->refined, d);
     if (r == XYL_OK) r = xyl_tess_patches_create(j->refined, NULL, &j->drawn, d);
     return r;
 }
@@ -638,6 +640,7 @@ static xyl_result prepare_render(const options *o, render_job *j, xyl_diag *d)
     pd.variant = ro->variant;
     xyl_result r = xyl_tess_patterns_create(0, NULL, &j->patterns, d);
     if (r == XYL_OK) r = xyl_tess_patches_create(j->mesh, &pd, &j->patches, d);
+    if (r == XYL_OK) r = xyl_tess_batches_create(NULL, &j->batches, d);
     if (r != XYL_OK) return r;
     j->drawn = j->patches;
     frame_camera(o, j);
@@ -681,7 +684,7 @@ static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
                                                          : XYL_TESS_PATH_INSTANCED;
     double t0 = now_seconds();
     if (r == XYL_OK)
-        r = xyl_tess_gl_render_rgba(gl, &j->batches, &j->frame, path, &j->image, j->rgba, d);
+        r = xyl_tess_gl_render_rgba(gl, j->batches, &j->frame, path, &j->image, j->rgba, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
     if (r == XYL_OK) {
         j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl);
@@ -711,7 +714,7 @@ static xyl_result render_vk(render_job *j, xyl_diag *d)
         r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_VULKAN, j->frame.view_proj, d);
     if (r == XYL_OK) r = xyl_tess_vk_set_patches(vk, j->drawn, d);
     double t0 = now_seconds();
-    if (r == XYL_OK) r = xyl_tess_vk_render_rgba(vk, &j->batches, &j->frame, &j->image, j->rgba, d);
+    if (r == XYL_OK) r = xyl_tess_vk_render_rgba(vk, j->batches, &j->frame, &j->image, j->rgba, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
     if (r == XYL_OK) {
         j->gpu_ms = xyl_tess_vk_last_gpu_ms(vk);
@@ -732,12 +735,12 @@ static xyl_result render_vk(render_job *j, xyl_diag *d)
 static void print_render(const render_job *j, const char *path)
 {
     uint32_t lo = 64, hi = 0;
-    for (size_t c = 0; c < j->batches.cmd_count; ++c) {
-        lo = j->batches.batches[c].level < lo ? j->batches.batches[c].level : lo;
-        hi = j->batches.batches[c].level > hi ? j->batches.batches[c].level : hi;
+    for (size_t c = 0; c < j->batches->cmd_count; ++c) {
+        lo = j->batches->batches[c].level < lo ? j->batches->batches[c].level : lo;
+        hi = j->batches->batches[c].level > hi ? j->batches->batches[c].level : hi;
     }
     printf("patches: %zu (%zu quads), levels %u..%u, %llu triangles drawn\n", j->drawn->count,
-           j->drawn->quad_count, lo, hi, (unsigned long long)j->batches.triangles);
+           j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
            "GPU timer %.3f ms\n", j->select_ms, j->render_ms, j->gpu_ms);
     printf("wrote %s\n", path);

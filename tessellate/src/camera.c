@@ -1,5 +1,4 @@
-/* Cameras (look-at + perspective in either API's clip convention) and the CPU reference of a
- * GPU-captured vertex. */
+/* Cameras: look-at + perspective in either API's clip convention. */
 #include <string.h>
 
 #include "tess_internal.h"
@@ -91,43 +90,4 @@ void xyl_tess_camera_frame(const float lo[3], const float hi[3], float azimuth, 
     camera->aspect = (float)as;
     camera->near_plane = (float)(0.01 * d);
     camera->far_plane = (float)(d + 2.0 * r);
-}
-
-/* The hardware path's side test (shaders/tess_hw.tese: xyl_side_point). */
-static bool side_point(uint32_t kind, const float tc[3], uint32_t *e, float *t)
-{
-    if (kind == XYL_TESS_KIND_TRIANGLE) {
-        if (tc[2] == 0.0f) { *e = 0; *t = tc[1]; return true; }
-        if (tc[0] == 0.0f) { *e = 1; *t = tc[2]; return true; }
-        if (tc[1] == 0.0f) { *e = 2; *t = tc[0]; return true; }
-        return false;
-    }
-    if (tc[1] == 0.0f) { *e = 0; *t = tc[0]; return true; }
-    if (tc[0] == 1.0f) { *e = 1; *t = tc[1]; return true; }
-    if (tc[1] == 1.0f) { *e = 2; *t = 1.0f - tc[0]; return true; }
-    if (tc[0] == 0.0f) { *e = 3; *t = 1.0f - tc[1]; return true; }
-    return false;
-}
-
-void xyl_tess_reference(const xyl_tess_patch *patch, xyl_tess_variant variant,
-                        const xyl_tess_captured *captured, bool hardware, uint32_t edge_levels,
-                        float pos[3], float normal[3])
-{
-    const float *tc = captured->coord;
-    if (!hardware) {
-        xyl_tess_eval_lattice(patch, variant, (uint32_t)tc[2], edge_levels, (uint32_t)tc[0],
-                              (uint32_t)tc[1], pos, normal);
-        return;
-    }
-    uint32_t kind = xyl_tess_patch_kind(patch), e;
-    float t;
-    if (side_point(kind, tc, &e, &t)) {
-        uint32_t le = (edge_levels >> (XYL_TESS_EDGE_LEVEL_BITS * e)) & 0xffu;
-        uint32_t k = (uint32_t)lroundf(t * (float)le);
-        xyl_tess_eval_edge(patch, variant, e, k, le, pos, normal);
-    } else if (kind == XYL_TESS_KIND_QUAD) {
-        xyl_tess_eval(patch, variant, tc[0], tc[1], pos, normal);
-    } else {
-        xyl_tess_eval(patch, variant, tc[1], tc[2], pos, normal); /* weights (tc0, tc1, tc2) */
-    }
 }

@@ -3,6 +3,7 @@
  * a GPU may fuse, which is why GPU = CPU is checked to a tolerance and only CPU-side shared edges
  * are required to be bit-identical (the GPU's are identical to each other for the same reason:
  * both sides run the same code on the same operands). */
+#include "tess_debug.h"
 #include "tess_internal.h"
 
 static tv3 normalize_or(tv3 v, tv3 fallback)
@@ -293,4 +294,39 @@ void xyl_tess_eval_lattice(const xyl_tess_patch *patch, xyl_tess_variant variant
     else
         eval_triangle(c, n, (float)(level - i - j) / fl, (float)i / fl, (float)j / fl, variant,
                       pos, normal);
+}
+
+/* ---- the hardware path's vertices --------------------------------------------------------- */
+
+/* The hardware path's side test (shaders/tess_hw.tese: xyl_side_point). */
+static bool side_point(uint32_t kind, const float tc[3], uint32_t *e, float *t)
+{
+    if (kind == XYL_TESS_KIND_TRIANGLE) {
+        if (tc[2] == 0.0f) { *e = 0; *t = tc[1]; return true; }
+        if (tc[0] == 0.0f) { *e = 1; *t = tc[2]; return true; }
+        if (tc[1] == 0.0f) { *e = 2; *t = tc[0]; return true; }
+        return false;
+    }
+    if (tc[1] == 0.0f) { *e = 0; *t = tc[0]; return true; }
+    if (tc[0] == 1.0f) { *e = 1; *t = tc[1]; return true; }
+    if (tc[1] == 1.0f) { *e = 2; *t = 1.0f - tc[0]; return true; }
+    if (tc[0] == 0.0f) { *e = 3; *t = 1.0f - tc[1]; return true; }
+    return false;
+}
+
+void xyl__tess_reference_hardware(const xyl_tess_patch *patch, xyl_tess_variant variant,
+                                  const float tc[3], uint32_t edge_levels, float pos[3],
+                                  float normal[3])
+{
+    uint32_t kind = xyl_tess_patch_kind(patch), e;
+    float t;
+    if (side_point(kind, tc, &e, &t)) {
+        uint32_t le = (edge_levels >> (XYL_TESS_EDGE_LEVEL_BITS * e)) & 0xffu;
+        uint32_t k = (uint32_t)lroundf(t * (float)le);
+        xyl_tess_eval_edge(patch, variant, e, k, le, pos, normal);
+    } else if (kind == XYL_TESS_KIND_QUAD) {
+        xyl_tess_eval(patch, variant, tc[0], tc[1], pos, normal);
+    } else {
+        xyl_tess_eval(patch, variant, tc[1], tc[2], pos, normal); /* weights (tc0, tc1, tc2) */
+    }
 }

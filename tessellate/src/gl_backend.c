@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "shader_sources.h"
+#include "tess_debug.h"
 #include "xyl_internal.h"
 #include "xylem/xyl_tess_gl.h"
 
@@ -18,9 +19,9 @@
 #define XFB_VERTEX_BYTES 40u   /* v_position, v_normal, v_tess_coord, v_patch */
 #define MAX_READBACK_BYTES ((size_t)1 << 31)
 
-/* A transform feedback record is exactly a xyl_tess_captured, so it is read back in place. */
-_Static_assert(sizeof(xyl_tess_captured) == XFB_VERTEX_BYTES, "captured = xfb record");
-_Static_assert(offsetof(xyl_tess_captured, patch) == 36, "v_patch follows three vec3");
+/* A transform feedback record is exactly a xyl__tess_captured, so it is read back in place. */
+_Static_assert(sizeof(xyl__tess_captured) == XFB_VERTEX_BYTES, "captured = xfb record");
+_Static_assert(offsetof(xyl__tess_captured, patch) == 36, "v_patch follows three vec3");
 
 typedef struct target {
     GLuint fbo, color, depth;       /* what is drawn into (multisampled when samples > 1) */
@@ -543,7 +544,7 @@ static void draw_geometry(const xyl_tess_gl *gl, const xyl_tess_batches *b, xyl_
     }
 }
 
-/* Depth-tested, back faces culled. With XYL_TESS_FLAG_BACKFACES the back faces follow in a
+/* Depth-tested, back faces culled. With XYL__TESS_FLAG_BACKFACES the back faces follow in a
  * second pass, pushed back by a slope-scaled offset: at a silhouette a front and a back face
  * meet at equal depth and interpolation noise would let the back face win a few pixels, red
  * where there is no hole. Seen through a hole, a back face lies a branch's width behind. */
@@ -556,7 +557,7 @@ static void draw_pass(const xyl_tess_gl *gl, const xyl_tess_batches *b, xyl_tess
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
     draw_geometry(gl, b, path, pass);
-    if (!(flags & XYL_TESS_FLAG_BACKFACES)) return;
+    if (!(flags & XYL__TESS_FLAG_BACKFACES)) return;
     glCullFace(GL_FRONT);
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(2.0f, 8.0f);
@@ -825,7 +826,7 @@ static xyl_result run_capture_draw(xyl_tess_gl *gl, const xyl_tess_batches *b,
 
 /* Slots hold what the GPU computed; (i, j, level) and the patch come from the instances. */
 static void fill_instanced(const xyl_tess_gl *gl, const xyl_tess_batches *b, const float *slots,
-                           size_t n, xyl_tess_captured *out)
+                           size_t n, xyl__tess_captured *out)
 {
     size_t base = 0;
     for (size_t i = 0; i < b->instance_count && base < n; ++i) {
@@ -847,7 +848,7 @@ static void fill_instanced(const xyl_tess_gl *gl, const xyl_tess_batches *b, con
 }
 
 static xyl_result capture_instanced(xyl_tess_gl *gl, const xyl_tess_batches *b,
-                                    xyl_tess_captured *out, size_t capacity, size_t *count,
+                                    xyl__tess_captured *out, size_t capacity, size_t *count,
                                     xyl_diag *diag)
 {
     uint32_t *offsets = NULL;
@@ -918,7 +919,7 @@ static xyl_result run_feedback(xyl_tess_gl *gl, const xyl_tess_batches *b, size_
 }
 
 static xyl_result capture_hardware(xyl_tess_gl *gl, const xyl_tess_batches *b,
-                                   xyl_tess_captured *out, size_t capacity, size_t *count,
+                                   xyl__tess_captured *out, size_t capacity, size_t *count,
                                    xyl_diag *diag)
 {
     GLuint64 written[2] = {0}, generated[2] = {0};
@@ -940,9 +941,10 @@ static xyl_result capture_hardware(xyl_tess_gl *gl, const xyl_tess_batches *b,
     return r;
 }
 
-xyl_result xyl_tess_gl_capture(xyl_tess_gl *gl, const xyl_tess_batches *batches,
-                               xyl_tess_variant variant, xyl_tess_path path, xyl_tess_captured *out,
-                               size_t capacity, size_t *count, xyl_diag *diag)
+xyl_result xyl__tess_gl_capture(xyl_tess_gl *gl, const xyl_tess_batches *batches,
+                                xyl_tess_variant variant, xyl_tess_path path,
+                                xyl__tess_captured *out, size_t capacity, size_t *count,
+                                xyl_diag *diag)
 {
     if (!count || (capacity && !out))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,

@@ -2,6 +2,7 @@
 #include <float.h>
 #include <string.h>
 
+#include "tess_debug.h"
 #include "tess_internal.h"
 #include "xyl_internal.h"
 
@@ -29,8 +30,8 @@ static uint32_t level_from(float coef, float distance, float scale, float error_
     return (uint32_t)ceil(need);
 }
 
-uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
-                            uint32_t max_level)
+uint32_t xyl__tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
+                             uint32_t max_level)
 {
     if (max_level == 0 || max_level > XYL_TESS_MAX_LEVEL) max_level = XYL_TESS_MAX_LEVEL;
     float budget = view && view->error_px > 0.0f ? view->error_px : 0.5f;
@@ -74,43 +75,77 @@ static xyl_result check_view(const xyl_tess_patches *patches, const xyl_tess_pat
     return XYL_OK;
 }
 
-static bool reserve(xyl_tess_batches *b, size_t patches, size_t edges)
+/* What xyl_tess_batches_create hands out: the public view first, then the arrays it points at
+ * (writable here) and their capacities. */
+typedef struct owned_batches {
+    xyl_tess_batches pub;
+    xyl_tess_instance *instances;
+    xyl_tess_draw_cmd *cmds;
+    xyl_tess_batch *batches;
+    uint8_t *edge_levels;
+    uint8_t *patch_levels; /* scratch: each patch's level before bucketing */
+    size_t instance_cap, edge_cap, patch_cap;
+    size_t edge_count; /* edge levels the public view holds */
+    xyl_allocator alloc;
+} owned_batches;
+
+xyl_result xyl_tess_batches_create(const xyl_allocator *alloc, xyl_tess_batches **out,
+                                   xyl_diag *diag)
 {
-    size_t cap = b->instance_cap;
-    if (patches > cap) {
-        void *p = b->instances;
-        if (!xyl__grow(&b->alloc, &p, &cap, 0, patches, sizeof(xyl_tess_instance))) return false;
-        b->instances = p;
-        void *l = b->patch_levels;
-        size_t lcap = b->patch_cap;
-        if (!xyl__grow(&b->alloc, &l, &lcap, 0, patches, 1)) return false;
-        b->patch_levels = l;
-        b->patch_cap = lcap;
-        b->instance_cap = cap;
+    if (!out) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out is required");
+    owned_batches *b = xyl__calloc(alloc, 1, sizeof *b);
+    if (b) {
+        if (alloc) b->alloc = *alloc;
+        /* one command per (kind, level) at most: allocated once */
+        b->cmds = xyl__calloc(alloc, 2 * XYL_TESS_MAX_LEVEL, sizeof(xyl_tess_draw_cmd));
+        b->batches = xyl__calloc(alloc, 2 * XYL_TESS_MAX_LEVEL, sizeof(xyl_tess_batch));
     }
-    if (edges > b->edge_cap) {
-        void *e = b->edge_levels;
-        size_t ecap = b->edge_cap;
-        if (!xyl__grow(&b->alloc, &e, &ecap, 0, edges, 1)) return false;
-        b->edge_levels = e;
-        b->edge_cap = ecap;
+    if (!b || !b->cmds || !b->batches) {
+        xyl_tess_batches_destroy(b ? &b->pub : NULL);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     }
-    if (!b->cmds) {
-        b->cmds = xyl__calloc(&b->alloc, 2 * XYL_TESS_MAX_LEVEL, sizeof(xyl_tess_draw_cmd));
-        b->batches = xyl__calloc(&b->alloc, 2 * XYL_TESS_MAX_LEVEL, sizeof(xyl_tess_batch));
-        if (!b->cmds || !b->batches) {
-            xyl__free(&b->alloc, b->cmds);
-            xyl__free(&b->alloc, b->batches);
-            b->cmds = NULL;
-            b->batches = NULL;
-            return false;
-        }
-    }
+    b->pub.cmds = b->cmds;
+    b->pub.batches = b->batches;
+    *out = &b->pub;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+void xyl_tess_batches_destroy(xyl_tess_batches *batches)
+{
+    if (!batches) return;
+    owned_batches *b = (owned_batches *)batches;
+    xyl_allocator a = b->alloc;
+    xyl__free(&a, b->instances);
+    xyl__free(&a, b->cmds);
+    xyl__free(&a, b->batches);
+    xyl__free(&a, b->edge_levels);
+    xyl__free(&a, b->patch_levels);
+    xyl__free(&a, b);
+}
+
+/* Grows the arrays for a patch set, keeping what the public view shows: a failure leaves the
+ * previous frame's batches intact. */
+static bool reserve(owned_batches *b, size_t patches, size_t edges)
+{
+    void *p = b->instances;
+    if (!xyl__grow(&b->alloc, &p, &b->instance_cap, b->pub.instance_count, patches,
+                   sizeof(xyl_tess_instance)))
+        return false;
+    b->instances = p;
+    b->pub.instances = b->instances;
+    void *l = b->patch_levels;
+    if (!xyl__grow(&b->alloc, &l, &b->patch_cap, 0, patches, 1)) return false;
+    b->patch_levels = l;
+    void *e = b->edge_levels;
+    if (!xyl__grow(&b->alloc, &e, &b->edge_cap, b->edge_count, edges, 1)) return false;
+    b->edge_levels = e;
+    b->pub.edge_levels = b->edge_levels;
     return true;
 }
 
 static void choose_levels(const xyl__tess_patches *t, const xyl_tess_view *view,
-                          const view_params *vp, xyl_tess_batches *b)
+                          const view_params *vp, owned_batches *b)
 {
     const xyl_tess_patches *p = &t->pub;
     if (view->fixed_level) {
@@ -133,31 +168,31 @@ static void choose_levels(const xyl__tess_patches *t, const xyl_tess_view *view,
 }
 
 static void bucket(const xyl_tess_patches *p, const xyl_tess_patterns *patterns,
-                   xyl_tess_batches *b)
+                   owned_batches *b)
 {
     size_t count[2][XYL_TESS_MAX_LEVEL + 1] = {{0}};
     for (size_t f = 0; f < p->count; ++f) ++count[f < p->quad_count ? 0 : 1][b->patch_levels[f]];
     size_t start[2][XYL_TESS_MAX_LEVEL + 1];
     size_t at = 0;
-    b->cmd_count = 0;
-    b->triangles = 0;
-    b->vertices = 0;
+    b->pub.cmd_count = 0;
+    b->pub.triangles = 0;
+    b->pub.vertices = 0;
     for (int k = 0; k < 2; ++k)
         for (uint32_t l = 1; l <= XYL_TESS_MAX_LEVEL; ++l) {
             start[k][l] = at;
             if (!count[k][l]) continue;
             const xyl_tess_pattern_range *r = &patterns->ranges[k][l];
-            xyl_tess_draw_cmd *c = &b->cmds[b->cmd_count];
+            xyl_tess_draw_cmd *c = &b->cmds[b->pub.cmd_count];
             c->index_count = r->index_count;
             c->instance_count = (uint32_t)count[k][l];
             c->first_index = r->first_index;
             c->base_vertex = (int32_t)r->first_vertex;
             c->base_instance = (uint32_t)at;
-            b->batches[b->cmd_count].kind = k ? XYL_TESS_KIND_TRIANGLE : XYL_TESS_KIND_QUAD;
-            b->batches[b->cmd_count].level = l;
-            ++b->cmd_count;
-            b->triangles += (uint64_t)count[k][l] * (r->index_count / 3);
-            b->vertices += (uint64_t)count[k][l] * r->vertex_count;
+            b->batches[b->pub.cmd_count].kind = k ? XYL_TESS_KIND_TRIANGLE : XYL_TESS_KIND_QUAD;
+            b->batches[b->pub.cmd_count].level = l;
+            ++b->pub.cmd_count;
+            b->pub.triangles += (uint64_t)count[k][l] * (r->index_count / 3);
+            b->pub.vertices += (uint64_t)count[k][l] * r->vertex_count;
             at += count[k][l];
         }
     for (size_t f = 0; f < p->count; ++f) {
@@ -172,7 +207,7 @@ static void bucket(const xyl_tess_patches *p, const xyl_tess_patterns *patterns,
             in->edge_levels |= (uint32_t)b->edge_levels[p->patch_edges[4 * f + e]]
                                << (XYL_TESS_EDGE_LEVEL_BITS * e);
     }
-    b->instance_count = p->count;
+    b->pub.instance_count = p->count;
 }
 
 xyl_result xyl_tess_select(const xyl_tess_patches *patches, const xyl_tess_patterns *patterns,
@@ -184,24 +219,13 @@ xyl_result xyl_tess_select(const xyl_tess_patches *patches, const xyl_tess_patte
     view_params vp;
     xyl_result r = check_view(patches, patterns, view, &vp, diag);
     if (r != XYL_OK) return r;
-    if (!reserve(batches, patches->count, patches->edge_count))
+    owned_batches *b = (owned_batches *)batches;
+    if (!reserve(b, patches->count, patches->edge_count))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for %zu patches",
                          patches->count);
-    choose_levels((const xyl__tess_patches *)patches, view, &vp, batches);
-    bucket(patches, patterns, batches);
+    choose_levels((const xyl__tess_patches *)patches, view, &vp, b);
+    b->edge_count = patches->edge_count;
+    bucket(patches, patterns, b);
     xyl__diag_ok(diag);
     return XYL_OK;
-}
-
-void xyl_tess_batches_free(xyl_tess_batches *b)
-{
-    if (!b) return;
-    xyl_allocator a = b->alloc;
-    xyl__free(&a, b->instances);
-    xyl__free(&a, b->cmds);
-    xyl__free(&a, b->batches);
-    xyl__free(&a, b->edge_levels);
-    xyl__free(&a, b->patch_levels);
-    memset(b, 0, sizeof *b);
-    b->alloc = a;
 }

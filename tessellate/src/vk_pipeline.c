@@ -1,12 +1,12 @@
-/* Vulkan backend: shader modules, the one descriptor set, render passes, the offscreen target and
- * the graphics pipelines (shade, wireframe overlay, capture). */
+/* Vulkan backend: shader modules, the descriptor sets, render passes, the offscreen target and
+ * the graphics pipelines (shade, wireframe overlay, capture) for any pass they draw in. */
 #include <string.h>
 
 #include "shader_sources.h"
 #include "vk_internal.h"
 
-#define COLOR_FORMAT VK_FORMAT_R8G8B8A8_UNORM
-#define DEPTH_FORMAT VK_FORMAT_D32_SFLOAT
+#define COLOR_FORMAT XYL__VK_COLOR_FORMAT
+#define DEPTH_FORMAT XYL__VK_DEPTH_FORMAT
 
 static xyl_result shader(xyl_tess_vk *vk, const unsigned char *code, size_t size,
                          VkShaderModule *out, xyl_diag *diag)
@@ -14,12 +14,13 @@ static xyl_result shader(xyl_tess_vk *vk, const unsigned char *code, size_t size
     VkShaderModuleCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     si.codeSize = size;
     si.pCode = (const uint32_t *)(const void *)code; /* the embedded arrays are 4-byte aligned */
-    VkResult r = vkCreateShaderModule(vk->device, &si, NULL, out);
+    VkResult r = vkCreateShaderModule(vk->device, &si, vk->vkalloc, out);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateShaderModule");
 }
 
-/* One set for every pipeline: patches, frame (dynamic offset: shade or wireframe copy),
- * capture output, capture offsets. */
+/* One layout for every pipeline: patches, frame (dynamic offset: a slot's shade or wireframe
+ * copy), capture output, capture offsets. The draws' set leaves the last two unwritten: their
+ * shaders do not use them. */
 static xyl_result descriptor_layout(xyl_tess_vk *vk, xyl_diag *diag)
 {
     const VkShaderStageFlags vf = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
@@ -34,31 +35,38 @@ static xyl_result descriptor_layout(xyl_tess_vk *vk, xyl_diag *diag)
     VkDescriptorSetLayoutCreateInfo li = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     li.bindingCount = 4;
     li.pBindings = b;
-    VkResult r = vkCreateDescriptorSetLayout(vk->device, &li, NULL, &vk->set_layout);
+    VkResult r = vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &vk->set_layout);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateDescriptorSetLayout");
     VkPipelineLayoutCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     pi.setLayoutCount = 1;
     pi.pSetLayouts = &vk->set_layout;
-    r = vkCreatePipelineLayout(vk->device, &pi, NULL, &vk->layout);
+    r = vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->layout);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreatePipelineLayout");
 }
 
-static xyl_result descriptor_set(xyl_tess_vk *vk, xyl_diag *diag)
+/* Two sets: the draws' (written by set_patches only, so recorded draws stay valid while the
+ * caller's frames are in flight) and the capture's (rewritten by every capture). */
+static xyl_result descriptor_sets(xyl_tess_vk *vk, xyl_diag *diag)
 {
-    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 3},
-                                     {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 1}};
+    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6},
+                                     {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER_DYNAMIC, 2}};
     VkDescriptorPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-    pi.maxSets = 1;
+    pi.maxSets = 2;
     pi.poolSizeCount = 2;
     pi.pPoolSizes = sizes;
-    VkResult r = vkCreateDescriptorPool(vk->device, &pi, NULL, &vk->descriptor_pool);
+    VkResult r = vkCreateDescriptorPool(vk->device, &pi, vk->vkalloc, &vk->descriptor_pool);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateDescriptorPool");
+    VkDescriptorSetLayout layouts[2] = {vk->set_layout, vk->set_layout};
+    VkDescriptorSet sets[2];
     VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     ai.descriptorPool = vk->descriptor_pool;
-    ai.descriptorSetCount = 1;
-    ai.pSetLayouts = &vk->set_layout;
-    r = vkAllocateDescriptorSets(vk->device, &ai, &vk->set);
-    return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkAllocateDescriptorSets");
+    ai.descriptorSetCount = 2;
+    ai.pSetLayouts = layouts;
+    r = vkAllocateDescriptorSets(vk->device, &ai, sets);
+    if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkAllocateDescriptorSets");
+    vk->set = sets[0];
+    vk->capture_set = sets[1];
+    return XYL_OK;
 }
 
 /* ---- render passes ------------------------------------------------------------------------- */
@@ -122,7 +130,7 @@ static xyl_result create_pass(xyl_tess_vk *vk, VkSampleCountFlagBits samples, Vk
     ri.pSubpasses = &sub;
     ri.dependencyCount = 2;
     ri.pDependencies = dep;
-    VkResult r = vkCreateRenderPass(vk->device, &ri, NULL, out);
+    VkResult r = vkCreateRenderPass(vk->device, &ri, vk->vkalloc, out);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateRenderPass");
 }
 
@@ -135,22 +143,21 @@ static xyl_result create_capture_pass(xyl_tess_vk *vk, xyl_diag *diag)
     VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
     ri.subpassCount = 1;
     ri.pSubpasses = &sub;
-    VkResult r = vkCreateRenderPass(vk->device, &ri, NULL, &vk->capture_pass);
+    VkResult r = vkCreateRenderPass(vk->device, &ri, vk->vkalloc, &vk->capture_pass);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateRenderPass");
     VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
     fi.renderPass = vk->capture_pass;
     fi.width = 1;
     fi.height = 1;
     fi.layers = 1;
-    r = vkCreateFramebuffer(vk->device, &fi, NULL, &vk->capture_framebuffer);
+    r = vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &vk->capture_framebuffer);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateFramebuffer");
 }
 
 /* ---- pipelines ----------------------------------------------------------------------------- */
 
 typedef struct pipe_desc {
-    VkRenderPass pass;
-    VkSampleCountFlagBits samples;
+    xyl__vk_pass where;
     VkPolygonMode mode;
     VkCullModeFlags cull;
     bool overlay; /* wireframe: depth bias towards the eye, test LESS_OR_EQUAL, no depth write */
@@ -212,7 +219,7 @@ static xyl_result create_pipeline(xyl_tess_vk *vk, const pipe_desc *d, VkPipelin
     VkPipelineRasterizationStateCreateInfo rs = raster_state(d);
     VkPipelineMultisampleStateCreateInfo ms = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    ms.rasterizationSamples = d->samples;
+    ms.rasterizationSamples = d->where.samples;
     VkPipelineDepthStencilStateCreateInfo ds = depth_state(d);
     VkPipelineColorBlendAttachmentState blend = {0};
     blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
@@ -236,12 +243,21 @@ static xyl_result create_pipeline(xyl_tess_vk *vk, const pipe_desc *d, VkPipelin
     pi.pColorBlendState = &cb;
     pi.pDynamicState = &dy;
     pi.layout = vk->layout;
-    pi.renderPass = d->pass;
-    VkResult r = vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, NULL, out);
+    pi.renderPass = d->where.pass;
+    pi.subpass = d->where.subpass;
+    VkPipelineRenderingCreateInfoKHR ri = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
+    if (!d->where.pass) { /* dynamic rendering */
+        ri.colorAttachmentCount = 1;
+        ri.pColorAttachmentFormats = &d->where.color;
+        ri.depthAttachmentFormat = d->where.depth;
+        pi.pNext = &ri;
+    }
+    VkResult r = vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, vk->vkalloc, out);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateGraphicsPipelines");
 }
 
-xyl_result xyl__vk_create_pipelines(xyl_tess_vk *vk, xyl_diag *diag)
+xyl_result xyl__vk_create_layouts(xyl_tess_vk *vk, xyl_diag *diag)
 {
     xyl_result r = shader(vk, xyl__shader_vk_instanced_vert, xyl__shader_vk_instanced_vert_size,
                           &vk->vert, diag);
@@ -251,38 +267,74 @@ xyl_result xyl__vk_create_pipelines(xyl_tess_vk *vk, xyl_diag *diag)
     if (r == XYL_OK)
         r = shader(vk, xyl__shader_vk_shade_frag, xyl__shader_vk_shade_frag_size, &vk->frag, diag);
     if (r == XYL_OK) r = descriptor_layout(vk, diag);
-    if (r == XYL_OK) r = descriptor_set(vk, diag);
-    if (r == XYL_OK) r = create_capture_pass(vk, diag);
-    if (r != XYL_OK || !vk->features.vertexPipelineStoresAndAtomics) return r;
-    pipe_desc d = {vk->capture_pass, VK_SAMPLE_COUNT_1_BIT, VK_POLYGON_MODE_FILL,
-                   VK_CULL_MODE_NONE, false, true};
+    if (r == XYL_OK) r = descriptor_sets(vk, diag);
+    return r;
+}
+
+void xyl__vk_destroy_layouts(xyl_tess_vk *vk)
+{
+    VkDevice dev = vk->device;
+    const VkAllocationCallbacks *a = vk->vkalloc;
+    if (vk->descriptor_pool) vkDestroyDescriptorPool(dev, vk->descriptor_pool, a);
+    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, a);
+    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, a);
+    if (vk->frag) vkDestroyShaderModule(dev, vk->frag, a);
+    if (vk->vert_capture) vkDestroyShaderModule(dev, vk->vert_capture, a);
+    if (vk->vert) vkDestroyShaderModule(dev, vk->vert, a);
+}
+
+/* Shaded and wireframe pipelines, each with back faces culled and with nothing culled. */
+xyl_result xyl__vk_create_pipes(xyl_tess_vk *vk, const xyl__vk_pass *where, xyl__vk_pipes *out,
+                                xyl_diag *diag)
+{
+    xyl_result r = XYL_OK;
+    for (int k = 0; k < 2 && r == XYL_OK; ++k) {
+        VkCullModeFlags cull = k ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT;
+        pipe_desc fill = {*where, VK_POLYGON_MODE_FILL, cull, false, false};
+        pipe_desc line = {*where, VK_POLYGON_MODE_LINE, cull, true, false};
+        r = create_pipeline(vk, &fill, &out->fill[k], diag);
+        if (r == XYL_OK && vk->features.fillModeNonSolid)
+            r = create_pipeline(vk, &line, &out->line[k], diag);
+    }
+    if (r != XYL_OK) xyl__vk_destroy_pipes(vk, out);
+    return r;
+}
+
+void xyl__vk_destroy_pipes(xyl_tess_vk *vk, xyl__vk_pipes *p)
+{
+    for (int k = 0; k < 2; ++k) {
+        if (p->fill[k]) vkDestroyPipeline(vk->device, p->fill[k], vk->vkalloc);
+        if (p->line[k]) vkDestroyPipeline(vk->device, p->line[k], vk->vkalloc);
+    }
+    memset(p, 0, sizeof *p);
+}
+
+xyl_result xyl__vk_capture_reserve(xyl_tess_vk *vk, xyl_diag *diag)
+{
+    if (vk->capture) return XYL_OK;
+    xyl_result r = vk->capture_pass ? XYL_OK : create_capture_pass(vk, diag);
+    if (r != XYL_OK) return r;
+    pipe_desc d = {{vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,
+                    VK_SAMPLE_COUNT_1_BIT},
+                   VK_POLYGON_MODE_FILL, VK_CULL_MODE_NONE, false, true};
     return create_pipeline(vk, &d, &vk->capture, diag);
 }
 
-void xyl__vk_destroy_pipelines(xyl_tess_vk *vk)
+void xyl__vk_destroy_capture(xyl_tess_vk *vk)
 {
     VkDevice dev = vk->device;
-    if (vk->capture) vkDestroyPipeline(dev, vk->capture, NULL);
-    if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, NULL);
-    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, NULL);
-    if (vk->descriptor_pool) vkDestroyDescriptorPool(dev, vk->descriptor_pool, NULL);
-    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, NULL);
-    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, NULL);
-    if (vk->frag) vkDestroyShaderModule(dev, vk->frag, NULL);
-    if (vk->vert_capture) vkDestroyShaderModule(dev, vk->vert_capture, NULL);
-    if (vk->vert) vkDestroyShaderModule(dev, vk->vert, NULL);
+    if (vk->capture) vkDestroyPipeline(dev, vk->capture, vk->vkalloc);
+    if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, vk->vkalloc);
+    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, vk->vkalloc);
 }
 
 /* ---- offscreen target ---------------------------------------------------------------------- */
 
 void xyl__vk_target_destroy(xyl_tess_vk *vk, xyl__vk_target *t)
 {
-    for (int k = 0; k < 2; ++k) {
-        if (t->fill[k]) vkDestroyPipeline(vk->device, t->fill[k], NULL);
-        if (t->line[k]) vkDestroyPipeline(vk->device, t->line[k], NULL);
-    }
-    if (t->framebuffer) vkDestroyFramebuffer(vk->device, t->framebuffer, NULL);
-    if (t->pass) vkDestroyRenderPass(vk->device, t->pass, NULL);
+    xyl__vk_destroy_pipes(vk, &t->pipes);
+    if (t->framebuffer) vkDestroyFramebuffer(vk->device, t->framebuffer, vk->vkalloc);
+    if (t->pass) vkDestroyRenderPass(vk->device, t->pass, vk->vkalloc);
     xyl__vk_image_destroy(vk, &t->color);
     xyl__vk_image_destroy(vk, &t->depth);
     xyl__vk_image_destroy(vk, &t->resolve);
@@ -315,22 +367,8 @@ static xyl_result target_images(xyl_tess_vk *vk, xyl__vk_target *t, xyl_diag *di
     fi.width = t->width;
     fi.height = t->height;
     fi.layers = 1;
-    VkResult vr = vkCreateFramebuffer(vk->device, &fi, NULL, &t->framebuffer);
+    VkResult vr = vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &t->framebuffer);
     return vr == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, vr, "vkCreateFramebuffer");
-}
-
-static xyl_result target_pipelines(xyl_tess_vk *vk, xyl__vk_target *t, xyl_diag *diag)
-{
-    xyl_result r = XYL_OK;
-    for (int k = 0; k < 2 && r == XYL_OK; ++k) {
-        VkCullModeFlags cull = k ? VK_CULL_MODE_NONE : VK_CULL_MODE_BACK_BIT;
-        pipe_desc fill = {t->pass, t->samples, VK_POLYGON_MODE_FILL, cull, false, false};
-        pipe_desc line = {t->pass, t->samples, VK_POLYGON_MODE_LINE, cull, true, false};
-        r = create_pipeline(vk, &fill, &t->fill[k], diag);
-        if (r == XYL_OK && vk->features.fillModeNonSolid)
-            r = create_pipeline(vk, &line, &t->line[k], diag);
-    }
-    return r;
 }
 
 xyl_result xyl__vk_target_reserve(xyl_tess_vk *vk, uint32_t width, uint32_t height,
@@ -345,7 +383,8 @@ xyl_result xyl__vk_target_reserve(xyl_tess_vk *vk, uint32_t width, uint32_t heig
     t->samples = samples;
     xyl_result r = create_pass(vk, samples, &t->pass, diag);
     if (r == XYL_OK) r = target_images(vk, t, diag);
-    if (r == XYL_OK) r = target_pipelines(vk, t, diag);
+    xyl__vk_pass where = {t->pass, 0, COLOR_FORMAT, DEPTH_FORMAT, samples};
+    if (r == XYL_OK) r = xyl__vk_create_pipes(vk, &where, &t->pipes, diag);
     if (r != XYL_OK) xyl__vk_target_destroy(vk, t);
     return r;
 }

@@ -1,6 +1,7 @@
-/* Vulkan backend: instance (with the validation layer and a messenger that counts what it
- * reports), physical device and its features, logical device, host-visible buffers, images,
- * submission. */
+/* Vulkan backend: allocation callbacks over the caller's allocator, instance (with the
+ * validation layer and a messenger that counts what it reports), physical device and its
+ * features, logical device, host-visible buffers, images, submission. */
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -41,6 +42,64 @@ xyl_result xyl__vk_fail(xyl_tess_vk *vk, xyl_diag *diag, VkResult r, const char 
                      vk_result_name(r), (int)r);
 }
 
+/* ---- allocation callbacks ------------------------------------------------------------------ */
+
+/* xyl_allocator has no alignment and no realloc: a block is over-allocated, aligned, and keeps
+ * its size and the allocator's pointer just below the pointer Vulkan gets. */
+typedef struct block_head {
+    void *base;
+    size_t size;
+} block_head;
+
+static void *VKAPI_PTR vk_alloc(void *user, size_t size, size_t align,
+                                VkSystemAllocationScope scope)
+{
+    (void)scope;
+    const size_t min_align = _Alignof(max_align_t);
+    if (align < min_align) align = min_align; /* also aligns the head below the block */
+    if (size > SIZE_MAX - align - sizeof(block_head)) return NULL;
+    char *base = xyl__alloc(user, size + align + sizeof(block_head));
+    if (!base) return NULL;
+    uintptr_t at = ((uintptr_t)(base + sizeof(block_head)) + align - 1) & ~(uintptr_t)(align - 1);
+    block_head *h = (block_head *)at - 1;
+    h->base = base;
+    h->size = size;
+    return (void *)at;
+}
+
+static void VKAPI_PTR vk_free(void *user, void *p)
+{
+    if (p) xyl__free(user, ((block_head *)p - 1)->base);
+}
+
+static void *VKAPI_PTR vk_realloc(void *user, void *old, size_t size, size_t align,
+                                  VkSystemAllocationScope scope)
+{
+    if (!old) return vk_alloc(user, size, align, scope);
+    if (size == 0) {
+        vk_free(user, old);
+        return NULL;
+    }
+    void *p = vk_alloc(user, size, align, scope);
+    if (!p) return NULL; /* the old block stays valid, as Vulkan requires */
+    size_t keep = ((block_head *)old - 1)->size;
+    memcpy(p, old, keep < size ? keep : size);
+    vk_free(user, old);
+    return p;
+}
+
+void xyl__vk_init_callbacks(xyl_tess_vk *vk)
+{
+    vk->vkalloc = NULL; /* the default allocator: Vulkan's own is as good */
+    if (!vk->alloc.alloc) return;
+    memset(&vk->callbacks, 0, sizeof vk->callbacks);
+    vk->callbacks.pUserData = &vk->alloc;
+    vk->callbacks.pfnAllocation = vk_alloc;
+    vk->callbacks.pfnReallocation = vk_realloc;
+    vk->callbacks.pfnFree = vk_free;
+    vk->vkalloc = &vk->callbacks;
+}
+
 /* ---- instance ------------------------------------------------------------------------------ */
 
 static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
@@ -58,15 +117,15 @@ static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlag
     return VK_FALSE; /* the call goes on, as the layer's reports must not change behaviour */
 }
 
-static bool has_layer(const char *name)
+static bool has_layer(const xyl_tess_vk *vk, const char *name)
 {
     uint32_t n = 0;
     if (vkEnumerateInstanceLayerProperties(&n, NULL) != VK_SUCCESS || n == 0) return false;
-    VkLayerProperties *props = xyl__alloc_array(NULL, n, sizeof *props);
+    VkLayerProperties *props = xyl__alloc_array(&vk->alloc, n, sizeof *props);
     bool found = false;
     if (props && vkEnumerateInstanceLayerProperties(&n, props) >= VK_SUCCESS)
         for (uint32_t i = 0; i < n && !found; ++i) found = strcmp(props[i].layerName, name) == 0;
-    xyl__free(NULL, props);
+    xyl__free(&vk->alloc, props);
     return found;
 }
 
@@ -93,7 +152,7 @@ static xyl_result create_messenger(xyl_tess_vk *vk, xyl_diag *diag)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "Vulkan: VK_EXT_debug_utils has no messenger entry points");
     VkDebugUtilsMessengerCreateInfoEXT mi = messenger_info(vk);
-    VkResult r = create(vk->instance, &mi, NULL, &vk->messenger);
+    VkResult r = create(vk->instance, &mi, vk->vkalloc, &vk->messenger);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateDebugUtilsMessengerEXT");
 }
 
@@ -103,7 +162,7 @@ xyl_result xyl__vk_create_instance(xyl_tess_vk *vk, bool validation, xyl_diag *d
     if (vkEnumerateInstanceVersion(&version) != VK_SUCCESS || version < VK_API_VERSION_1_2)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "Vulkan: the loader offers no Vulkan 1.2 instance");
-    if (validation && !has_layer(validation_layer))
+    if (validation && !has_layer(vk, validation_layer))
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "Vulkan: validation asked for but %s is not installed",
                          validation_layer);
@@ -123,18 +182,18 @@ xyl_result xyl__vk_create_instance(xyl_tess_vk *vk, bool validation, xyl_diag *d
         ci.enabledExtensionCount = 1;
         ci.ppEnabledExtensionNames = &ext;
     }
-    VkResult r = vkCreateInstance(&ci, NULL, &vk->instance);
+    VkResult r = vkCreateInstance(&ci, vk->vkalloc, &vk->instance);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateInstance");
     return validation ? create_messenger(vk, diag) : XYL_OK;
 }
 
 /* ---- physical device ----------------------------------------------------------------------- */
 
-static bool graphics_family(VkPhysicalDevice pd, uint32_t *family)
+static bool graphics_family(const xyl_tess_vk *vk, VkPhysicalDevice pd, uint32_t *family)
 {
     uint32_t n = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, NULL);
-    VkQueueFamilyProperties *q = xyl__alloc_array(NULL, n, sizeof *q);
+    VkQueueFamilyProperties *q = xyl__alloc_array(&vk->alloc, n, sizeof *q);
     bool found = false;
     if (q) {
         vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, q);
@@ -144,13 +203,14 @@ static bool graphics_family(VkPhysicalDevice pd, uint32_t *family)
                 found = true;
             }
     }
-    xyl__free(NULL, q);
+    xyl__free(&vk->alloc, q);
     return found;
 }
 
 /* A device qualifies with Vulkan 1.2, a graphics queue, drawIndirectFirstInstance (the commands'
  * base_instance) and D32_SFLOAT depth; the name filters when given. */
-static bool qualifies(VkPhysicalDevice pd, const char *name, uint32_t *family)
+static bool qualifies(const xyl_tess_vk *vk, VkPhysicalDevice pd, const char *name,
+                      uint32_t *family)
 {
     VkPhysicalDeviceProperties p;
     VkPhysicalDeviceFeatures f;
@@ -161,7 +221,7 @@ static bool qualifies(VkPhysicalDevice pd, const char *name, uint32_t *family)
     if (p.apiVersion < VK_API_VERSION_1_2 || !f.drawIndirectFirstInstance) return false;
     if (!(fp.optimalTilingFeatures & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT)) return false;
     if (name && !strstr(p.deviceName, name)) return false;
-    return graphics_family(pd, family);
+    return graphics_family(vk, pd, family);
 }
 
 xyl_result xyl__vk_pick_device(xyl_tess_vk *vk, const char *name, xyl_diag *diag)
@@ -169,12 +229,12 @@ xyl_result xyl__vk_pick_device(xyl_tess_vk *vk, const char *name, xyl_diag *diag
     uint32_t n = 0;
     VkResult r = vkEnumeratePhysicalDevices(vk->instance, &n, NULL);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkEnumeratePhysicalDevices");
-    VkPhysicalDevice *pds = xyl__alloc_array(NULL, n, sizeof *pds);
+    VkPhysicalDevice *pds = xyl__alloc_array(&vk->alloc, n, sizeof *pds);
     if (!pds) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     r = vkEnumeratePhysicalDevices(vk->instance, &n, pds);
     for (uint32_t i = 0; r >= VK_SUCCESS && i < n && !vk->physical; ++i)
-        if (qualifies(pds[i], name, &vk->family)) vk->physical = pds[i];
-    xyl__free(NULL, pds);
+        if (qualifies(vk, pds[i], name, &vk->family)) vk->physical = pds[i];
+    xyl__free(&vk->alloc, pds);
     if (r < VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkEnumeratePhysicalDevices");
     if (!vk->physical)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
@@ -206,26 +266,26 @@ static xyl_result create_queries(xyl_tess_vk *vk, xyl_diag *diag)
 {
     uint32_t n = 0;
     vkGetPhysicalDeviceQueueFamilyProperties(vk->physical, &n, NULL);
-    VkQueueFamilyProperties *q = xyl__alloc_array(NULL, n, sizeof *q);
+    VkQueueFamilyProperties *q = xyl__alloc_array(&vk->alloc, n, sizeof *q);
     if (!q) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     vkGetPhysicalDeviceQueueFamilyProperties(vk->physical, &n, q);
     uint32_t bits = vk->family < n ? q[vk->family].timestampValidBits : 0;
-    xyl__free(NULL, q);
+    xyl__free(&vk->alloc, q);
     if (bits == 0) return XYL_OK; /* no timestamps: xyl_tess_vk_last_gpu_ms stays negative */
     vk->timestamp_bits = bits;
     VkQueryPoolCreateInfo qi = {.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
     qi.queryCount = 2;
-    VkResult r = vkCreateQueryPool(vk->device, &qi, NULL, &vk->queries);
+    VkResult r = vkCreateQueryPool(vk->device, &qi, vk->vkalloc, &vk->queries);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateQueryPool");
 }
 
-static xyl_result create_commands(xyl_tess_vk *vk, xyl_diag *diag)
+xyl_result xyl__vk_create_commands(xyl_tess_vk *vk, xyl_diag *diag)
 {
     VkCommandPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
     pi.queueFamilyIndex = vk->family;
-    VkResult r = vkCreateCommandPool(vk->device, &pi, NULL, &vk->pool);
+    VkResult r = vkCreateCommandPool(vk->device, &pi, vk->vkalloc, &vk->pool);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateCommandPool");
     VkCommandBufferAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     ai.commandPool = vk->pool;
@@ -234,7 +294,7 @@ static xyl_result create_commands(xyl_tess_vk *vk, xyl_diag *diag)
     r = vkAllocateCommandBuffers(vk->device, &ai, &vk->cmd);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkAllocateCommandBuffers");
     VkFenceCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    r = vkCreateFence(vk->device, &fi, NULL, &vk->fence);
+    r = vkCreateFence(vk->device, &fi, vk->vkalloc, &vk->fence);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateFence");
     return create_queries(vk, diag);
 }
@@ -251,10 +311,10 @@ xyl_result xyl__vk_create_device(xyl_tess_vk *vk, xyl_diag *diag)
     di.queueCreateInfoCount = 1;
     di.pQueueCreateInfos = &qi;
     di.pEnabledFeatures = &vk->features;
-    VkResult r = vkCreateDevice(vk->physical, &di, NULL, &vk->device);
+    VkResult r = vkCreateDevice(vk->physical, &di, vk->vkalloc, &vk->device);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateDevice");
     vkGetDeviceQueue(vk->device, vk->family, 0, &vk->queue);
-    return create_commands(vk, diag);
+    return XYL_OK;
 }
 
 /* ---- memory -------------------------------------------------------------------------------- */
@@ -284,14 +344,14 @@ static xyl_result allocate(xyl_tess_vk *vk, VkMemoryRequirements req, VkMemoryPr
     VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = req.size;
     ai.memoryTypeIndex = type;
-    VkResult r = vkAllocateMemory(vk->device, &ai, NULL, out);
+    VkResult r = vkAllocateMemory(vk->device, &ai, vk->vkalloc, out);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkAllocateMemory");
 }
 
 void xyl__vk_buffer_destroy(xyl_tess_vk *vk, xyl__vk_buffer *b)
 {
-    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, NULL);
-    if (b->memory) vkFreeMemory(vk->device, b->memory, NULL); /* unmaps implicitly */
+    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, vk->vkalloc);
+    if (b->memory) vkFreeMemory(vk->device, b->memory, vk->vkalloc); /* unmaps implicitly */
     memset(b, 0, sizeof *b);
 }
 
@@ -305,7 +365,7 @@ xyl_result xyl__vk_buffer_reserve(xyl_tess_vk *vk, xyl__vk_buffer *b, VkDeviceSi
     bi.size = size;
     bi.usage = usage;
     bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    VkResult r = vkCreateBuffer(vk->device, &bi, NULL, &b->buffer);
+    VkResult r = vkCreateBuffer(vk->device, &bi, vk->vkalloc, &b->buffer);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateBuffer");
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(vk->device, b->buffer, &req);
@@ -325,9 +385,9 @@ xyl_result xyl__vk_buffer_reserve(xyl_tess_vk *vk, xyl__vk_buffer *b, VkDeviceSi
 
 void xyl__vk_image_destroy(xyl_tess_vk *vk, xyl__vk_image *img)
 {
-    if (img->view) vkDestroyImageView(vk->device, img->view, NULL);
-    if (img->image) vkDestroyImage(vk->device, img->image, NULL);
-    if (img->memory) vkFreeMemory(vk->device, img->memory, NULL);
+    if (img->view) vkDestroyImageView(vk->device, img->view, vk->vkalloc);
+    if (img->image) vkDestroyImage(vk->device, img->image, vk->vkalloc);
+    if (img->memory) vkFreeMemory(vk->device, img->memory, vk->vkalloc);
     memset(img, 0, sizeof *img);
 }
 
@@ -341,7 +401,7 @@ static xyl_result image_view(xyl_tess_vk *vk, xyl__vk_image *img, VkFormat forma
     vi.subresourceRange.aspectMask = aspect;
     vi.subresourceRange.levelCount = 1;
     vi.subresourceRange.layerCount = 1;
-    VkResult r = vkCreateImageView(vk->device, &vi, NULL, &img->view);
+    VkResult r = vkCreateImageView(vk->device, &vi, vk->vkalloc, &img->view);
     return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkCreateImageView");
 }
 
@@ -363,7 +423,7 @@ xyl_result xyl__vk_image_create(xyl_tess_vk *vk, xyl__vk_image *img, VkFormat fo
     ii.usage = usage;
     ii.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
     ii.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-    VkResult r = vkCreateImage(vk->device, &ii, NULL, &img->image);
+    VkResult r = vkCreateImage(vk->device, &ii, vk->vkalloc, &img->image);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkCreateImage");
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(vk->device, img->image, &req);
@@ -378,12 +438,24 @@ xyl_result xyl__vk_image_create(xyl_tess_vk *vk, xyl__vk_image *img, VkFormat fo
 
 /* ---- submission ---------------------------------------------------------------------------- */
 
+xyl_result xyl__vk_begin(xyl_tess_vk *vk, xyl_diag *diag)
+{
+    VkResult r = vkResetCommandBuffer(vk->cmd, 0);
+    if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkResetCommandBuffer");
+    VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    r = vkBeginCommandBuffer(vk->cmd, &bi);
+    return r == VK_SUCCESS ? XYL_OK : xyl__vk_fail(vk, diag, r, "vkBeginCommandBuffer");
+}
+
 xyl_result xyl__vk_submit_wait(xyl_tess_vk *vk, xyl_diag *diag)
 {
+    VkResult r = vkEndCommandBuffer(vk->cmd);
+    if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkEndCommandBuffer");
     VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &vk->cmd;
-    VkResult r = vkResetFences(vk->device, 1, &vk->fence);
+    r = vkResetFences(vk->device, 1, &vk->fence);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkResetFences");
     r = vkQueueSubmit(vk->queue, 1, &si, vk->fence);
     if (r != VK_SUCCESS) return xyl__vk_fail(vk, diag, r, "vkQueueSubmit");

@@ -8,9 +8,7 @@
  *     xyl_tess_select(), xyl_tess_gl_draw() draws into the bound framebuffer: the instanced path
  *     (one indirect draw per (kind, level), instance records as a per-instance attribute) or the
  *     hardware path (TCS/TES with the same evaluation code).
- *   - xyl_tess_gl_render_rgba() renders into an offscreen image and reads it back;
- *     xyl_tess_gl_capture() reads back the evaluated vertices (tests compare them with the CPU
- *     reference).
+ *   - xyl_tess_gl_render_rgba() renders into an offscreen image and reads it back.
  * All calls must come from the thread where the GL context is current.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
@@ -63,15 +61,6 @@ XYL_API xyl_result xyl_tess_gl_render_rgba(xyl_tess_gl *gl, const xyl_tess_batch
                                            const xyl_tess_frame *frame, xyl_tess_path path,
                                            const xyl_tess_image_desc *image, uint8_t *rgba,
                                            xyl_diag *diag);
-
-/* Evaluates the batches on the GPU and reads the vertices back (instanced path: every pattern
- * vertex of every instance, batches->vertices in all, in instance order then pattern order;
- * hardware path: every vertex the tessellator emitted, three per triangle). Writes the first
- * `capacity` into out and the total into *count. */
-XYL_API xyl_result xyl_tess_gl_capture(xyl_tess_gl *gl, const xyl_tess_batches *batches,
-                                       xyl_tess_variant variant, xyl_tess_path path,
-                                       xyl_tess_captured *out, size_t capacity, size_t *count,
-                                       xyl_diag *diag);
 
 /* Milliseconds of GPU time of the last draw (GL_TIME_ELAPSED query), or a negative value when
  * the query is not available yet. */

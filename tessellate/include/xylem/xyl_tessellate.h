@@ -6,12 +6,15 @@
  *      mesh's unique edges and per-patch / per-edge error coefficients for the chosen variant.
  *   2. xyl_tess_patterns_create(max_level, ...): the (i, j) lattice and indices of every level,
  *      built once and shared by all meshes.
- *   3. Each frame: xyl_tess_select(patches, patterns, &view, batches): per-edge and per-patch
- *      levels from a camera and a pixel budget (or one fixed level), patches bucketed by
- *      (kind, level) into instance records and indirect draw commands, ready to upload.
+ *   3. xyl_tess_batches_create(alloc, &batches) once; each frame xyl_tess_select(patches,
+ *      patterns, &view, batches): per-edge and per-patch levels from a camera and a pixel
+ *      budget (or one fixed level), patches bucketed by (kind, level) into instance records and
+ *      indirect draw commands, ready to upload, in batches' read-only arrays.
  *   4. Draw: per command, the level's pattern instanced over its instance records; the vertex
- *      shader evaluates shaders/xyl_tess_eval.glsl. xyl_tess_eval_lattice() is the CPU
- *      reference of exactly that evaluation.
+ *      shader evaluates shaders/xyl_tess_eval.glsl. The backends do it for you
+ *      (xylem/xyl_tess_gl.h, xylem/xyl_tess_vk.h: into your own framebuffer or command buffer,
+ *      or offscreen); xyl_tess_eval_lattice() is the CPU reference of exactly that evaluation,
+ *      and xyl_tess_refine() the whole CPU tessellation.
  *
  * Crack-freedom: a shared edge gets one level (computed once per unique edge); each side snaps
  * its lattice points on that edge to it and evaluates the edge in a canonical direction, so both
@@ -140,37 +143,36 @@ typedef struct xyl_tess_batch {
     uint32_t kind, level; /* pattern drawn */
 } xyl_tess_batch;
 
-/* Per-frame output, reused from frame to frame (grows, never shrinks). */
+/* What xyl_tess_select chose for one frame, read only: instance records and indirect draw
+ * commands ready to upload. A xyl_tess_batches made by xyl_tess_batches_create owns these arrays
+ * and refills them at each select (they stay valid until the next select or destroy; storage
+ * grows, never shrinks). The backends take any xyl_tess_batches, so a caller may also fill one
+ * on the stack with arrays of its own (after culling, say): they check every record. */
 typedef struct xyl_tess_batches {
-    xyl_tess_instance *instances; /* sorted by (kind, level); upload as a per-instance buffer */
+    const xyl_tess_instance *instances; /* sorted by (kind, level); a per-instance buffer */
     size_t instance_count;
-    xyl_tess_draw_cmd *cmds;      /* one per non-empty (kind, level) */
-    xyl_tess_batch *batches;      /* what each command draws */
+    const xyl_tess_draw_cmd *cmds;      /* one per non-empty (kind, level) */
+    const xyl_tess_batch *batches;      /* what each command draws */
     size_t cmd_count;
-    uint8_t *edge_levels;         /* level of each unique edge */
-    uint64_t triangles;           /* triangles the commands draw */
-    uint64_t vertices;            /* pattern vertices they evaluate */
-    /* internal storage */
-    size_t instance_cap, edge_cap;
-    uint8_t *patch_levels;
-    size_t patch_cap;
-    xyl_allocator alloc;
+    const uint8_t *edge_levels;         /* level of each unique edge (select only) */
+    uint64_t triangles;                 /* triangles the commands draw */
+    uint64_t vertices;                  /* pattern vertices they evaluate */
 } xyl_tess_batches;
 
-/* Zero-fill a xyl_tess_batches (optionally setting .alloc) before the first call; free with
- * xyl_tess_batches_free. Errors: XYL_ERR_INVALID_ARGUMENT (NULL, non-finite eye, levels out of
- * range, patterns with a smaller max level than asked), XYL_ERR_OUT_OF_MEMORY (batches keep their
- * previous content). */
+/* An empty batches object whose storage comes from alloc (NULL or zero-filled: malloc / free).
+ * Errors: XYL_ERR_INVALID_ARGUMENT (out NULL), XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_tess_batches_create(const xyl_allocator *alloc, xyl_tess_batches **out,
+                                           xyl_diag *diag);
+/* Only for objects from xyl_tess_batches_create (NULL is a no-op). */
+XYL_API void xyl_tess_batches_destroy(xyl_tess_batches *batches);
+
+/* Chooses the levels for the view and refills batches (from xyl_tess_batches_create). Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL, levels out of range, patterns with a smaller max level than
+ * asked), XYL_ERR_NON_FINITE (eye), XYL_ERR_OUT_OF_MEMORY (batches keep their previous
+ * content). */
 XYL_API xyl_result xyl_tess_select(const xyl_tess_patches *patches,
                                    const xyl_tess_patterns *patterns, const xyl_tess_view *view,
                                    xyl_tess_batches *batches, xyl_diag *diag);
-XYL_API void xyl_tess_batches_free(xyl_tess_batches *batches);
-
-/* Level that keeps a world error coefficient (world units * L^2) under error_px when seen from
- * distance d with the view's projection: ceil(sqrt(coef * scale / (d * error_px))), clamped to
- * [1, max_level]. Exposed for tests and tools. */
-XYL_API uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl_tess_view *view,
-                                    uint32_t max_level);
 
 /* ---- CPU tessellation ---------------------------------------------------------------------- */
 
@@ -185,7 +187,7 @@ XYL_API xyl_result xyl_tess_refine(const xyl_tess_patches *patches,
                                    const xyl_tess_batches *batches, const xyl_mesh_limits *limits,
                                    xyl_mesh **out, xyl_diag *diag);
 
-/* ---- cameras and GPU readback (shared by the GL and Vulkan backends) ------------------------ */
+/* ---- cameras and offscreen images (shared by the GL and Vulkan backends) ------------------- */
 
 typedef enum xyl_tess_clip {
     XYL_TESS_CLIP_GL = 0,    /* y up, depth -1..1 */
@@ -222,22 +224,6 @@ typedef struct xyl_tess_image_desc {
     bool wireframe;          /* overlay the triangle edges in frame->line_color */
     uint32_t samples;        /* MSAA samples; default (0): 1 */
 } xyl_tess_image_desc;
-
-/* One vertex as a GPU evaluated it, for comparison with the CPU reference. Instanced path:
- * coord = (i, j, level) of the lattice point. Hardware path: coord = gl_TessCoord. */
-typedef struct xyl_tess_captured {
-    float position[3];
-    float normal[3];
-    float coord[3];
-    uint32_t patch;
-} xyl_tess_captured;
-
-/* The CPU reference of a captured vertex: xyl_tess_eval_lattice for the instanced path; for the
- * hardware path the tessellation evaluation shader's rule (points on a side snapped to k / le of
- * that side's level, the rest by xyl_tess_eval). edge_levels is the patch's instance record. */
-XYL_API void xyl_tess_reference(const xyl_tess_patch *patch, xyl_tess_variant variant,
-                                const xyl_tess_captured *captured, bool hardware,
-                                uint32_t edge_levels, float pos[3], float normal[3]);
 
 #ifdef __cplusplus
 }
