@@ -34,9 +34,9 @@ static int setup(void **state)
 {
     suite *s = calloc(1, sizeof *s);
     xyl_diag d = {0};
-    if (!s || xyl_gl_context_create_headless(&s->ctx, &d) != XYL_OK ||
+    if (!s || xyl_gl_context_create_headless(NULL, &s->ctx, &d) != XYL_OK ||
         xyl_tess_patterns_create(MAX_LEVEL, NULL, &s->pat, &d) != XYL_OK ||
-        xyl_tess_gl_create(s->pat, &s->gl, &d) != XYL_OK) {
+        xyl_tess_gl_create(NULL, s->pat, &s->gl, &d) != XYL_OK) {
         print_error("setup failed: %s\n", d.message);
         return -1;
     }
@@ -470,10 +470,10 @@ static void bad_input_gets_result_codes(void **state)
 {
     suite *s = *state;
     xyl_diag d = {0};
-    expect(xyl_gl_context_create_headless(NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_gl_context_create_headless(NULL, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
     xyl_tess_gl *none = (xyl_tess_gl *)(uintptr_t)1;
-    expect(xyl_tess_gl_create(NULL, &none, &d), XYL_ERR_INVALID_ARGUMENT, &d);
-    expect(xyl_tess_gl_create(s->pat, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_tess_gl_create(NULL, NULL, &none, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_tess_gl_create(NULL, s->pat, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
     assert_ptr_equal(none, (xyl_tess_gl *)(uintptr_t)1);
     assert_true(xyl_tess_gl_last_gpu_ms(NULL) < 0.0);
     xyl_tess_gl_destroy(NULL);
@@ -537,11 +537,11 @@ static void create_without_a_context_is_unsupported(void **state)
     s->ctx = NULL;
     xyl_diag d = {0};
     xyl_tess_gl *gl = NULL;
-    expect(xyl_tess_gl_create(s->pat, &gl, &d), XYL_ERR_UNSUPPORTED, &d);
+    expect(xyl_tess_gl_create(NULL, s->pat, &gl, &d), XYL_ERR_UNSUPPORTED, &d);
     assert_null(gl);
     /* and a context made again afterwards works */
-    assert_int_equal(xyl_gl_context_create_headless(&s->ctx, &d), XYL_OK);
-    assert_int_equal(xyl_tess_gl_create(s->pat, &s->gl, &d), XYL_OK);
+    assert_int_equal(xyl_gl_context_create_headless(NULL, &s->ctx, &d), XYL_OK);
+    assert_int_equal(xyl_tess_gl_create(NULL, s->pat, &s->gl, &d), XYL_OK);
 }
 
 /* ---- 5. rendering --------------------------------------------------------------------------- */
@@ -638,6 +638,53 @@ static void default_tree_renders_with_coverage_and_wireframe(void **state)
     xyl_mesh_destroy(m);
 }
 
+/* The renderer's own memory (pattern and patch tables, staging for a render) comes from the
+ * allocator in its desc, and all of it goes back on destroy; a refusing allocator is
+ * XYL_ERR_OUT_OF_MEMORY, with nothing left behind. */
+static void renderer_allocates_through_the_callers_allocator(void **state)
+{
+    suite *s = *state;
+    xyl_mesh *m = tu_tree_mesh(0, 4, XYL_SUBDIVIDE_NONE);
+    xyl_tess_patches *tp = patches_of(m);
+    tu_counting_alloc counted = {0, 0, false};
+    xyl_tess_gl_desc gd = {0};
+    gd.alloc = tu_counting_allocator(&counted);
+    xyl_tess_gl *gl = NULL;
+    xyl_diag d = {0};
+    expect(xyl_tess_gl_create(&gd, s->pat, &gl, &d), XYL_OK, &d);
+    expect(xyl_tess_gl_set_patches(gl, tp, &d), XYL_OK, &d);
+    xyl_tess_camera cam;
+    xyl_tess_frame f;
+    make_view(m, 0.6f, 0.15f, 1.0f, &cam, &f);
+    xyl_tess_view view = {0};
+    memcpy(view.eye, cam.eye, sizeof view.eye);
+    view.viewport_height = SIDE;
+    xyl_tess_batches *b = tu_batches_create();
+    expect(xyl_tess_select(tp, s->pat, &view, b, &d), XYL_OK, &d);
+    xyl_tess_image_desc img = {0};
+    img.width = img.height = 64;
+    uint8_t *rgba = malloc(4u * 64 * 64);
+    expect(xyl_tess_gl_render_rgba(gl, b, &f, XYL_TESS_PATH_INSTANCED, &img, rgba, &d), XYL_OK, &d);
+    assert_true(counted.calls >= 3);
+    xyl_tess_gl_destroy(gl);
+    assert_int_equal(counted.live, 0);
+    counted.refuse = true;
+    gl = NULL;
+    expect(xyl_tess_gl_create(&gd, s->pat, &gl, &d), XYL_ERR_OUT_OF_MEMORY, &d);
+    assert_null(gl);
+    assert_int_equal(counted.live, 0);
+    tu_counting_alloc ctx_count = {0, 0, false};
+    xyl_allocator ca = tu_counting_allocator(&ctx_count);
+    xyl_gl_context *other = NULL;
+    ctx_count.refuse = true;
+    expect(xyl_gl_context_create_headless(&ca, &other, &d), XYL_ERR_OUT_OF_MEMORY, &d);
+    assert_null(other);
+    free(rgba);
+    xyl_tess_batches_destroy(b);
+    xyl_tess_patches_destroy(tp);
+    xyl_mesh_destroy(m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -647,6 +694,7 @@ int main(void)
         cmocka_unit_test(default_tree_renders_with_coverage_and_wireframe),
         cmocka_unit_test(bad_input_gets_result_codes),
         cmocka_unit_test(create_without_a_context_is_unsupported),
+        cmocka_unit_test(renderer_allocates_through_the_callers_allocator),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

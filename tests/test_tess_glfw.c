@@ -74,7 +74,7 @@ static int setup(void **state)
     s->window = open_window();
     xyl_diag d = {0};
     if (!s->window || xyl_tess_patterns_create(16, NULL, &s->pat, &d) != XYL_OK ||
-        xyl_tess_gl_create(s->pat, &s->gl, &d) != XYL_OK) {
+        xyl_tess_gl_create(NULL, s->pat, &s->gl, &d) != XYL_OK) {
         print_error("setup failed (a window needs a display: ctest runs this under xvfb-run): %s\n",
                     d.message);
         return -1;

@@ -306,8 +306,8 @@ static double time_path(gpu *g, int path, const xyl_tess_patches *tp, const xyl_
 static void gpu_open(gpu *g, const xyl_tess_patterns *pat, const bench_opts *o)
 {
     xyl_diag d = {0};
-    xyl_result r = xyl_gl_context_create_headless(&g->ctx, &d);
-    if (!r) r = xyl_tess_gl_create(pat, &g->gl, &d);
+    xyl_result r = xyl_gl_context_create_headless(NULL, &g->ctx, &d);
+    if (!r) r = xyl_tess_gl_create(NULL, pat, &g->gl, &d);
     if (r) die("GL backend", r, &d);
     xyl_tess_vk_desc vd = {0};
     r = xyl_tess_vk_create(&vd, pat, &g->vk, &d);

@@ -263,7 +263,7 @@ int xyl_view_run(const xyl_view_request *req)
     if (!rc) {
         xyl_result r = xyl_tess_patterns_create(0, NULL, &v.patterns, &d);
         if (r == XYL_OK) r = xyl_tess_batches_create(NULL, &v.batches, &d);
-        if (r == XYL_OK) r = xyl_tess_gl_create(v.patterns, &v.gl, &d);
+        if (r == XYL_OK) r = xyl_tess_gl_create(NULL, v.patterns, &v.gl, &d);
         if (r != XYL_OK) rc = fail("GL backend", r, &d);
         else {
             GLint samples = 0;

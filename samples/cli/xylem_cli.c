@@ -676,9 +676,9 @@ static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
 {
     xyl_gl_context *ctx = NULL;
     xyl_tess_gl *gl = NULL;
-    xyl_result r = xyl_gl_context_create_headless(&ctx, d);
+    xyl_result r = xyl_gl_context_create_headless(NULL, &ctx, d);
     if (r == XYL_OK) r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, d);
-    if (r == XYL_OK) r = xyl_tess_gl_create(j->patterns, &gl, d);
+    if (r == XYL_OK) r = xyl_tess_gl_create(NULL, j->patterns, &gl, d);
     if (r == XYL_OK) r = xyl_tess_gl_set_patches(gl, j->drawn, d);
     xyl_tess_path path = o->render.tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE
                                                          : XYL_TESS_PATH_INSTANCED;

@@ -238,7 +238,8 @@ static xyl_result copy_patterns(xyl_tess_gl *gl, const xyl_tess_patterns *p)
     return XYL_OK;
 }
 
-xyl_result xyl_tess_gl_create(const xyl_tess_patterns *patterns, xyl_tess_gl **out, xyl_diag *diag)
+xyl_result xyl_tess_gl_create(const xyl_tess_gl_desc *desc, const xyl_tess_patterns *patterns,
+                              xyl_tess_gl **out, xyl_diag *diag)
 {
     if (!patterns || !out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "patterns and out are required");
@@ -248,7 +249,9 @@ xyl_result xyl_tess_gl_create(const xyl_tess_patterns *patterns, xyl_tess_gl **o
     xyl_result r = need_context(diag);
     if (r != XYL_OK) return r;
     xyl_allocator a = {0};
+    if (desc) a = desc->alloc;
     xyl_tess_gl *gl = xyl__calloc(&a, 1, sizeof *gl);
+    if (gl) gl->alloc = a;
     if (!gl || copy_patterns(gl, patterns) != XYL_OK) {
         xyl_tess_gl_destroy(gl);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");

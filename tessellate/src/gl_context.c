@@ -9,6 +9,7 @@
 #include "xylem/xyl_tess_gl.h"
 
 struct xyl_gl_context {
+    xyl_allocator alloc;
     EGLDisplay display;
     EGLContext context;
     char renderer[128];
@@ -59,12 +60,15 @@ static xyl_result make_context(EGLDisplay d, EGLContext *out, xyl_diag *diag)
     return XYL_OK;
 }
 
-xyl_result xyl_gl_context_create_headless(xyl_gl_context **out, xyl_diag *diag)
+xyl_result xyl_gl_context_create_headless(const xyl_allocator *alloc, xyl_gl_context **out,
+                                          xyl_diag *diag)
 {
     if (!out) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out is required");
     xyl_allocator a = {0};
+    if (alloc) a = *alloc;
     xyl_gl_context *ctx = xyl__calloc(&a, 1, sizeof *ctx);
     if (!ctx) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    ctx->alloc = a;
     xyl_result r = open_display(&ctx->display, diag);
     if (r == XYL_OK) {
         r = make_context(ctx->display, &ctx->context, diag);
@@ -98,7 +102,7 @@ void xyl_gl_context_destroy(xyl_gl_context *context)
         eglMakeCurrent(context->display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(context->display, context->context);
     eglTerminate(context->display);
-    xyl_allocator a = {0};
+    xyl_allocator a = context->alloc;
     xyl__free(&a, context);
 }
 

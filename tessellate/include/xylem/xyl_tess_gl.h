@@ -2,7 +2,7 @@
  *
  * How to use
  *   - With your own context: make a GL 4.5 core context current (GLFW, SDL, your engine), then
- *     xyl_tess_gl_create(patterns, &gl). Headless: xyl_gl_context_create_headless() first (EGL,
+ *     xyl_tess_gl_create(NULL, patterns, &gl). Headless: xyl_gl_context_create_headless() first (EGL,
  *     Mesa's surfaceless platform; llvmpipe on machines without a GPU).
  *   - xyl_tess_gl_set_patches() uploads a patch set (storage buffer); each frame, after
  *     xyl_tess_select(), xyl_tess_gl_draw() draws into the bound framebuffer: the instanced path
@@ -26,9 +26,12 @@ extern "C" {
 
 typedef struct xyl_gl_context xyl_gl_context;
 
-/* EGL surfaceless display, OpenGL 4.5 core context, made current on this thread. Errors:
- * XYL_ERR_UNSUPPORTED (no EGL display, no GL 4.5 core: the message says which). */
-XYL_API xyl_result xyl_gl_context_create_headless(xyl_gl_context **out, xyl_diag *diag);
+/* EGL surfaceless display, OpenGL 4.5 core context, made current on this thread. alloc (NULL:
+ * the default) holds the context's own record; EGL and the driver allocate as they do. Errors:
+ * XYL_ERR_UNSUPPORTED (no EGL display, no GL 4.5 core: the message says which),
+ * XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_gl_context_create_headless(const xyl_allocator *alloc,
+                                                  xyl_gl_context **out, xyl_diag *diag);
 XYL_API void xyl_gl_context_destroy(xyl_gl_context *context);
 /* GL_RENDERER of the context ("llvmpipe (LLVM 15.0.6, 256 bits)"). */
 XYL_API const char *xyl_gl_context_renderer(const xyl_gl_context *context);
@@ -37,9 +40,15 @@ XYL_API const char *xyl_gl_context_renderer(const xyl_gl_context *context);
 
 typedef struct xyl_tess_gl xyl_tess_gl;
 
-/* Compiles the programs and uploads the patterns. Errors: XYL_ERR_UNSUPPORTED (no current GL 4.5
- * core context, a shader that does not compile or link: the driver's log in diag.message). */
-XYL_API xyl_result xyl_tess_gl_create(const xyl_tess_patterns *patterns, xyl_tess_gl **out,
+typedef struct xyl_tess_gl_desc {
+    xyl_allocator alloc; /* every host allocation of the renderer, as long as it lives */
+} xyl_tess_gl_desc;
+
+/* Compiles the programs and uploads the patterns. desc may be NULL (defaults). Errors:
+ * XYL_ERR_UNSUPPORTED (no current GL 4.5 core context, a shader that does not compile or link:
+ * the driver's log in diag.message), XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_tess_gl_create(const xyl_tess_gl_desc *desc,
+                                      const xyl_tess_patterns *patterns, xyl_tess_gl **out,
                                       xyl_diag *diag);
 XYL_API void xyl_tess_gl_destroy(xyl_tess_gl *gl);
 
