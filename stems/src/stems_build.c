@@ -6,15 +6,7 @@
  * parent quads whose boundary has k vertices and the patch is replaced by a bridge to the child's
  * first ring (face extrusion). Topology is therefore right by construction; geometry (where the
  * rings go) decides only whether surfaces intersect. */
-#include <float.h>
 #include <string.h>
-/* The SSE2 loops stand for scalar ones with the same operations in the same order, and give the
- * same bits; XYL_NO_SIMD compiles the scalar ones alone (tests/stems_scalar.c builds this file
- * so, to check that). */
-#if defined(__SSE2__) && !defined(XYL_NO_SIMD)
-#define XYL__SSE2 1
-#include <emmintrin.h>
-#endif
 
 #include "mesh_internal.h"
 #include "stems_internal.h"
@@ -49,7 +41,7 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
     return true;
 }
 
-static xyl_result oom(stems *s)
+xyl_result xyl__stems_oom(stems *s)
 {
     return xyl__fail(s->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the stem mesh");
 }
@@ -96,7 +88,7 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
     if (!xyl__grow(&s->alloc, (void **)&s->tris, &c0, s->nt, s->nt + 1, 3 * sizeof *s->tris) ||
         !xyl__grow(&s->alloc, (void **)&s->tbranch, &c1, s->nt, s->nt + 1, sizeof *s->tbranch) ||
         !xyl__grow(&s->alloc, (void **)&s->twrap, &c2, s->nt, s->nt + 1, sizeof *s->twrap))
-        return oom(s);
+        return xyl__stems_oom(s);
     s->tcap3 = c0;
     uint32_t *t = s->tris + 3 * s->nt;
     t[0] = a;
@@ -110,26 +102,6 @@ static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t
 /* ---- rings --------------------------------------------------------------------------------- */
 
 #ifdef XYL__SSE2
-/* Lanes (v[i].x, v[i1].x) and so on as doubles, built in registers: stores of single floats
- * read back as a pair would stall on store forwarding. */
-static XYL__ALWAYS_INLINE void load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1, __m128d *out)
-{
-    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
-    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
-    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
-}
-
-/* The low two lanes of x, y and z (floats) as out[0] and out[1]. */
-static XYL__ALWAYS_INLINE void store_pair(__m128 x, __m128 y, __m128 z, xyl_vec3 *out)
-{
-    out[0].x = _mm_cvtss_f32(x);
-    out[0].y = _mm_cvtss_f32(y);
-    out[0].z = _mm_cvtss_f32(z);
-    out[1].x = _mm_cvtss_f32(_mm_shuffle_ps(x, x, 1));
-    out[1].y = _mm_cvtss_f32(_mm_shuffle_ps(y, y, 1));
-    out[1].z = _mm_cvtss_f32(_mm_shuffle_ps(z, z, 1));
-}
-
 /* One coordinate of two ring vertices, c + (u (r cos) + w (r sin)), rounded to floats in the
  * low two lanes: xyl__d3_add(c, xyl__d3_add(scale(u, ...), scale(w, ...))) per lane. */
 static XYL__ALWAYS_INLINE __m128 ring_coord(double c, double u, double w, __m128d rcos,
@@ -161,7 +133,7 @@ static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3
         __m128d ca = _mm_mul_pd(vr, _mm_loadu_pd(s->cos_a + j));
         __m128d sa = _mm_mul_pd(vr, _mm_loadu_pd(s->sin_a + j));
         __m128 fx = ring_coord(c.x, u.x, w.x, ca, sa), fy = ring_coord(c.y, u.y, w.y, ca, sa);
-        store_pair(fx, fy, ring_coord(c.z, u.z, w.z, ca, sa), pos + j);
+        xyl__store_pair(fx, fy, ring_coord(c.z, u.z, w.z, ca, sa), pos + j);
     }
 #endif
     for (; j < k; ++j) {
@@ -198,10 +170,10 @@ static XYL__ALWAYS_INLINE void quad_normals_sse2(const xyl_vec3 *pa, const xyl_v
     for (uint32_t j = 0; j < k; j += 2) {
         uint32_t j1 = j + 1, j2 = j + 2 < k ? j + 2 : 0;
         __m128d a0[3], a1[3], b0[3], b1[3], d1[3], d2[3];
-        load_pair(pa, j, j1, a0);
-        load_pair(pa, j1, j2, a1);
-        load_pair(pb, j, j1, b0);
-        load_pair(pb, j1, j2, b1);
+        xyl__load_pair(pa, j, j1, a0);
+        xyl__load_pair(pa, j1, j2, a1);
+        xyl__load_pair(pb, j, j1, b0);
+        xyl__load_pair(pb, j1, j2, b1);
         for (int i = 0; i < 3; ++i) {
             d1[i] = _mm_sub_pd(b1[i], a0[i]);
             d2[i] = _mm_sub_pd(b0[i], a1[i]);
@@ -209,7 +181,7 @@ static XYL__ALWAYS_INLINE void quad_normals_sse2(const xyl_vec3 *pa, const xyl_v
         __m128 nx = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[1], d2[2]), _mm_mul_pd(d1[2], d2[1])));
         __m128 ny = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[2], d2[0]), _mm_mul_pd(d1[0], d2[2])));
         __m128 nz = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[0], d2[1]), _mm_mul_pd(d1[1], d2[0])));
-        store_pair(nx, ny, nz, fn + j);
+        xyl__store_pair(nx, ny, nz, fn + j);
     }
 }
 #endif
@@ -386,7 +358,7 @@ static xyl_result index_children(stems *s, const int32_t *parent_of)
     s->child_start = start;
     s->child_list = xyl__alloc_array(&s->alloc, n, sizeof *s->child_list);
     s->main = xyl__alloc_array(&s->alloc, n, sizeof *s->main);
-    if (!start || !s->child_list || !s->main) return oom(s);
+    if (!start || !s->child_list || !s->main) return xyl__stems_oom(s);
     for (size_t i = 0; i < n; ++i) {
         int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
         if (p >= 0) ++start[p + 2];
@@ -423,7 +395,7 @@ static xyl_result collect_chain(stems *s, uint32_t start)
     for (uint32_t n = start; n != UINT32_MAX; n = main_child(s, n)) {
         if (!xyl__grow(&s->alloc, (void **)&s->chain, &s->ccap, s->nchain, s->nchain + 1,
                        sizeof *s->chain))
-            return oom(s);
+            return xyl__stems_oom(s);
         s->chain[s->nchain++] = n;
     }
     return XYL_OK;
@@ -464,7 +436,7 @@ static xyl_result make_stations(stems *s, const stems_ring *bridge)
         if (behind) p = xyl__d3_add(bridge->centre, xyl__d3_scale(bridge->tangent, 2 * bridge->radius));
         if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations,
                        s->nstations + 1, sizeof *s->stations))
-            return oom(s);
+            return xyl__stems_oom(s);
         stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
         /* a stub stands for none of the child's nodes, so it need not have their radius: at it,
          * a knob wider than the bridge ring (whose radius the patch limits) stood out beside
@@ -487,7 +459,7 @@ static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
 {
     if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + 1,
                    sizeof *s->rings))
-        return oom(s);
+        return xyl__stems_oom(s);
     /* filled in place: a ring built on the stack and copied in as a whole stalled on store
      * forwarding (its fields written in pieces, read back in 16-byte blocks) */
     stems_ring *ring = &s->rings[s->nrings], *prev = s->nrings ? ring - 1 : NULL;
@@ -517,7 +489,7 @@ static XYL__ALWAYS_INLINE xyl_result emit_rings_k(stems *s, size_t from, uint32_
                                                  uint32_t k)
 {
     for (size_t i = from; i < s->nrings; ++i) {
-        if (!out_reserve(s, s->nv + k, s->nq + k)) return oom(s);
+        if (!out_reserve(s, s->nv + k, s->nq + k)) return xyl__stems_oom(s);
         stems_ring *ring = &s->rings[i];
         ring->first = put_ring_k(s, ring->centre, ring->tangent, ring->u, ring->radius, ring->v,
                                  branch, k);
@@ -864,14 +836,14 @@ static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
     xyl__dvec3 n = g.n, centroid = g.centroid;
     stems_ring ring = g.ring;
     double r = ring.radius;
-    if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
+    if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return xyl__stems_oom(s);
     ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
     align_to_outline(s, &ring, loop, centroid, r);
     xyl_result res = bridge_faces(s, loop, 2 * strip + 2, ring.first, branch);
     if (res) return res;
     if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
                    sizeof *s->pending))
-        return oom(s);
+        return xyl__stems_oom(s);
     stems_pending pend = {child, ring};
     s->pending[s->npending++] = pend;
     return XYL_OK;
@@ -898,7 +870,8 @@ static xyl_result grow_taken(stems *s)
 {
     size_t old = s->tcap;
     if (s->qcap <= old) return XYL_OK;
-    if (!xyl__grow(&s->alloc, (void **)&s->taken, &s->tcap, old, s->qcap, 1)) return oom(s);
+    if (!xyl__grow(&s->alloc, (void **)&s->taken, &s->tcap, old, s->qcap, 1))
+        return xyl__stems_oom(s);
     memset(s->taken + old, 0, s->tcap - old);
     return XYL_OK;
 }
@@ -916,7 +889,7 @@ static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, u
     if (more) {
         if (!xyl__grow(&s->alloc, (void **)&s->cones, &s->cone_cap, s->ncones, s->ncones + 1,
                        sizeof *s->cones))
-            return oom(s);
+            return xyl__stems_oom(s);
         bool reaches;
         s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
     }
@@ -959,7 +932,7 @@ static xyl_result ensure_two_stations(stems *s, xyl__dvec3 dir)
 {
     if (s->nstations >= 2) return XYL_OK;
     if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, 2, sizeof *s->stations))
-        return oom(s);
+        return xyl__stems_oom(s);
     stems_station *a = &s->stations[0];
     stems_station b = {xyl__d3_add(a->p, xyl__d3_scale(dir, 2.0 * a->r)), a->r, UINT32_MAX, 0};
     s->stations[s->nstations++] = b;
@@ -989,56 +962,6 @@ static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, stems_fork_span *
         }
     }
     return XYL_OK;
-}
-
-/* With even k (no triangles) a vertex's own-branch faces are the bands, caps and bridge of its
- * branch, all made once the branch is built: its normals are normalised then, while they are
- * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
- * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings and the
- * apexes of its domed caps. */
-static void unit_normal(stems *s, xyl_vec3 *n)
-{
-    if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
-    else s->lonely = true;
-}
-
-#ifdef XYL__SSE2
-/* unit_normal on n[0] and n[1] at once: the same double operations in the same order, so the
- * same bits, two lanes per instruction (the square root and the division dominate this pass). */
-static void unit_normal_pair(stems *s, xyl_vec3 *n)
-{
-    __m128d v[3];
-    load_pair(n, 0, 1, v);
-    __m128d l2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(v[0], v[0]), _mm_mul_pd(v[1], v[1])),
-                            _mm_mul_pd(v[2], v[2]));
-    /* both with a direction and finite: else each on its own */
-    __m128d ok = _mm_and_pd(_mm_cmpgt_pd(l2, _mm_set1_pd(XYL__EPS_NORMALIZE)),
-                            _mm_cmple_pd(l2, _mm_set1_pd(DBL_MAX)));
-    if (_mm_movemask_pd(ok) != 3) {
-        unit_normal(s, &n[0]);
-        unit_normal(s, &n[1]);
-        return;
-    }
-    __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(l2));
-    store_pair(_mm_cvtpd_ps(_mm_mul_pd(v[0], inv)), _mm_cvtpd_ps(_mm_mul_pd(v[1], inv)),
-               _mm_cvtpd_ps(_mm_mul_pd(v[2], inv)), n);
-}
-#endif
-
-static void unit_branch_normals(stems *s)
-{
-    for (size_t i = 0; i < s->nrings; ++i) {
-        xyl_vec3 *n = s->nrm + s->rings[i].first;
-        uint32_t j = 0;
-#ifdef XYL__SSE2
-        for (; j + 2 <= s->k; j += 2) unit_normal_pair(s, n + j);
-#endif
-        for (; j < s->k; ++j) unit_normal(s, n + j);
-    }
-    for (int e = 0; e < 2; ++e) {
-        if (s->apex[e] == UINT32_MAX) continue;
-        unit_normal(s, s->nrm + s->apex[e]);
-    }
 }
 
 /* Whether the band from ring a (centre ca, unit tangent ta, radius ra) to ring b ahead of it
@@ -1108,7 +1031,7 @@ static xyl_result add_elbow(stems *s, const stems_ring *bridge)
         return XYL_OK;
     if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, s->nstations + 1,
                    sizeof *s->stations))
-        return oom(s);
+        return xyl__stems_oom(s);
     memmove(s->stations + 1, s->stations, s->nstations * sizeof *s->stations);
     stems_station elbow = {e, re, UINT32_MAX, 0};
     s->stations[0] = elbow;
@@ -1157,23 +1080,23 @@ static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
     s->nrings = 0;
     if (from) { /* the bridge ring is this branch's first ring */
         if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings))
-            return oom(s);
+            return xyl__stems_oom(s);
         s->rings[0] = *from;
         s->nrings = 1;
     }
     /* one buffer for all branches: children are built after their parent's build_branch */
     if (!xyl__grow(&s->alloc, (void **)&s->spans, &s->spcap, 0, s->nstations, sizeof *s->spans))
-        return oom(s);
+        return xyl__stems_oom(s);
     stems_fork_span *spans = s->spans;
     size_t nspans = 0;
     r = branch_rings(s, dir, spans, &nspans);
     if (!r && s->limit_centres) limit_centres(s);
     if (!r) r = emit_rings(s, from ? 1 : 0, branch);
-    if (!r && !out_reserve(s, s->nv + 2, s->nq + s->k)) r = oom(s); /* the caps */
+    if (!r && !out_reserve(s, s->nv + 2, s->nq + s->k)) r = xyl__stems_oom(s); /* the caps */
     s->apex[0] = s->apex[1] = UINT32_MAX;
     if (!r && !from) r = put_cap(s, 0, false, branch);
     if (!r) r = put_cap(s, s->nrings - 1, true, branch);
-    if (!r && s->unit_per_branch) unit_branch_normals(s);
+    if (!r && s->unit_per_branch) xyl__stems_unit_branch_normals(s);
     for (size_t f = 0; f < nspans && !r; ++f)
         r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
     return r;
@@ -1234,7 +1157,7 @@ static xyl_result index_tree(stems *s)
             parent_of = xyl__alloc_array(&s->alloc, n ? 5 * n : 1, sizeof *parent_of);
             s->tails = xyl__alloc_array(&s->alloc, n ? 6 * n : 1, sizeof *s->tails);
             if (!parent_of || !s->tails) {
-                r = oom(s);
+                r = xyl__stems_oom(s);
                 break;
             }
             xyl__stems_tail_boxes(s, s->tails);
@@ -1266,7 +1189,8 @@ static xyl_result build_all(stems *s)
      * allocator can hand the same pages back on the next build instead of fresh ones */
     size_t rings = 0, chains = 0;
     if (!r) ring_bound(s, &rings, &chains);
-    if (!r && !out_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k)) r = oom(s);
+    if (!r && !out_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k))
+        r = xyl__stems_oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
         r = build_branch(s, (uint32_t)i, NULL);
@@ -1403,59 +1327,6 @@ static void free_state(stems *s)
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 
-/* Normals of the mesh before the patches were dropped: a parent vertex on a joint still sees its
- * branch's full tube, so its normal is the parent's own (Skjermo 2008). The quads' share is in
- * s->nrm already; triangles come after all quads, as in xyl__mesh_normals. */
-static xyl_result normals_with_patches(stems *s, xyl_vec3 **out)
-{
-    for (size_t t = 0; t < s->nt; ++t) {
-        const uint32_t *f = s->tris + 3 * t;
-        xyl_vec3 fn = xyl__tri_normal(s->pos, f);
-        for (int k = 0; k < 3; ++k)
-            if (s->vbranch[f[k]] == s->tbranch[t]) xyl__add_f3(&s->nrm[f[k]], fn);
-    }
-    xyl__mesh_arrays view; /* all faces, taken ones too: for vertices without own-branch faces */
-    memset(&view, 0, sizeof view);
-    view.positions = s->pos;
-    view.vertex_count = s->nv;
-    view.quads = s->quads;
-    view.quad_count = s->nq;
-    view.triangles = s->tris;
-    view.triangle_count = s->nt;
-    xyl_result r = XYL_OK;
-    if (!s->unit_per_branch) r = xyl__mesh_normals_finish(&view, true, &s->alloc, s->nrm);
-    else if (s->lonely) r = xyl__mesh_normals_lonely(&view, &s->alloc, s->nrm);
-    if (r) return oom(s);
-    *out = s->nrm;
-    s->nrm = NULL;
-    return XYL_OK;
-}
-
-/* Per-branch normals on a mesh whose vertices sit on the limit surface: the limit normal
- * (exact) wherever all of a vertex's faces are of its own branch, the own-branch face average
- * at the seams between branches, where the limit normal would lean towards the other branch. */
-static xyl_result branch_normals_on_limit(stems *s, xyl__mesh_arrays *a)
-{
-    xyl_vec3 *limit = a->normals;
-    uint8_t *seam = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, 1);
-    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
-    xyl_result r = seam && a->normals ? xyl__mesh_normals(a, a->face_branches, &s->alloc, a->normals)
-                                      : XYL_ERR_OUT_OF_MEMORY;
-    if (!r) {
-        for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
-            bool quad = f < a->quad_count;
-            const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
-            for (int c = 0; c < (quad ? 4 : 3); ++c)
-                if (a->branch_ids[idx[c]] != a->face_branches[f]) seam[idx[c]] = 1;
-        }
-        for (size_t v = 0; v < a->vertex_count; ++v)
-            if (!seam[v]) a->normals[v] = limit[v];
-    }
-    xyl__free(&s->alloc, seam);
-    xyl__free(&s->alloc, limit);
-    return r ? oom(s) : XYL_OK;
-}
-
 static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, uint32_t *tv,
                          xyl_mesh **out)
 {
@@ -1470,13 +1341,13 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
         *a = fine;
     }
     if (a->normals && d->normals == XYL_NORMALS_BRANCH) {
-        r = branch_normals_on_limit(s, a);
+        r = xyl__stems_branch_normals_on_limit(s, a);
     } else if (!a->normals) { /* limit normals are the smooth normals */
         a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
-        if (!a->normals) r = oom(s);
+        if (!a->normals) r = xyl__stems_oom(s);
         if (!r) {
             const uint32_t *fb = d->normals == XYL_NORMALS_BRANCH ? a->face_branches : NULL;
-            if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = oom(s);
+            if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = xyl__stems_oom(s);
         }
     }
     if (r) {
@@ -1497,14 +1368,14 @@ static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
                              sizeof *s->fbranch) ||
                   !xyl__grow(&s->alloc, (void **)&s->qwrap, &wcap, s->nq, s->nq + s->nt,
                              sizeof *s->qwrap)))
-        return oom(s);
+        return xyl__stems_oom(s);
     if (s->sum_normals) {
-        xyl_result r = normals_with_patches(s, &normals);
+        xyl_result r = xyl__stems_normals_with_patches(s, &normals);
         if (r) return r;
         *tv = xyl__alloc_array(&s->alloc, 2 * s->nq + s->nt, 3 * sizeof **tv);
         if (!*tv) {
             xyl__free(&s->alloc, normals);
-            return oom(s);
+            return xyl__stems_oom(s);
         }
     }
     take_arrays(s, a, *tv);

@@ -1,8 +1,24 @@
-/* The stem mesher's state (stems_build.c). Not installed. */
+/* The stem mesher's state and what its files (stems_*.c) share. Not installed. */
 #ifndef XYL_STEMS_INTERNAL_H
 #define XYL_STEMS_INTERNAL_H
 
 #include "mesh_internal.h"
+
+/* The SSE2 loops stand for scalar ones with the same operations in the same order, and give the
+ * same bits; XYL_NO_SIMD compiles the scalar ones alone (tests/stems_scalar.c builds the mesher
+ * so, to check that). */
+#if defined(__SSE2__) && !defined(XYL_NO_SIMD)
+#define XYL__SSE2 1
+#include <emmintrin.h>
+#endif
+
+/* The linkage of the functions below that the mesher's files share. tests/stems_scalar.c
+ * compiles those files once more, without SSE2, in one translation unit and defines this as
+ * static there: its copy then neither clashes with the library's nor stands in for any of it.
+ * (stems_merge.c and stems_joints.c have no SIMD loops; the copy calls the library's.) */
+#ifndef XYL__STEMS_SHARED
+#define XYL__STEMS_SHARED
+#endif
 
 /* One ring of a branch tube, and the patch bookkeeping of the band that follows it. */
 typedef struct stems_ring {
@@ -150,5 +166,45 @@ typedef struct xyl__joint_tally {
 xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
                                    const uint64_t *pairs, size_t count, uint8_t *drop,
                                    const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag);
+
+/* ---- shared by the mesher's files ---------------------------------------------------------- */
+
+#ifdef XYL__SSE2
+/* Lanes (v[i].x, v[i1].x) and so on as doubles, built in registers: stores of single floats
+ * read back as a pair would stall on store forwarding. */
+static XYL__ALWAYS_INLINE void xyl__load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1,
+                                              __m128d *out)
+{
+    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
+    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
+    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
+}
+
+/* The low two lanes of x, y and z (floats) as out[0] and out[1]. */
+static XYL__ALWAYS_INLINE void xyl__store_pair(__m128 x, __m128 y, __m128 z, xyl_vec3 *out)
+{
+    out[0].x = _mm_cvtss_f32(x);
+    out[0].y = _mm_cvtss_f32(y);
+    out[0].z = _mm_cvtss_f32(z);
+    out[1].x = _mm_cvtss_f32(_mm_shuffle_ps(x, x, 1));
+    out[1].y = _mm_cvtss_f32(_mm_shuffle_ps(y, y, 1));
+    out[1].z = _mm_cvtss_f32(_mm_shuffle_ps(z, z, 1));
+}
+#endif
+
+/* XYL_ERR_OUT_OF_MEMORY, told to s->diag (stems_build.c). */
+XYL__STEMS_SHARED xyl_result xyl__stems_oom(stems *s);
+
+/* Makes the normals summed for the branch just built (its rings and cap apexes) unit
+ * (stems_normals.c); k even, while they are still in cache. */
+XYL__STEMS_SHARED void xyl__stems_unit_branch_normals(stems *s);
+
+/* The vertex normals of the mesh as it stood before bridges replaced their patches, finished
+ * from the sums in s->nrm, which it hands over as *out (stems_normals.c). */
+XYL__STEMS_SHARED xyl_result xyl__stems_normals_with_patches(stems *s, xyl_vec3 **out);
+
+/* Replaces the limit normals in a->normals by branch normals at the seams between branches
+ * (stems_normals.c). */
+XYL__STEMS_SHARED xyl_result xyl__stems_branch_normals_on_limit(stems *s, xyl__mesh_arrays *a);
 
 #endif
