@@ -192,19 +192,122 @@ static XYL__ALWAYS_INLINE void xyl__store_pair(__m128 x, __m128 y, __m128 z, xyl
 }
 #endif
 
+
+/* The child that continues n's branch (same branch id), or UINT32_MAX at a tip. */
+static inline uint32_t xyl__stems_main_child(const stems *s, uint32_t n)
+{
+    return s->main[n];
+}
+
+static inline xyl__dvec3 xyl__stems_node_pos(const stems *s, uint32_t n)
+{
+    return xyl__from_f3(s->sk->nodes[n].pos);
+}
+
+/* The unit direction from a to b; fallback where they coincide. */
+static inline xyl__dvec3 xyl__dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
+{
+    return xyl__d3_normalize_or(xyl__d3_sub(b, a), fallback);
+}
+
+/* Room in the output arrays for verts vertices and quads quads; false when out of memory. The
+ * usual case, reserved up front, is decided inline; xyl__stems_reserve_slow grows the arrays
+ * (stems_build.c). */
+XYL__STEMS_SHARED bool xyl__stems_reserve_slow(stems *s, size_t verts, size_t quads);
+static inline bool xyl__stems_reserve(stems *s, size_t verts, size_t quads)
+{
+    if (verts <= s->vcap && quads <= s->qcap) return true;
+    return xyl__stems_reserve_slow(s, verts, quads);
+}
+
+/* Adds quad q's normal to the sums of its vertices of its branch. Quads are made in index order
+ * and their vertices are final by then, so each vertex sums the same faces in the same order as
+ * xyl__mesh_normals would, while they are still in cache. */
+static inline void xyl__stems_sum_quad_normal(stems *s, const uint32_t *q, uint32_t branch)
+{
+    xyl_vec3 fn = xyl__quad_normal(s->pos, q);
+    for (int k = 0; k < 4; ++k)
+        if (s->vbranch[q[k]] == branch) xyl__add_f3(&s->nrm[q[k]], fn);
+}
+
+/* The uv_wraps bits of a face of n corners (idx), by the rule of xyl__uv_wraps_of. Band quads
+ * do not come here (put_band_k knows theirs); caps and bridge faces do. */
+static inline uint8_t xyl__stems_face_wraps(const stems *s, const uint32_t *idx, int n)
+{
+    float u[4];
+    for (int c = 0; c < n; ++c) u[c] = s->uv[2 * idx[c]];
+    return xyl__uv_wraps_of(u, n);
+}
+
+/* Appends a quad; its branch is the branch being built. */
+static inline void xyl__stems_put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
+                                       uint32_t branch)
+{
+    size_t n = s->nq;
+    uint32_t *q = s->quads + 4 * n;
+    q[0] = a;
+    q[1] = b;
+    q[2] = c;
+    q[3] = d;
+    s->fbranch[n] = branch;
+    s->qwrap[n] = xyl__stems_face_wraps(s, q, 4);
+    s->nq = n + 1;
+    if (s->nrm) xyl__stems_sum_quad_normal(s, q, branch);
+}
+
 /* XYL_ERR_OUT_OF_MEMORY, told to s->diag (stems_build.c). */
 XYL__STEMS_SHARED xyl_result xyl__stems_oom(stems *s);
 
-/* Makes the normals summed for the branch just built (its rings and cap apexes) unit
- * (stems_normals.c); k even, while they are still in cache. */
+/* Appends a triangle (odd k: caps and bridges have one) (stems_build.c). */
+XYL__STEMS_SHARED xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c,
+                                                uint32_t branch);
+
+/* ---- rings (stems_build.c) ----------------------------------------------------------------- */
+
+/* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
+ * radius r (times s->inflate), texture v. Returns the first vertex index. */
+XYL__STEMS_SHARED uint32_t xyl__stems_put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u,
+                                               double r, double v, uint32_t branch);
+
+/* Plans the next ring of the branch being built: centre c, unit tangent t, radius r. */
+XYL__STEMS_SHARED xyl_result xyl__stems_add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r);
+
+/* Lateral children of the nodes merged into station st. */
+XYL__STEMS_SHARED size_t xyl__stems_lateral_count(const stems *s, const stems_station *st);
+
+/* ---- forks (stems_fork.c) ------------------------------------------------------------------ */
+
+/* Rings a fork with `laterals` lateral children adds around its own. */
+XYL__STEMS_SHARED size_t xyl__stems_fork_extra_rings(const stems *s, size_t laterals);
+
+/* The rings of station i, a fork with `laterals` lateral children: its own ring, turned to t,
+ * and the extra rings around it, which the tube comes into along t_in and leaves along t_out. */
+XYL__STEMS_SHARED xyl_result xyl__stems_fork_rings(stems *s, size_t i, xyl__dvec3 t_in,
+                                                   xyl__dvec3 t, xyl__dvec3 t_out,
+                                                   size_t laterals);
+
+/* Bridges every lateral child of station i from a patch in the bands between rings lo .. hi,
+ * and queues its branch in s->pending. */
+XYL__STEMS_SHARED xyl_result xyl__stems_attach_laterals(stems *s, size_t i, size_t lo, size_t hi);
+
+/* The direction a lateral's tube, whose stations are made, leaves its bridge ring along. */
+XYL__STEMS_SHARED xyl__dvec3 xyl__stems_first_direction(const stems *s, const stems_ring *bridge);
+
+/* Puts a node-less station (an elbow) between a lateral's bridge ring and its first station
+ * where the band between them would cross the bridges of that station's laterals. */
+XYL__STEMS_SHARED xyl_result xyl__stems_add_elbow(stems *s, const stems_ring *bridge);
+
+/* ---- normals (stems_normals.c) ------------------------------------------------------------- */
+
+/* Makes the normals summed for the branch just built (its rings and cap apexes) unit;
+ * k even, while they are still in cache. */
 XYL__STEMS_SHARED void xyl__stems_unit_branch_normals(stems *s);
 
 /* The vertex normals of the mesh as it stood before bridges replaced their patches, finished
- * from the sums in s->nrm, which it hands over as *out (stems_normals.c). */
+ * from the sums in s->nrm, which it hands over as *out. */
 XYL__STEMS_SHARED xyl_result xyl__stems_normals_with_patches(stems *s, xyl_vec3 **out);
 
-/* Replaces the limit normals in a->normals by branch normals at the seams between branches
- * (stems_normals.c). */
+/* Replaces the limit normals in a->normals by branch normals at the seams between branches. */
 XYL__STEMS_SHARED xyl_result xyl__stems_branch_normals_on_limit(stems *s, xyl__mesh_arrays *a);
 
 #endif

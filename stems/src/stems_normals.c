@@ -1,4 +1,4 @@
-/* Stem mesh normals: per-branch sums made unit, the joints' normals, branch normals on the limit. */
+/* Stem mesh normals: unit sums per branch, the joints' normals, branch normals on the limit. */
 #include <float.h>
 #include <string.h>
 
