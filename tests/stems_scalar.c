@@ -8,4 +8,5 @@
 #define xyl_stems_build xyl__stems_build_scalar
 #include "stems_fork.c"
 #include "stems_normals.c"
+#include "stems_rings.c"
 #include "stems_build.c"

@@ -399,7 +399,7 @@ xyl_result xyl__stems_attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
     return r;
 }
 
-/* ---- a lateral's first band ----------------------------------------------------------------- */
+/* ---- a lateral's first band ---------------------------------------------------------------- */
 
 /* Whether the band from ring a (centre ca, unit tangent ta, radius ra) to ring b ahead of it
  * folds: a vertex of one lies on the wrong side of the other's plane. */

@@ -262,7 +262,13 @@ XYL__STEMS_SHARED xyl_result xyl__stems_oom(stems *s);
 XYL__STEMS_SHARED xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c,
                                                 uint32_t branch);
 
-/* ---- rings (stems_build.c) ----------------------------------------------------------------- */
+/* ---- a branch's tube (stems_rings.c) ------------------------------------------------------- */
+
+/* Builds the branch that starts at node start: its tube, caps and the bridges of its laterals,
+ * whose branches it queues in s->pending. from: the bridge ring a lateral's tube starts from;
+ * NULL for a root. */
+XYL__STEMS_SHARED xyl_result xyl__stems_build_branch(stems *s, uint32_t start,
+                                                     const stems_ring *from);
 
 /* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
  * radius r (times s->inflate), texture v. Returns the first vertex index. */
