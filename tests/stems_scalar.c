@@ -9,4 +9,5 @@
 #include "stems_fork.c"
 #include "stems_normals.c"
 #include "stems_rings.c"
+#include "stems_tree.c"
 #include "stems_build.c"

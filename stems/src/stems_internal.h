@@ -262,6 +262,13 @@ XYL__STEMS_SHARED xyl_result xyl__stems_oom(stems *s);
 XYL__STEMS_SHARED xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c,
                                                 uint32_t branch);
 
+/* ---- the tree as meshed (stems_tree.c) ----------------------------------------------------- */
+
+/* Indexes the children and main child of every node (child_start, child_list, main) of the tree
+ * as meshed: laterals placed out of their parent's tube, overlapping siblings merged, and the
+ * branches s->drop leaves out detached. */
+XYL__STEMS_SHARED xyl_result xyl__stems_index_tree(stems *s);
+
 /* ---- a branch's tube (stems_rings.c) ------------------------------------------------------- */
 
 /* Builds the branch that starts at node start: its tube, caps and the bridges of its laterals,
