@@ -1,11 +1,17 @@
-/* The stem mesher: one closed quad mesh around a whole skeleton (docs/stems.md).
+/* The stem mesher's driver: checks the desc, builds every branch, hands the mesh over. */
+
+/* The stem mesher wraps a whole skeleton in one closed quad mesh (docs/stems.md). Every branch is
+ * a tube of k-vertex rings (rotation-minimising frames, caps at both ends). A lateral child is
+ * grown out of its parent by Euler operators that keep a closed oriented genus-0 manifold so:
+ * rings are inserted around the fork (loop insertion), the child takes a patch of parent quads
+ * whose boundary has k vertices and the patch is replaced by a bridge to the child's first ring
+ * (face extrusion). Topology is therefore right by construction; geometry (where the rings go)
+ * decides only whether surfaces intersect.
  *
- * Every branch is a tube of k-vertex rings (rotation-minimising frames, caps at both ends). A
- * lateral child is grown out of its parent by Euler operators that keep a closed oriented genus-0
- * manifold so: rings are inserted around the fork (loop insertion), the child takes a patch of
- * parent quads whose boundary has k vertices and the patch is replaced by a bridge to the child's
- * first ring (face extrusion). Topology is therefore right by construction; geometry (where the
- * rings go) decides only whether surfaces intersect. */
+ * Its files: stems_tree.c indexes the tree as meshed (stems_merge.c places and merges the
+ * laterals), stems_rings.c builds a branch's tube, stems_fork.c the rings around its forks and
+ * its laterals' bridges, stems_normals.c the normals, stems_joints.c judges a mesh's
+ * intersecting pairs for checked joints, and this file drives them. */
 #include <string.h>
 
 #include "mesh_internal.h"

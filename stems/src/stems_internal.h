@@ -167,7 +167,7 @@ xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
                                    const uint64_t *pairs, size_t count, uint8_t *drop,
                                    const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag);
 
-/* ---- shared by the mesher's files ---------------------------------------------------------- */
+/* ---- small inline functions of the mesher's files ------------------------------------------ */
 
 #ifdef XYL__SSE2
 /* Lanes (v[i].x, v[i1].x) and so on as doubles, built in registers: stores of single floats
@@ -192,7 +192,6 @@ static XYL__ALWAYS_INLINE void xyl__store_pair(__m128 x, __m128 y, __m128 z, xyl
 }
 #endif
 
-
 /* The child that continues n's branch (same branch id), or UINT32_MAX at a tip. */
 static inline uint32_t xyl__stems_main_child(const stems *s, uint32_t n)
 {
@@ -210,9 +209,10 @@ static inline xyl__dvec3 xyl__dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3
     return xyl__d3_normalize_or(xyl__d3_sub(b, a), fallback);
 }
 
+/* ---- output (stems_build.c; the usual cases inline) ---------------------------------------- */
+
 /* Room in the output arrays for verts vertices and quads quads; false when out of memory. The
- * usual case, reserved up front, is decided inline; xyl__stems_reserve_slow grows the arrays
- * (stems_build.c). */
+ * usual case, reserved up front, is decided inline; xyl__stems_reserve_slow grows the arrays. */
 XYL__STEMS_SHARED bool xyl__stems_reserve_slow(stems *s, size_t verts, size_t quads);
 static inline bool xyl__stems_reserve(stems *s, size_t verts, size_t quads)
 {
@@ -255,10 +255,10 @@ static inline void xyl__stems_put_quad(stems *s, uint32_t a, uint32_t b, uint32_
     if (s->nrm) xyl__stems_sum_quad_normal(s, q, branch);
 }
 
-/* XYL_ERR_OUT_OF_MEMORY, told to s->diag (stems_build.c). */
+/* XYL_ERR_OUT_OF_MEMORY, told to s->diag. */
 XYL__STEMS_SHARED xyl_result xyl__stems_oom(stems *s);
 
-/* Appends a triangle (odd k: caps and bridges have one) (stems_build.c). */
+/* Appends a triangle (odd k: caps and bridges have one). */
 XYL__STEMS_SHARED xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c,
                                                 uint32_t branch);
 
@@ -303,7 +303,8 @@ XYL__STEMS_SHARED xyl_result xyl__stems_fork_rings(stems *s, size_t i, xyl__dvec
  * and queues its branch in s->pending. */
 XYL__STEMS_SHARED xyl_result xyl__stems_attach_laterals(stems *s, size_t i, size_t lo, size_t hi);
 
-/* The direction a lateral's tube, whose stations are made, leaves its bridge ring along. */
+/* The direction a lateral's tube comes into its first station along from its bridge ring (its
+ * stations made). */
 XYL__STEMS_SHARED xyl__dvec3 xyl__stems_first_direction(const stems *s, const stems_ring *bridge);
 
 /* Puts a node-less station (an elbow) between a lateral's bridge ring and its first station
