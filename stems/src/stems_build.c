@@ -327,6 +327,19 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     return r ? r : finish(&s, desc, &a, tv, out);
 }
 
+/* Judges the intersecting pairs of mesh m (stems_joints.c): *t counts them, and drop has the
+ * levels raised for those at joints. */
+static xyl_result judge_mesh(const xyl_skeleton *sk, const xyl_mesh *m, uint8_t *drop,
+                             const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag)
+{
+    uint64_t *pairs = NULL;
+    size_t count = 0;
+    xyl_result r = xyl__mesh_intersecting_pairs(m, alloc, &pairs, &count, diag);
+    if (!r) r = xyl__stems_judge_joints(sk, m, pairs, count, drop, alloc, t, diag);
+    xyl__free(alloc, pairs);
+    return r;
+}
+
 /* Checked joints (docs/stems.md): builds, tests the mesh for intersecting pairs, and for each
  * pair at a joint raises one lateral's level (stems_joints.c): it starts a node later, then
  * another, then is left out with all that grows from it; and builds again, until a mesh has no
@@ -347,12 +360,8 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
         r = build_once(skeleton, &plain, drop, &m, diag);
         if (r) break;
         if (++st->builds == 1) st->faces_first = m->quad_count + m->triangle_count;
-        uint64_t *pairs = NULL;
-        size_t count = 0;
-        r = xyl__mesh_intersecting_pairs(m, &desc->alloc, &pairs, &count, diag);
         xyl__joint_tally t;
-        if (!r) r = xyl__stems_judge_joints(skeleton, m, pairs, count, drop, &desc->alloc, &t, diag);
-        xyl__free(&desc->alloc, pairs);
+        r = judge_mesh(skeleton, m, drop, &desc->alloc, &t, diag);
         if (r) break;
         if (st->builds == 1) st->joint_pairs_first = t.joint;
         if (!t.marked) {
