@@ -1,31 +1,27 @@
-/* The stem mesher: one closed quad mesh around a whole skeleton (docs/stems.md).
+/* The stem mesher's driver: checks the desc, builds every branch, hands the mesh over. */
+
+/* The stem mesher wraps a whole skeleton in one closed quad mesh (docs/stems.md). Every branch is
+ * a tube of k-vertex rings (rotation-minimising frames, caps at both ends). A lateral child is
+ * grown out of its parent by Euler operators that keep a closed oriented genus-0 manifold so:
+ * rings are inserted around the fork (loop insertion), the child takes a patch of parent quads
+ * whose boundary has k vertices and the patch is replaced by a bridge to the child's first ring
+ * (face extrusion). Topology is therefore right by construction; geometry (where the rings go)
+ * decides only whether surfaces intersect.
  *
- * Every branch is a tube of k-vertex rings (rotation-minimising frames, caps at both ends). A
- * lateral child is grown out of its parent by Euler operators that keep a closed oriented genus-0
- * manifold so: rings are inserted around the fork (loop insertion), the child takes a patch of
- * parent quads whose boundary has k vertices and the patch is replaced by a bridge to the child's
- * first ring (face extrusion). Topology is therefore right by construction; geometry (where the
- * rings go) decides only whether surfaces intersect. */
-#include <float.h>
+ * Its files: stems_tree.c indexes the tree as meshed (stems_merge.c places and merges the
+ * laterals), stems_rings.c builds a branch's tube, stems_fork.c the rings around its forks and
+ * its laterals' bridges, stems_normals.c the normals, stems_joints.c judges a mesh's
+ * intersecting pairs for checked joints, and this file drives them. */
 #include <string.h>
-/* The SSE2 loops stand for scalar ones with the same operations in the same order, and give the
- * same bits; XYL_NO_SIMD compiles the scalar ones alone (tests/stems_scalar.c builds this file
- * so, to check that). */
-#if defined(__SSE2__) && !defined(XYL_NO_SIMD)
-#define XYL__SSE2 1
-#include <emmintrin.h>
-#endif
 
 #include "mesh_internal.h"
 #include "stems_internal.h"
 #include "subdivide.h"
 
-
 /* ---- output buffers ------------------------------------------------------------------------ */
 
-static bool out_reserve(stems *s, size_t verts, size_t quads)
+bool xyl__stems_reserve_slow(stems *s, size_t verts, size_t quads)
 {
-    if (verts <= s->vcap && quads <= s->qcap) return true; /* the usual case: reserved up front */
     const xyl_allocator *a = &s->alloc;
     /* the first reservation (from the bound in build_all) is exact, not rounded up to a power
      * of two: a smaller footprint leaves more of the allocator's cache for the next build */
@@ -49,1135 +45,29 @@ static bool out_reserve(stems *s, size_t verts, size_t quads)
     return true;
 }
 
-static xyl_result oom(stems *s)
+xyl_result xyl__stems_oom(stems *s)
 {
     return xyl__fail(s->diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the stem mesh");
 }
 
-/* Adds quad q's normal to the sums of its vertices of its branch. Quads are made in index order
- * and their vertices are final by then, so each vertex sums the same faces in the same order as
- * xyl__mesh_normals would, while they are still in cache. */
-static inline void sum_quad_normal(stems *s, const uint32_t *q, uint32_t branch)
-{
-    xyl_vec3 fn = xyl__quad_normal(s->pos, q);
-    for (int k = 0; k < 4; ++k)
-        if (s->vbranch[q[k]] == branch) xyl__add_f3(&s->nrm[q[k]], fn);
-}
-
-/* The uv_wraps bits of a face of n corners (idx), by the rule of xyl__uv_wraps_of. Band quads
- * do not come here (put_band_k knows theirs); caps and bridge faces do. */
-static inline uint8_t face_wraps(const stems *s, const uint32_t *idx, int n)
-{
-    float u[4];
-    for (int c = 0; c < n; ++c) u[c] = s->uv[2 * idx[c]];
-    return xyl__uv_wraps_of(u, n);
-}
-
-/* Appends a quad; its branch is the branch being built. */
-static inline void put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
-                            uint32_t branch)
-{
-    size_t n = s->nq;
-    uint32_t *q = s->quads + 4 * n;
-    q[0] = a;
-    q[1] = b;
-    q[2] = c;
-    q[3] = d;
-    s->fbranch[n] = branch;
-    s->qwrap[n] = face_wraps(s, q, 4);
-    s->nq = n + 1;
-    if (s->nrm) sum_quad_normal(s, q, branch);
-}
-
-/* Appends a triangle (odd k: caps and bridges have one). */
-static xyl_result put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t branch)
+xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t branch)
 {
     size_t c0 = s->tcap3, c1 = s->tcap3, c2 = s->tcap3;
     if (!xyl__grow(&s->alloc, (void **)&s->tris, &c0, s->nt, s->nt + 1, 3 * sizeof *s->tris) ||
         !xyl__grow(&s->alloc, (void **)&s->tbranch, &c1, s->nt, s->nt + 1, sizeof *s->tbranch) ||
         !xyl__grow(&s->alloc, (void **)&s->twrap, &c2, s->nt, s->nt + 1, sizeof *s->twrap))
-        return oom(s);
+        return xyl__stems_oom(s);
     s->tcap3 = c0;
     uint32_t *t = s->tris + 3 * s->nt;
     t[0] = a;
     t[1] = b;
     t[2] = c;
-    s->twrap[s->nt] = face_wraps(s, t, 3);
+    s->twrap[s->nt] = xyl__stems_face_wraps(s, t, 3);
     s->tbranch[s->nt++] = branch;
     return XYL_OK;
 }
 
-/* ---- rings --------------------------------------------------------------------------------- */
-
-#ifdef XYL__SSE2
-/* Lanes (v[i].x, v[i1].x) and so on as doubles, built in registers: stores of single floats
- * read back as a pair would stall on store forwarding. */
-static XYL__ALWAYS_INLINE void load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1, __m128d *out)
-{
-    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
-    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
-    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
-}
-
-/* The low two lanes of x, y and z (floats) as out[0] and out[1]. */
-static XYL__ALWAYS_INLINE void store_pair(__m128 x, __m128 y, __m128 z, xyl_vec3 *out)
-{
-    out[0].x = _mm_cvtss_f32(x);
-    out[0].y = _mm_cvtss_f32(y);
-    out[0].z = _mm_cvtss_f32(z);
-    out[1].x = _mm_cvtss_f32(_mm_shuffle_ps(x, x, 1));
-    out[1].y = _mm_cvtss_f32(_mm_shuffle_ps(y, y, 1));
-    out[1].z = _mm_cvtss_f32(_mm_shuffle_ps(z, z, 1));
-}
-
-/* One coordinate of two ring vertices, c + (u (r cos) + w (r sin)), rounded to floats in the
- * low two lanes: xyl__d3_add(c, xyl__d3_add(scale(u, ...), scale(w, ...))) per lane. */
-static XYL__ALWAYS_INLINE __m128 ring_coord(double c, double u, double w, __m128d rcos,
-                                            __m128d rsin)
-{
-    __m128d along = _mm_add_pd(_mm_mul_pd(_mm_set1_pd(u), rcos), _mm_mul_pd(_mm_set1_pd(w), rsin));
-    return _mm_cvtpd_ps(_mm_add_pd(_mm_set1_pd(c), along));
-}
-#endif
-
-/* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
- * counter-clockwise seen from +t. Returns the first vertex index. */
-static XYL__ALWAYS_INLINE uint32_t put_ring_k(stems *s, xyl__dvec3 c, xyl__dvec3 t,
-                                              xyl__dvec3 u, double r, double v, uint32_t branch,
-                                              uint32_t k)
-{
-    /* locals: stores through the output pointers could otherwise alias s->nv and force reloads */
-    size_t first = s->nv;
-    xyl_vec3 *pos = s->pos + first;
-    float *uv = s->uv + 2 * first, fv = (float)v;
-    uint32_t *vb = s->vbranch + first;
-    xyl__dvec3 w = xyl__d3_cross(t, u);
-    double rr = r * s->inflate;
-    uint32_t j = 0;
-#ifdef XYL__SSE2
-    /* two vertices per instruction, the same operations in the same order: the same bits */
-    __m128d vr = _mm_set1_pd(rr);
-    for (; j + 2 <= k; j += 2) {
-        __m128d ca = _mm_mul_pd(vr, _mm_loadu_pd(s->cos_a + j));
-        __m128d sa = _mm_mul_pd(vr, _mm_loadu_pd(s->sin_a + j));
-        __m128 fx = ring_coord(c.x, u.x, w.x, ca, sa), fy = ring_coord(c.y, u.y, w.y, ca, sa);
-        store_pair(fx, fy, ring_coord(c.z, u.z, w.z, ca, sa), pos + j);
-    }
-#endif
-    for (; j < k; ++j) {
-        xyl__dvec3 p = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(u, rr * s->cos_a[j]),
-                                                  xyl__d3_scale(w, rr * s->sin_a[j])));
-        pos[j] = xyl__to_f3(p);
-    }
-    for (j = 0; j < k; ++j) {
-        uv[2 * j] = s->u_of[j];
-        uv[2 * j + 1] = fv;
-        vb[j] = branch;
-    }
-    if (s->nrm) {
-        xyl_vec3 *n = s->nrm + first, zero = {0.0f, 0.0f, 0.0f};
-        for (uint32_t i = 0; i < k; ++i) n[i] = zero;
-    }
-    s->nv = first + k;
-    return (uint32_t)first;
-}
-
-static uint32_t put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u, double r, double v,
-                         uint32_t branch)
-{
-    return put_ring_k(s, c, t, u, r, v, branch, s->k);
-}
-
-#ifdef XYL__SSE2
-/* The normals of the k band quads from ring pa to ring pb (even k), as xyl__quad_normal of quad
- * j = (a + j, a + j1, b + j1, b + j): the cross product of the diagonals b + j1 - (a + j) and
- * b + j - (a + j1) in doubles, rounded to floats, for quads j and j + 1 in the two lanes. */
-static XYL__ALWAYS_INLINE void quad_normals_sse2(const xyl_vec3 *pa, const xyl_vec3 *pb,
-                                                 uint32_t k, xyl_vec3 *fn)
-{
-    for (uint32_t j = 0; j < k; j += 2) {
-        uint32_t j1 = j + 1, j2 = j + 2 < k ? j + 2 : 0;
-        __m128d a0[3], a1[3], b0[3], b1[3], d1[3], d2[3];
-        load_pair(pa, j, j1, a0);
-        load_pair(pa, j1, j2, a1);
-        load_pair(pb, j, j1, b0);
-        load_pair(pb, j1, j2, b1);
-        for (int i = 0; i < 3; ++i) {
-            d1[i] = _mm_sub_pd(b1[i], a0[i]);
-            d2[i] = _mm_sub_pd(b0[i], a1[i]);
-        }
-        __m128 nx = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[1], d2[2]), _mm_mul_pd(d1[2], d2[1])));
-        __m128 ny = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[2], d2[0]), _mm_mul_pd(d1[0], d2[2])));
-        __m128 nz = _mm_cvtpd_ps(_mm_sub_pd(_mm_mul_pd(d1[0], d2[1]), _mm_mul_pd(d1[1], d2[0])));
-        store_pair(nx, ny, nz, fn + j);
-    }
-}
-#endif
-
-/* Adds the normals of the band quads q0 .. q0 + k - 1 (from ring a to ring b) to their vertices.
- * Vertex j of either ring is in quads j - 1 and j (vertex 0: quads 0 and k - 1) and gets their
- * normals in that, the quads', order, as two adds in registers. A ring's vertices share one
- * branch (put_ring), so one test per ring replaces the per-vertex ones. The *_k helpers are
- * inlined into emit_rings with a constant k for the usual ring sides, so that their loops
- * unroll: the same operations in the same order, so the same bits. */
-static XYL__ALWAYS_INLINE void sum_band_normals_k(stems *s, uint32_t a, uint32_t b,
-                                                  uint32_t branch, size_t q0, uint32_t k)
-{
-    if (s->vbranch[a] != branch || s->vbranch[b] != branch) {
-        for (uint32_t j = 0; j < k; ++j) sum_quad_normal(s, s->quads + 4 * (q0 + j), branch);
-        return;
-    }
-    /* quad j is (a + j, a + j1, b + j1, b + j), j1 = j + 1 mod k: xyl__quad_normal's diagonals
-     * are b + j1 - (a + j) and b + j - (a + j1) */
-    const xyl_vec3 *pa = s->pos + a, *pb = s->pos + b;
-    xyl_vec3 fn[32];
-#ifdef XYL__SSE2
-    if (k % 2 == 0) { /* two quads per instruction: the same operations, so the same bits */
-        quad_normals_sse2(pa, pb, k, fn);
-    } else
-#endif
-    for (uint32_t j = 0; j < k; ++j) {
-        uint32_t j1 = j + 1 < k ? j + 1 : 0;
-        xyl__dvec3 d1 = xyl__d3_sub(xyl__from_f3(pb[j1]), xyl__from_f3(pa[j]));
-        xyl__dvec3 d2 = xyl__d3_sub(xyl__from_f3(pb[j]), xyl__from_f3(pa[j1]));
-        fn[j] = xyl__to_f3(xyl__d3_cross(d1, d2));
-    }
-    xyl_vec3 *acc[2] = {s->nrm + a, s->nrm + b};
-    for (int r = 0; r < 2; ++r) {
-        xyl_vec3 *n = acc[r];
-        for (uint32_t j = 0; j < k; ++j) {
-            xyl_vec3 first = fn[j ? j - 1 : 0], second = fn[j ? j : k - 1];
-            n[j].x = (n[j].x + first.x) + second.x;
-            n[j].y = (n[j].y + first.y) + second.y;
-            n[j].z = (n[j].z + first.z) + second.z;
-        }
-    }
-}
-
-/* Quads between ring a (behind) and ring b (ahead), both counter-clockwise seen from ahead.
- * Ring vertex j has u = j/k (put_ring_k), so quad j spans 1/k in u, and the last, which closes
- * the ring from (k - 1)/k back to 0, wraps its corners 1 and 2 (vertex 0 of both rings): what
- * face_wraps would find, without the search. */
-static XYL__ALWAYS_INLINE void put_band_k(stems *s, uint32_t a, uint32_t b, uint32_t branch,
-                                          uint32_t k)
-{
-    uint32_t last = k - 1;
-    size_t n = s->nq;
-    uint32_t *q = s->quads + 4 * n, *fb = s->fbranch + n;
-    uint8_t *wr = s->qwrap + n;
-    for (uint32_t j = 0; j < last; ++j, q += 4) {
-        q[0] = a + j;
-        q[1] = a + j + 1;
-        q[2] = b + j + 1;
-        q[3] = b + j;
-        fb[j] = branch;
-        wr[j] = 0;
-    }
-    q[0] = a + last;
-    q[1] = a;
-    q[2] = b;
-    q[3] = b + last;
-    fb[last] = branch;
-    wr[last] = 1u << 1 | 1u << 2;
-    s->nq = n + last + 1;
-    if (s->nrm) sum_band_normals_k(s, a, b, branch, n, k);
-}
-
-/* Closes a ring with (k - 2) / 2 quads fanned from its first vertex; forward = true for a ring
- * the tube leaves behind it (a tip), false for one it starts from (a root). */
-static xyl_result put_flat_cap(stems *s, uint32_t ring, bool forward, uint32_t branch)
-{
-    uint32_t j = 1;
-    for (; j + 2 < s->k; j += 2) {
-        uint32_t a = ring, b = ring + j, c = ring + j + 1, d = ring + j + 2;
-        if (forward) put_quad(s, a, b, c, d, branch);
-        else put_quad(s, a, d, c, b, branch);
-    }
-    if (j + 1 < s->k) { /* odd k: vertices 0, j, j + 1 are left for one triangle */
-        uint32_t a = ring, b = ring + j, c = ring + j + 1;
-        return forward ? put_tri(s, a, b, c, branch) : put_tri(s, a, c, b, branch);
-    }
-    return XYL_OK;
-}
-
-/* The apex of a domed cap: a quarter of the ring's radius beyond its centre, outwards. */
-static uint32_t put_apex(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
-{
-    double h = (forward ? 0.25 : -0.25) * ring->radius * s->inflate;
-    size_t v = s->nv;
-    s->pos[v] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, h)));
-    s->uv[2 * v] = 0.5f;
-    /* a ring of radius 0 (a bridge on a patch without height) has its apex on it */
-    double along = ring->radius > 0.0 ? h / (2.0 * XYL__PI * ring->radius) : 0.0;
-    s->uv[2 * v + 1] = (float)(ring->v + along);
-    s->vbranch[v] = branch;
-    if (s->nrm) memset(s->nrm + v, 0, sizeof *s->nrm);
-    s->nv = v + 1;
-    return (uint32_t)v;
-}
-
-/* Closes a ring of k >= 5 with a low dome: k / 2 quads around an apex (odd k: and one
- * triangle). A flat cap of three or more triangles has two that share one vertex and lie in
- * one plane, which no test can tell from touching once rounding makes them almost, not
- * exactly, coplanar; the dome's faces meet at an angle. */
-static xyl_result put_dome_cap(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
-{
-    uint32_t a = put_apex(s, ring, forward, branch), f = ring->first, k = s->k;
-    for (uint32_t j = 0; j + 1 < k; j += 2) {
-        uint32_t b = f + j, c = f + j + 1, d = j + 2 < k ? f + j + 2 : f;
-        if (forward) put_quad(s, a, b, c, d, branch);
-        else put_quad(s, a, d, c, b, branch);
-    }
-    if (k % 2 == 0) return XYL_OK;
-    return forward ? put_tri(s, a, f + k - 1, f, branch) : put_tri(s, a, f, f + k - 1, branch);
-}
-
-/* The cap of ring i of the branch being built (its root or its tip). */
-static xyl_result put_cap(stems *s, size_t i, bool forward, uint32_t branch)
-{
-    const stems_ring *ring = &s->rings[i];
-    if (s->k < 5) return put_flat_cap(s, ring->first, forward, branch);
-    xyl_result r = put_dome_cap(s, ring, forward, branch);
-    if (s->unit_per_branch) s->apex[forward] = (uint32_t)s->nv - 1;
-    return r;
-}
-
-/* Rotation-minimising frame transport (double reflection, Wang et al. 2008): the reference
- * vector u at (x0, t0) carried to (x1, t1). */
-static xyl__dvec3 transport(xyl__dvec3 u, xyl__dvec3 x0, xyl__dvec3 t0, xyl__dvec3 x1,
-                            xyl__dvec3 t1)
-{
-    xyl__dvec3 v1 = xyl__d3_sub(x1, x0);
-    double c1 = xyl__d3_dot(v1, v1);
-    xyl__dvec3 uL = u, tL = t0;
-    if (c1 > XYL__EPS_NORMALIZE) {
-        uL = xyl__d3_sub(u, xyl__d3_scale(v1, 2.0 / c1 * xyl__d3_dot(v1, u)));
-        tL = xyl__d3_sub(t0, xyl__d3_scale(v1, 2.0 / c1 * xyl__d3_dot(v1, t0)));
-    }
-    xyl__dvec3 v2 = xyl__d3_sub(t1, tL);
-    double c2 = xyl__d3_dot(v2, v2);
-    if (c2 > XYL__EPS_NORMALIZE) uL = xyl__d3_sub(uL, xyl__d3_scale(v2, 2.0 / c2 * xyl__d3_dot(v2, uL)));
-    /* re-orthogonalise against t1: rounding must not tilt the ring plane */
-    uL = xyl__d3_sub(uL, xyl__d3_scale(t1, xyl__d3_dot(uL, t1)));
-    double l2 = xyl__d3_dot(uL, uL);
-    /* reflections keep the length: a unit u stays unit up to rounding, and dividing by the
-     * square root would put the slowest operations on the chain that carries u along the
-     * branch; only a u that has drifted is scaled back */
-    if (fabs(l2 - 1.0) <= 1e-12) return uL;
-    if (!(l2 > XYL__EPS_NORMALIZE) || !isfinite(l2)) return xyl__d3_any_orthogonal(t1);
-    return xyl__d3_scale(uL, 1.0 / sqrt(l2));
-}
-
-/* ---- skeleton structure -------------------------------------------------------------------- */
-
-/* Children of every node in one array (counting sort by parent) and each node's main child, in
- * two passes over the nodes. A child of the parent's branch is its main child; the last one in
- * node order wins, as child_list holds children in node order. */
-static xyl_result index_children(stems *s, const int32_t *parent_of)
-{
-    size_t n = s->sk->node_count;
-    const xyl_skel_node *nodes = s->sk->nodes;
-    /* counts go to child_start[p + 2], so that after the prefix sum child_start[p + 1] is p's
-     * first slot and filling moves it on to p's end, which is p + 1's start */
-    xyl__free(&s->alloc, s->child_start); /* the second pass of index_tree */
-    xyl__free(&s->alloc, s->child_list);
-    xyl__free(&s->alloc, s->main);
-    uint32_t *start = xyl__calloc(&s->alloc, n + 2, sizeof *start);
-    s->child_start = start;
-    s->child_list = xyl__alloc_array(&s->alloc, n, sizeof *s->child_list);
-    s->main = xyl__alloc_array(&s->alloc, n, sizeof *s->main);
-    if (!start || !s->child_list || !s->main) return oom(s);
-    for (size_t i = 0; i < n; ++i) {
-        int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
-        if (p >= 0) ++start[p + 2];
-        s->main[i] = UINT32_MAX;
-    }
-    for (size_t i = 2; i < n + 2; ++i) start[i] += start[i - 1];
-    for (size_t i = 0; i < n; ++i) {
-        int32_t p = parent_of ? parent_of[i] : nodes[i].parent;
-        if (p < 0) continue;
-        s->child_list[start[p + 1]++] = (uint32_t)i;
-        if (nodes[i].branch != nodes[p].branch) continue;
-        /* a lateral child of its parent's branch would add bridge faces to the parent's
-         * vertex sums after the parent is built (xyl_skeleton_create never makes one) */
-        if (s->main[p] != UINT32_MAX) s->unit_per_branch = false;
-        s->main[p] = (uint32_t)i;
-    }
-    return XYL_OK;
-}
-
-/* The child that continues n's branch (same branch id), or UINT32_MAX at a tip. */
-static inline uint32_t main_child(const stems *s, uint32_t n)
-{
-    return s->main[n];
-}
-
-static xyl__dvec3 node_pos(const stems *s, uint32_t n)
-{
-    return xyl__from_f3(s->sk->nodes[n].pos);
-}
-
-static xyl_result collect_chain(stems *s, uint32_t start)
-{
-    s->nchain = 0;
-    for (uint32_t n = start; n != UINT32_MAX; n = main_child(s, n)) {
-        if (!xyl__grow(&s->alloc, (void **)&s->chain, &s->ccap, s->nchain, s->nchain + 1,
-                       sizeof *s->chain))
-            return oom(s);
-        s->chain[s->nchain++] = n;
-    }
-    return XYL_OK;
-}
-
-/* Lateral children of the nodes merged into station st. */
-static size_t lateral_count(const stems *s, const stems_station *st)
-{
-    size_t n = 0;
-    for (uint32_t i = st->first; i <= st->last; ++i) {
-        uint32_t node = s->chain[i];
-        n += s->child_start[node + 1] - s->child_start[node];
-        n -= main_child(s, node) != UINT32_MAX;
-    }
-    return n;
-}
-
-/* Stations along the chain: coincident nodes share one; nodes not clearly ahead of a child's
- * bridge ring are merged into the first station that is (docs/stems.md). */
-static xyl_result make_stations(stems *s, const stems_ring *bridge)
-{
-    s->nstations = 0;
-    size_t first = 0;
-    for (size_t i = 0; i < s->nchain; ++i) {
-        xyl__dvec3 p = node_pos(s, s->chain[i]);
-        double r = s->sk->nodes[s->chain[i]].radius;
-        /* only the chain's start can be behind: a branch that curls back later keeps its nodes */
-        bool behind = bridge && !s->nstations &&
-                      xyl__d3_dot(xyl__d3_sub(p, bridge->centre), bridge->tangent) < bridge->radius;
-        bool same = s->nstations &&
-                    xyl__d3_len(xyl__d3_sub(p, s->stations[s->nstations - 1].p)) <= 1e-6 * r;
-        if (behind && i + 1 < s->nchain) continue;
-        if (same) {
-            s->stations[s->nstations - 1].last = (uint32_t)i;
-            first = i + 1;
-            continue;
-        }
-        if (behind) p = xyl__d3_add(bridge->centre, xyl__d3_scale(bridge->tangent, 2 * bridge->radius));
-        if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations,
-                       s->nstations + 1, sizeof *s->stations))
-            return oom(s);
-        stems_station st = {p, r, (uint32_t)first, (uint32_t)i};
-        /* a stub stands for none of the child's nodes, so it need not have their radius: at it,
-         * a knob wider than the bridge ring (whose radius the patch limits) stood out beside
-         * the fork, across its siblings' tubes. It keeps the bridge ring's radius, unless
-         * laterals of the nodes it absorbed hang from it: their patches need the width */
-        if (behind && !lateral_count(s, &st)) st.r = bridge->radius;
-        s->stations[s->nstations++] = st;
-        first = i + 1;
-    }
-    return XYL_OK;
-}
-
-/* ---- rings along one branch ---------------------------------------------------------------- */
-
-/* Plans a ring: its frame (the reference direction carried from the previous ring of this
- * branch) and texture v. Its vertices and the band to it come later, from emit_rings: the
- * frames form one long chain of dependent sqrt and divisions along the branch, which runs
- * faster on its own than interleaved with the vertex and quad stores. */
-static xyl_result add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
-{
-    if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + 1,
-                   sizeof *s->rings))
-        return oom(s);
-    /* filled in place: a ring built on the stack and copied in as a whole stalled on store
-     * forwarding (its fields written in pieces, read back in 16-byte blocks) */
-    stems_ring *ring = &s->rings[s->nrings], *prev = s->nrings ? ring - 1 : NULL;
-    ring->first = UINT32_MAX;
-    ring->centre = c;
-    ring->tangent = t;
-    ring->radius = r;
-    ring->band = UINT32_MAX;
-    if (prev) {
-        ring->u = transport(prev->u, prev->centre, prev->tangent, c, t);
-        double mean_r = 0.5 * (prev->radius + r);
-        /* v is arc length in units of the circumference; a tube of radius 0 (a bridge ring
-         * on a patch without height, and the stub that keeps its radius) has none, and its
-         * length would give 0 / 0 or an infinite v: it adds nothing */
-        double along = xyl__d3_len(xyl__d3_sub(c, prev->centre));
-        ring->v = prev->v + (mean_r > 0.0 ? along / (2.0 * XYL__PI * mean_r) : 0.0);
-    } else {
-        ring->u = xyl__d3_any_orthogonal(t);
-        ring->v = 0.0;
-    }
-    s->nrings++;
-    return XYL_OK;
-}
-
-/* Vertices of the planned rings from .. nrings - 1 and the band from each ring to the next. */
-static XYL__ALWAYS_INLINE xyl_result emit_rings_k(stems *s, size_t from, uint32_t branch,
-                                                 uint32_t k)
-{
-    for (size_t i = from; i < s->nrings; ++i) {
-        if (!out_reserve(s, s->nv + k, s->nq + k)) return oom(s);
-        stems_ring *ring = &s->rings[i];
-        ring->first = put_ring_k(s, ring->centre, ring->tangent, ring->u, ring->radius, ring->v,
-                                 branch, k);
-        if (i) {
-            stems_ring *prev = ring - 1;
-            prev->band = (uint32_t)s->nq;
-            put_band_k(s, prev->first, ring->first, branch, k);
-        }
-    }
-    return XYL_OK;
-}
-
-/* emit_rings_k with a constant k for the usual ring sides, so that the per-vertex loops unroll:
- * the same operations in the same order, so the same bits. */
-static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
-{
-    switch (s->k) {
-    case 4: return emit_rings_k(s, from, branch, 4);
-    case 6: return emit_rings_k(s, from, branch, 6);
-    case 8: return emit_rings_k(s, from, branch, 8);
-    default: return emit_rings_k(s, from, branch, s->k);
-    }
-}
-
-static xyl__dvec3 dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
-{
-    return xyl__d3_normalize_or(xyl__d3_sub(b, a), fallback);
-}
-
-/* Directions of the segments into and out of station i; the first and last take their one, a
- * segment without direction takes start_dir (in) or the incoming one (out). *seg carries the
- * direction of segment i -> i + 1 (and *seg_ok whether it has one) to station i + 1, whose
- * incoming direction it is: each segment is normalised once. */
-static void station_frame(const stems *s, size_t i, xyl__dvec3 start_dir, xyl__dvec3 *seg,
-                          bool *seg_ok, xyl__dvec3 *t_in, xyl__dvec3 *t_out)
-{
-    const stems_station *st = s->stations;
-    *t_in = i && *seg_ok ? *seg : start_dir;
-    *seg_ok = i + 1 < s->nstations && xyl__d3_normalize_ok(xyl__d3_sub(st[i + 1].p, st[i].p), seg);
-    *t_out = *seg_ok ? *seg : *t_in;
-}
-
-/* Quads in a child's patch: its outline has 2 strip + 2 vertices, k for even k, k + 1 for odd. */
-static uint32_t strip_size(const stems *s)
-{
-    return s->k % 2 ? (s->k - 1) / 2 : s->k / 2 - 1;
-}
-
-/* Rings a fork adds around its own: twice the patches its lateral children need, so each still
- * has a choice; never a fixed cap, so a fork can always hold all its children. */
-static size_t fork_extra_rings(const stems *s, size_t laterals)
-{
-    uint32_t per_band = s->k / strip_size(s);
-    size_t want = (2 * laterals + per_band - 1) / per_band;
-    return want < 2 ? 2 : want;
-}
-
-/* The unit direction a fraction f of the way from unit a to unit b (normalised lerp); a and b
- * themselves at the ends, and where they agree. */
-static xyl__dvec3 blend(xyl__dvec3 a, xyl__dvec3 b, double f)
-{
-    if (f <= 0.0 || (a.x == b.x && a.y == b.y && a.z == b.z)) return a;
-    if (f >= 1.0) return b;
-    xyl__dvec3 m = xyl__d3_add(xyl__d3_scale(a, 1.0 - f), xyl__d3_scale(b, f));
-    return xyl__d3_normalize_or(m, b);
-}
-
-/* The spacing of `count` rings that turn in even steps through a half bend of sine sin_half on
- * a segment seg long, from spacing d: neighbouring rings are a step apart in angle and cross
- * each other unless spaced by at least rr sin(step) (64 thin laterals on a bend: 1e-4 apart,
- * steps of 2 degrees on a ring 0.1 wide), so they take that spacing where the segment has the
- * room (0.45 of it over the rings). */
-static double turned_spacing(double d, double rr, double sin_half, size_t count, double seg)
-{
-    if (!count || !(seg > 0.0)) return d;
-    double step = asin(fmin(sin_half, 1.0)) / (double)count;
-    return fmin(fmax(d, rr * sin(step)), fmax(d, 0.45 * seg / (double)count));
-}
-
-/* Rings at a fork: `behind` rings before the node, its own ring, `ahead` rings after, spaced by
- * delta, so the bands between them offer patches to the lateral children. */
-static xyl_result fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3 t, xyl__dvec3 t_out,
-                             size_t laterals)
-{
-    const stems_station *st = &s->stations[i];
-    size_t want = fork_extra_rings(s, laterals);
-    double seg_in = i ? xyl__d3_len(xyl__d3_sub(st->p, s->stations[i - 1].p)) : 0.0;
-    double seg_out = i + 1 < s->nstations ? xyl__d3_len(xyl__d3_sub(s->stations[i + 1].p, st->p)) : 0.0;
-    /* without a segment of any length on either side (coordinates so large that the station
-     * after it rounds onto it), the laterals still need their bands: all go ahead */
-    size_t behind = seg_in > 0.0 ? (seg_out > 0.0 ? want / 2 : want) : 0;
-    size_t ahead = want - behind;
-    double lat_r = 0.0;
-    for (uint32_t c = st->first; c <= st->last; ++c) {
-        uint32_t node = s->chain[c];
-        for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j)
-            if (s->sk->nodes[s->child_list[j]].radius > lat_r) lat_r = s->sk->nodes[s->child_list[j]].radius;
-    }
-    double d_in = behind ? fmin(lat_r, 0.45 * seg_in / (double)behind) : 0.0;
-    double d_out = !ahead ? 0.0 : seg_out > 0.0 ? fmin(lat_r, 0.45 * seg_out / (double)ahead) : lat_r;
-    xyl_result r = XYL_OK;
-    /* a ring delta from the node ring whose plane is turned by the half bend against the node
-     * ring's crosses it on the inside of the bend when delta < r sin(half bend); the rings on
-     * that side then turn from t_in to t_out in even steps instead */
-    double rr = 1.05 * st->r * s->inflate;
-    double sin_in = xyl__d3_len(xyl__d3_cross(t_in, t)), sin_out = xyl__d3_len(xyl__d3_cross(t, t_out));
-    bool turn_in = d_in < rr * sin_in;
-    bool turn_out = d_out < rr * sin_out;
-    if (turn_in) d_in = turned_spacing(d_in, rr, sin_in, behind, seg_in);
-    if (turn_out) d_out = turned_spacing(d_out, rr, sin_out, ahead, seg_out);
-    for (size_t m = behind; m >= 1 && !r; --m) {
-        xyl__dvec3 tm = turn_in ? blend(t_in, t, (double)(behind - m) / (double)behind) : t_in;
-        r = add_ring(s, xyl__d3_sub(st->p, xyl__d3_scale(t_in, d_in * (double)m)), tm, st->r);
-    }
-    if (!r) r = add_ring(s, st->p, t, st->r);
-    for (size_t m = 1; m <= ahead && !r; ++m) {
-        xyl__dvec3 tm = turn_out ? blend(t, t_out, (double)m / (double)ahead) : t_out;
-        r = add_ring(s, xyl__d3_add(st->p, xyl__d3_scale(t_out, d_out * (double)m)), tm, st->r);
-    }
-    return r;
-}
-
-/* ---- patches and bridges ------------------------------------------------------------------- */
-
-/* The quads of band b, columns c .. c + strip - 1 (mod k). */
-static uint32_t strip_quad(const stems *s, uint32_t band, uint32_t c, uint32_t j)
-{
-    uint32_t col = c + j; /* c, j < k: a subtraction instead of a division by a run-time k */
-    return band + (col < s->k ? col : col - s->k);
-}
-
-static bool strip_free(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
-{
-    for (uint32_t j = 0; j < strip; ++j)
-        if (s->taken[strip_quad(s, band, c, j)]) return false;
-    return true;
-}
-
-static xyl__dvec3 strip_normal(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
-{
-    xyl__dvec3 n = xyl__d3(0, 0, 0);
-    for (uint32_t j = 0; j < strip; ++j) {
-        const uint32_t *q = s->quads + 4 * strip_quad(s, band, c, j);
-        xyl__dvec3 a = xyl__from_f3(s->pos[q[0]]), b = xyl__from_f3(s->pos[q[1]]);
-        xyl__dvec3 cc = xyl__from_f3(s->pos[q[2]]), d = xyl__from_f3(s->pos[q[3]]);
-        n = xyl__d3_add(n, xyl__d3_cross(xyl__d3_sub(cc, a), xyl__d3_sub(d, b)));
-    }
-    return xyl__d3_normalize_or(n, xyl__d3(0, 1, 0));
-}
-
-/* The strip's outline, counter-clockwise seen from outside: ring a's vertices c .. c + strip,
- * then ring b's back from c + strip to c. */
-static void strip_loop(const stems *s, uint32_t ring_a, uint32_t ring_b, uint32_t c,
-                       uint32_t strip, uint32_t *loop)
-{
-    uint32_t n = 0;
-    for (uint32_t j = 0; j <= strip; ++j) loop[n++] = ring_a + (c + j) % s->k;
-    for (uint32_t j = strip + 1; j-- > 0;) loop[n++] = ring_b + (c + j) % s->k;
-}
-
-typedef struct patch {
-    uint32_t ring;   /* index into s->rings of the ring behind the band */
-    uint32_t column;
-    double score;
-} patch;
-
-static xyl__dvec3 strip_centre(const stems *s, uint32_t band, uint32_t c, uint32_t strip)
-{
-    xyl__dvec3 sum = xyl__d3(0, 0, 0);
-    for (uint32_t j = 0; j < strip; ++j) {
-        const uint32_t *q = s->quads + 4 * strip_quad(s, band, c, j);
-        for (int v = 0; v < 4; ++v) sum = xyl__d3_add(sum, xyl__from_f3(s->pos[q[v]]));
-    }
-    return xyl__d3_scale(sum, 1.0 / (4.0 * strip));
-}
-
-/* Where a child's bridge from patch p goes: the patch outline, its centroid and normal, and the
- * child's first ring. */
-typedef struct bridge_geom {
-    uint32_t loop[66];
-    xyl__dvec3 centroid, n;
-    stems_ring ring;
-} bridge_geom;
-
-static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r, bridge_geom *g)
-{
-    uint32_t strip = strip_size(s);
-    const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
-    strip_loop(s, a->first, b->first, p.column, strip, g->loop);
-    xyl__dvec3 n = strip_normal(s, a->band, p.column, strip), centroid = xyl__d3(0, 0, 0);
-    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[g->loop[j]]));
-    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
-    /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
-     * tube widens to its own radius over its first segment */
-    double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
-    double width = 2.0 * parent_r * sin(XYL__PI * (double)strip / (double)s->k);
-    double r = fmin(s->sk->nodes[child].radius, 0.45 * fmin(height, width));
-    /* a strip of several quads bulges out past its centroid (by 1 - cos(pi strip / k) of the
-     * parent radius): the ring goes beyond the bulge, or the bridge folds back into the parent */
-    double bulge = 0.0;
-    for (uint32_t j = 0; j < 2 * strip + 2; ++j)
-        bulge = fmax(bulge, xyl__d3_dot(xyl__d3_sub(xyl__from_f3(s->pos[g->loop[j]]), centroid), n));
-    /* a quarter of the parent's radius keeps the bridge from lying flat on a thick parent,
-     * but not past the child's first node: that must stay a station, r ahead of the ring */
-    double room = xyl__d3_dot(xyl__d3_sub(node_pos(s, child), centroid), n) - 2.0 * r;
-    double h = fmax(fmin(fmax(r, 0.25 * parent_r), room), bulge + r);
-    stems_ring *ring = &g->ring;
-    memset(ring, 0, sizeof *ring);
-    ring->centre = xyl__d3_add(centroid, xyl__d3_scale(n, h));
-    ring->tangent = n;
-    xyl__dvec3 to0 = xyl__d3_sub(xyl__from_f3(s->pos[g->loop[0]]), centroid);
-    to0 = xyl__d3_sub(to0, xyl__d3_scale(n, xyl__d3_dot(to0, n)));
-    if (!xyl__d3_normalize_ok(to0, &ring->u)) ring->u = xyl__d3_any_orthogonal(n);
-    ring->radius = r;
-    ring->band = UINT32_MAX;
-    g->centroid = centroid;
-    g->n = n;
-}
-
-/* The first segment of child's tube if it bridges from patch p: from its bridge ring to its
- * first station as make_stations will place it. *reaches: that station is one of the child's
- * nodes, not a stub in front of the ring (every node behind it). */
-static xyl__stems_cone first_cone(const stems *s, patch p, uint32_t child, double parent_r,
-                                  bool *reaches)
-{
-    bridge_geom g;
-    plan_bridge(s, p, child, parent_r, &g);
-    const stems_ring *ring = &g.ring;
-    xyl__stems_cone c = {ring->centre, xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, 2 * ring->radius)),
-                         ring->radius, ring->radius};
-    *reaches = false;
-    for (uint32_t n = child; n != UINT32_MAX; n = main_child(s, n)) {
-        xyl__dvec3 q = node_pos(s, n);
-        c.r1 = s->sk->nodes[n].radius;
-        if (xyl__d3_dot(xyl__d3_sub(q, ring->centre), ring->tangent) >= ring->radius) {
-            c.p1 = q;
-            *reaches = true;
-            break;
-        }
-    }
-    return c;
-}
-
-static bool clashes(const stems *s, const xyl__stems_cone *c)
-{
-    for (size_t i = 0; i < s->ncones; ++i)
-        if (xyl__cones_clash(c, &s->cones[i])) return true;
-    return false;
-}
-
-/* Best free patch for direction d among the bands between rings lo .. hi: the one facing d
- * most, and lying in direction d from the fork node (so a child leaning forward takes a band
- * ahead of the node, one leaning back a band behind), among those whose first segment does not
- * run into a sibling's placed before (s->cones). Such a patch must still face the child and
- * reach its nodes, or the child would become a stub on the wrong side; if there is none, the
- * best of all. */
-static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d,
-                          uint32_t child, double parent_r)
-{
-    uint32_t strip = strip_size(s);
-    patch best = {UINT32_MAX, 0, -4.0}, fallback = best;
-    for (size_t r = lo; r < hi; ++r) {
-        uint32_t band = s->rings[r].band;
-        for (uint32_t c = 0; c < s->k; ++c) {
-            if (!strip_free(s, band, c, strip)) continue;
-            double facing = xyl__d3_dot(strip_normal(s, band, c, strip), d);
-            /* the second term is a dot of unit vectors, at most 1 (+ rounding): a patch that
-             * cannot beat the best even so is skipped before its centre is normalised */
-            if (facing + (1.0 + 1e-9) < best.score) continue;
-            xyl__dvec3 to = xyl__d3_normalize_or(xyl__d3_sub(strip_centre(s, band, c, strip), node), d);
-            patch p = {(uint32_t)r, c, facing + xyl__d3_dot(to, d)};
-            if (p.score <= best.score) continue;
-            if (s->ncones) {
-                bool reaches;
-                xyl__stems_cone cone = first_cone(s, p, child, parent_r, &reaches);
-                if (facing <= 0.0 || !reaches || clashes(s, &cone)) {
-                    if (p.score > fallback.score) fallback = p;
-                    continue;
-                }
-            }
-            best = p;
-        }
-    }
-    return best.ring != UINT32_MAX ? best : fallback;
-}
-
-/* Faces from the patch outline loop (n vertices, counter-clockwise from outside) to the child's
- * ring: k quads when n = k; for odd k the outline has k + 1 vertices and its last edge closes
- * with one triangle. Loop edges are used forwards, ring edges backwards, as in a tube band. */
-static xyl_result bridge_faces(stems *s, const uint32_t *loop, uint32_t n, uint32_t ring,
-                               uint32_t branch)
-{
-    uint32_t k = s->k;
-    for (uint32_t j = 0; j + 1 < k; ++j) put_quad(s, loop[j], loop[j + 1], ring + j + 1, ring + j, branch);
-    if (n == k) {
-        put_quad(s, loop[k - 1], loop[0], ring, ring + k - 1, branch);
-        return XYL_OK;
-    }
-    put_quad(s, loop[k], loop[0], ring, ring + k - 1, branch);
-    return put_tri(s, loop[k - 1], loop[k], ring + k - 1, branch);
-}
-
-/* Ring vertex j goes where outline vertex j is, seen around the ring's axis: evenly spaced
- * ring vertices would drift against an outline that is not a regular polygon and twist the
- * bridge (with odd k the outline even has k + 1 vertices; with even k a patch on a bend is
- * skewed). A skewed outline can show two vertices in one direction, or out of order: the ring
- * then keeps its even spacing, as two ring vertices in one place would make a sliver and a
- * step backwards a fold. Steps of more than 1/200 of an even one count (s->align_cos). */
-static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *loop,
-                             xyl__dvec3 centroid, double r)
-{
-    xyl__dvec3 n = ring->tangent, dir[33];
-    uint32_t k = s->k;
-    for (uint32_t j = 0; j < k; ++j) {
-        xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(s->pos[loop[j]]), centroid);
-        d = xyl__d3_sub(d, xyl__d3_scale(n, xyl__d3_dot(d, n)));
-        if (!xyl__d3_normalize_ok(d, &dir[j])) return; /* keep the even spacing */
-    }
-    dir[k] = dir[0];
-    /* every step, the closing one too, turns counter-clockwise (seen from +n) by more than the
-     * smallest step and less than pi, and none after the first passes direction 0 again: the
-     * outline goes round once, in order. Signs of cross and dot products, no angles. */
-    for (uint32_t j = 0; j < k; ++j) {
-        double sj = xyl__d3_dot(xyl__d3_cross(dir[j], dir[j + 1]), n);
-        if (!(sj > 0.0 && xyl__d3_dot(dir[j], dir[j + 1]) < s->align_cos)) return;
-        if (j && j + 1 < k && xyl__d3_dot(xyl__d3_cross(dir[j], dir[0]), n) > 0.0 &&
-            xyl__d3_dot(xyl__d3_cross(dir[0], dir[j + 1]), n) >= 0.0)
-            return;
-    }
-    double rr = r * s->inflate;
-    for (uint32_t j = 0; j < k; ++j)
-        s->pos[ring->first + j] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(dir[j], rr)));
-}
-
-/* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
-static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
-{
-    uint32_t strip = strip_size(s), band = s->rings[p.ring].band;
-    uint32_t branch = s->sk->nodes[child].branch;
-    bridge_geom g;
-    plan_bridge(s, p, child, parent_r, &g);
-    for (uint32_t j = 0; j < strip; ++j) s->taken[strip_quad(s, band, p.column, j)] = 1;
-    const uint32_t *loop = g.loop;
-    xyl__dvec3 n = g.n, centroid = g.centroid;
-    stems_ring ring = g.ring;
-    double r = ring.radius;
-    if (!out_reserve(s, s->nv + s->k, s->nq + s->k)) return oom(s);
-    ring.first = put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
-    align_to_outline(s, &ring, loop, centroid, r);
-    xyl_result res = bridge_faces(s, loop, 2 * strip + 2, ring.first, branch);
-    if (res) return res;
-    if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
-                   sizeof *s->pending))
-        return oom(s);
-    stems_pending pend = {child, ring};
-    s->pending[s->npending++] = pend;
-    return XYL_OK;
-}
-
-/* Direction in which a child leaves its fork node: towards its first node that is not at the
- * fork, else any direction across the parent. */
-static xyl__dvec3 child_direction(const stems *s, uint32_t fork, uint32_t child,
-                                  xyl__dvec3 parent_t)
-{
-    xyl__dvec3 f = node_pos(s, fork), dir;
-    for (uint32_t n = child; n != UINT32_MAX; n = main_child(s, n)) {
-        xyl__dvec3 d = xyl__d3_sub(node_pos(s, n), f);
-        if (xyl__d3_len(d) > 1e-6 * s->sk->nodes[fork].radius) {
-            if (xyl__d3_normalize_ok(d, &dir)) return dir;
-            break;
-        }
-    }
-    return xyl__d3_any_orthogonal(parent_t); /* across the parent, only when needed */
-}
-
-/* taken[] covers every quad written so far; new entries start free. */
-static xyl_result grow_taken(stems *s)
-{
-    size_t old = s->tcap;
-    if (s->qcap <= old) return XYL_OK;
-    if (!xyl__grow(&s->alloc, (void **)&s->taken, &s->tcap, old, s->qcap, 1)) return oom(s);
-    memset(s->taken + old, 0, s->tcap - old);
-    return XYL_OK;
-}
-
-/* Bridges lateral `child` of `node` (at station st) from the best patch among rings lo .. hi;
- * more: siblings follow, which test their first segments against this one's. */
-static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, uint32_t child,
-                             size_t lo, size_t hi, bool more)
-{
-    xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
-    patch p = choose_patch(s, lo, hi, node_pos(s, node), d, child, st->r);
-    if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
-        return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
-                         "internal: no free patch left at node %u", node);
-    if (more) {
-        if (!xyl__grow(&s->alloc, (void **)&s->cones, &s->cone_cap, s->ncones, s->ncones + 1,
-                       sizeof *s->cones))
-            return oom(s);
-        bool reaches;
-        s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
-    }
-    return bridge(s, p, child, st->r);
-}
-
-/* Attaches every lateral child of station i to a patch among rings lo .. hi, thickest first
- * (xyl__lateral_before): a thin sibling then keeps clear of the thick one's first segment,
- * which has less room to move. */
-static xyl_result attach_laterals(stems *s, size_t i, size_t lo, size_t hi)
-{
-    const stems_station *st = &s->stations[i];
-    xyl_result r = grow_taken(s);
-    if (r) return r;
-    s->ncones = 0;
-    size_t left = st->first == UINT32_MAX ? 0 : lateral_count(s, st);
-    for (uint32_t prev = UINT32_MAX; left && !r; --left) {
-        uint32_t child = UINT32_MAX, at = 0; /* the next lateral after prev */
-        for (uint32_t c = st->first; c <= st->last; ++c) {
-            uint32_t node = s->chain[c], main = main_child(s, node);
-            for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j) {
-                uint32_t x = s->child_list[j];
-                if (x == main || (prev != UINT32_MAX && !xyl__lateral_before(s->sk, prev, x)))
-                    continue;
-                if (child == UINT32_MAX || xyl__lateral_before(s->sk, x, child)) child = x, at = node;
-            }
-        }
-        r = attach_one(s, st, at, child, lo, hi, left > 1);
-        prev = child;
-    }
-    return r;
-}
-
-/* ---- branches ------------------------------------------------------------------------------ */
-
-/* A root chain that collapsed to one station still gets a tube: a second, node-less station
- * one diameter further on; so does a lateral's one station with laterals, whose fork rings
- * need a segment ahead. */
-static xyl_result ensure_two_stations(stems *s, xyl__dvec3 dir)
-{
-    if (s->nstations >= 2) return XYL_OK;
-    if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, 2, sizeof *s->stations))
-        return oom(s);
-    stems_station *a = &s->stations[0];
-    stems_station b = {xyl__d3_add(a->p, xyl__d3_scale(dir, 2.0 * a->r)), a->r, UINT32_MAX, 0};
-    s->stations[s->nstations++] = b;
-    return XYL_OK;
-}
-
-/* Rings for every station of the current chain; forks get extra rings. Records the ring span
- * of each fork in spans (capacity nstations). */
-static xyl_result branch_rings(stems *s, xyl__dvec3 start_dir, stems_fork_span *spans,
-                               size_t *nspans)
-{
-    *nspans = 0;
-    xyl__dvec3 seg = start_dir;
-    bool seg_ok = false;
-    for (size_t i = 0; i < s->nstations; ++i) {
-        xyl__dvec3 t_in, t_out;
-        station_frame(s, i, start_dir, &seg, &seg_ok, &t_in, &t_out);
-        xyl__dvec3 t = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
-        size_t laterals = s->stations[i].first == UINT32_MAX ? 0 : lateral_count(s, &s->stations[i]);
-        size_t lo = s->nrings;
-        xyl_result r = laterals ? fork_rings(s, i, t_in, t, t_out, laterals)
-                                : add_ring(s, s->stations[i].p, t, s->stations[i].r);
-        if (r) return r;
-        if (laterals) {
-            stems_fork_span sp = {i, lo, s->nrings - 1};
-            spans[(*nspans)++] = sp;
-        }
-    }
-    return XYL_OK;
-}
-
-/* With even k (no triangles) a vertex's own-branch faces are the bands, caps and bridge of its
- * branch, all made once the branch is built: its normals are normalised then, while they are
- * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
- * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings and the
- * apexes of its domed caps. */
-static void unit_normal(stems *s, xyl_vec3 *n)
-{
-    if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
-    else s->lonely = true;
-}
-
-#ifdef XYL__SSE2
-/* unit_normal on n[0] and n[1] at once: the same double operations in the same order, so the
- * same bits, two lanes per instruction (the square root and the division dominate this pass). */
-static void unit_normal_pair(stems *s, xyl_vec3 *n)
-{
-    __m128d v[3];
-    load_pair(n, 0, 1, v);
-    __m128d l2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(v[0], v[0]), _mm_mul_pd(v[1], v[1])),
-                            _mm_mul_pd(v[2], v[2]));
-    /* both with a direction and finite: else each on its own */
-    __m128d ok = _mm_and_pd(_mm_cmpgt_pd(l2, _mm_set1_pd(XYL__EPS_NORMALIZE)),
-                            _mm_cmple_pd(l2, _mm_set1_pd(DBL_MAX)));
-    if (_mm_movemask_pd(ok) != 3) {
-        unit_normal(s, &n[0]);
-        unit_normal(s, &n[1]);
-        return;
-    }
-    __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(l2));
-    store_pair(_mm_cvtpd_ps(_mm_mul_pd(v[0], inv)), _mm_cvtpd_ps(_mm_mul_pd(v[1], inv)),
-               _mm_cvtpd_ps(_mm_mul_pd(v[2], inv)), n);
-}
-#endif
-
-static void unit_branch_normals(stems *s)
-{
-    for (size_t i = 0; i < s->nrings; ++i) {
-        xyl_vec3 *n = s->nrm + s->rings[i].first;
-        uint32_t j = 0;
-#ifdef XYL__SSE2
-        for (; j + 2 <= s->k; j += 2) unit_normal_pair(s, n + j);
-#endif
-        for (; j < s->k; ++j) unit_normal(s, n + j);
-    }
-    for (int e = 0; e < 2; ++e) {
-        if (s->apex[e] == UINT32_MAX) continue;
-        unit_normal(s, s->nrm + s->apex[e]);
-    }
-}
-
-/* Whether the band from ring a (centre ca, unit tangent ta, radius ra) to ring b ahead of it
- * folds: a vertex of one lies on the wrong side of the other's plane. */
-static bool band_folds(xyl__dvec3 ca, xyl__dvec3 ta, double ra, xyl__dvec3 cb, xyl__dvec3 tb,
-                       double rb)
-{
-    double tilt = xyl__d3_len(xyl__d3_cross(ta, tb)); /* the sine of the angle between the planes */
-    return xyl__d3_dot(xyl__d3_sub(cb, ca), ta) <= rb * tilt ||
-           xyl__d3_dot(xyl__d3_sub(ca, cb), tb) >= -ra * tilt;
-}
-
-/* Whether the band from a ring (centre c, unit tangent t, radius r) to the ring of the first
- * station folds when the tube comes into that station along t_in (the station's ring is turned
- * halfway from t_in to the next segment, if there is one, as branch_rings turns it). */
-static bool band_to_first_station_folds(const stems *s, xyl__dvec3 c, xyl__dvec3 t, double r,
-                                        xyl__dvec3 t_in)
-{
-    const stems_station *st = s->stations;
-    xyl__dvec3 t_out = s->nstations > 1 ? dir_between(st[0].p, st[1].p, t_in) : t_in;
-    xyl__dvec3 t0 = xyl__d3_normalize_or(xyl__d3_add(t_in, t_out), t_in);
-    double f = s->inflate;
-    return band_folds(c, t, f * r, st[0].p, t0, f * st[0].r);
-}
-
-/* Whether a lateral's first band, from its bridge ring to its first station, folds. */
-static bool first_band_folds(const stems *s, const stems_ring *bridge, xyl__dvec3 t_in)
-{
-    return band_to_first_station_folds(s, bridge->centre, bridge->tangent, bridge->radius, t_in);
-}
-
-/* The direction a lateral's tube comes into its first station along: the bridge ring's normal,
- * so that the first band's rings face each other. Where the bridge's patch faces away from the
- * child, the station's ring, turned halfway to the next segment, can cross the bridge ring; if
- * it does not with the direction from the bridge ring's centre to the station, that one. Not at
- * a station with laterals, where the ring's frame also places their patches. */
-static xyl__dvec3 first_direction(const stems *s, const stems_ring *bridge)
-{
-    if (lateral_count(s, &s->stations[0]) || !first_band_folds(s, bridge, bridge->tangent))
-        return bridge->tangent;
-    xyl__dvec3 seg = dir_between(bridge->centre, s->stations[0].p, bridge->tangent);
-    return first_band_folds(s, bridge, seg) ? bridge->tangent : seg;
-}
-
-/* A first station with laterals keeps the bridge ring's normal (first_direction). Where its
- * first band folds along it and the station lies far out to the side (its direction from the
- * bridge ring's centre more than acos 0.2, 78 degrees, off the normal), the band runs along the
- * bridge ring's plane to the station and crosses the bridges of the station's laterals. The
- * tube then goes out along the normal first, to a node-less station (an elbow) 0.4 of the
- * station's distance ahead of the ring and a quarter of the way from the ring's radius to the
- * station's, and turns there to the station; if either band folds then, or the elbow would take
- * the chain past its rings in ring_bound (its nodes plus one), there is none. */
-static xyl_result add_elbow(stems *s, const stems_ring *bridge)
-{
-    const stems_station *st = s->stations;
-    if (s->nstations > s->nchain || !lateral_count(s, &st[0]) ||
-        !first_band_folds(s, bridge, bridge->tangent))
-        return XYL_OK;
-    xyl__dvec3 c = bridge->centre, n = bridge->tangent, to_st = xyl__d3_sub(st[0].p, c);
-    double ahead = xyl__d3_dot(to_st, n);
-    if (ahead > 0.2 * xyl__d3_len(to_st)) return XYL_OK;
-    double f = s->inflate, rb = bridge->radius, re = 0.75 * rb + 0.25 * st[0].r;
-    xyl__dvec3 e = xyl__d3_add(c, xyl__d3_scale(n, 0.4 * ahead));
-    xyl__dvec3 to = dir_between(e, st[0].p, n);
-    xyl__dvec3 te = xyl__d3_normalize_or(xyl__d3_add(n, to), to);
-    if (band_folds(c, n, f * rb, e, te, f * re) || band_to_first_station_folds(s, e, te, re, to))
-        return XYL_OK;
-    if (!xyl__grow(&s->alloc, (void **)&s->stations, &s->scap, s->nstations, s->nstations + 1,
-                   sizeof *s->stations))
-        return oom(s);
-    memmove(s->stations + 1, s->stations, s->nstations * sizeof *s->stations);
-    stems_station elbow = {e, re, UINT32_MAX, 0};
-    s->stations[0] = elbow;
-    s->nstations++;
-    return XYL_OK;
-}
-
-/* Before subdivision the limit surface at ring i lies, along the branch, at
- * (c[i-1] + 4 c[i] + c[i+1]) / 6 (the cubic B-spline of Catmull-Clark on the tube's regular
- * grid, and Loop's limit on the split bands): on a bend it is pulled towards the centre of
- * curvature by (c[i-1] - 2 c[i] + c[i+1]) / 6. Moving each inner ring's centre by minus that
- * leaves the limit within (the fourth difference) / 36 of the skeleton. The first ring (a
- * bridge, fixed to the parent's patch, or the root's cap) and the last (the tip's cap) stay. */
-static void limit_centres(stems *s)
-{
-    if (s->nrings < 3) return;
-    xyl__dvec3 prev = s->rings[0].centre, cur = s->rings[1].centre;
-    for (size_t i = 1; i + 1 < s->nrings; ++i) {
-        xyl__dvec3 next = s->rings[i + 1].centre;
-        xyl__dvec3 bend = xyl__d3_add(xyl__d3_sub(prev, xyl__d3_scale(cur, 2.0)), next);
-        s->rings[i].centre = xyl__d3_sub(cur, xyl__d3_scale(bend, 1.0 / 6.0));
-        prev = cur;
-        cur = next;
-    }
-}
-
-static xyl_result build_branch(stems *s, uint32_t start, const stems_ring *from)
-{
-    uint32_t branch = s->sk->nodes[start].branch;
-    xyl_result r = collect_chain(s, start);
-    if (!r) r = make_stations(s, from);
-    if (r) return r;
-    xyl__dvec3 dir = from ? from->tangent : xyl__d3(0, 1, 0);
-    if (!from && s->nchain > 1)
-        dir = dir_between(node_pos(s, s->chain[0]), node_pos(s, s->chain[s->nchain - 1]), dir);
-    /* a lateral's tube already has a ring, its bridge ring: one station without laterals is
-     * its tip, and a node-less station beyond it would only stick out past the child's end */
-    if (!from || s->nstations > 1 || lateral_count(s, &s->stations[0]))
-        r = ensure_two_stations(s, dir);
-    if (r) return r;
-    if (from) {
-        dir = first_direction(s, from);
-        r = add_elbow(s, from);
-        if (r) return r;
-    }
-    s->nrings = 0;
-    if (from) { /* the bridge ring is this branch's first ring */
-        if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, 0, 1, sizeof *s->rings))
-            return oom(s);
-        s->rings[0] = *from;
-        s->nrings = 1;
-    }
-    /* one buffer for all branches: children are built after their parent's build_branch */
-    if (!xyl__grow(&s->alloc, (void **)&s->spans, &s->spcap, 0, s->nstations, sizeof *s->spans))
-        return oom(s);
-    stems_fork_span *spans = s->spans;
-    size_t nspans = 0;
-    r = branch_rings(s, dir, spans, &nspans);
-    if (!r && s->limit_centres) limit_centres(s);
-    if (!r) r = emit_rings(s, from ? 1 : 0, branch);
-    if (!r && !out_reserve(s, s->nv + 2, s->nq + s->k)) r = oom(s); /* the caps */
-    s->apex[0] = s->apex[1] = UINT32_MAX;
-    if (!r && !from) r = put_cap(s, 0, false, branch);
-    if (!r) r = put_cap(s, s->nrings - 1, true, branch);
-    if (!r && s->unit_per_branch) unit_branch_normals(s);
-    for (size_t f = 0; f < nspans && !r; ++f)
-        r = attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
-    return r;
-}
+/* ---- building ------------------------------------------------------------------------------ */
 
 /* Upper bounds on the rings (each k vertices) and on the branch chains of the mesh: a chain's
  * stations are at most its nodes plus one (ensure_two_stations, add_elbow), a fork station adds
@@ -1190,71 +80,16 @@ static void ring_bound(const stems *s, size_t *rings, size_t *chains)
     size_t n = s->sk->node_count, r = 16, c = 0;
     for (size_t i = 0; i < n; ++i) {
         size_t laterals = s->child_start[i + 1] - s->child_start[i] - (s->main[i] != UINT32_MAX);
-        r += 1 + (laterals ? fork_extra_rings(s, laterals) + laterals : 0);
+        r += 1 + (laterals ? xyl__stems_fork_extra_rings(s, laterals) + laterals : 0);
         c += laterals + (s->sk->nodes[i].parent < 0);
     }
     *rings = r + c;
     *chains = c;
 }
 
-/* Whether some node has two or more lateral children, the only place siblings can merge. */
-static bool has_sibling_laterals(const stems *s)
-{
-    for (size_t n = 0; n < s->sk->node_count; ++n)
-        if (s->child_start[n + 1] - s->child_start[n] > 1u + (s->main[n] != UINT32_MAX)) return true;
-    return false;
-}
-
-/* Detaches every node of the branches marked in s->drop (never a root's: checked joints only
- * mark laterals), so that nothing of them or of what grows from them is meshed. */
-static bool drop_branches(const stems *s, int32_t *parent_of)
-{
-    const xyl_skel_node *nodes = s->sk->nodes;
-    bool any = false;
-    for (size_t i = 0; i < s->sk->node_count; ++i)
-        if (s->drop[nodes[i].branch] >= XYL__JOINT_DROP && nodes[i].parent >= 0)
-            parent_of[i] = -1, any = true;
-    return any;
-}
-
-/* Children of every node, indexed again after laterals inside their parent or a sibling were
- * moved, and again after laterals that came to hang from one node were merged (stems_merge.c),
- * so that the rest of the mesher sees the tree as meshed. One call site of index_children:
- * inlined twice, GCC doubts its sizes. */
-static xyl_result index_tree(stems *s)
-{
-    size_t n = s->sk->node_count;
-    int32_t *parent_of = NULL;
-    xyl_result r = XYL_OK;
-    bool moved = true;
-    for (int step = 0; step < 3 && !r; ++step) {
-        if (moved) r = index_children(s, parent_of);
-        if (r) break;
-        if (step == 0) { /* parent_of, then scratch */
-            parent_of = xyl__alloc_array(&s->alloc, n ? 5 * n : 1, sizeof *parent_of);
-            s->tails = xyl__alloc_array(&s->alloc, n ? 6 * n : 1, sizeof *s->tails);
-            if (!parent_of || !s->tails) {
-                r = oom(s);
-                break;
-            }
-            xyl__stems_tail_boxes(s, s->tails);
-            moved = xyl__stems_place_laterals(s, parent_of, (uint32_t *)(parent_of + n));
-        } else if (step == 1) {
-            /* here moved says whether the placement moved laterals: one it moved may lie in
-             * its new fork's tube, siblings or not */
-            moved = (moved || has_sibling_laterals(s)) && xyl__stems_merge_siblings(s, parent_of);
-            if (s->drop && drop_branches(s, parent_of)) moved = true;
-        }
-    }
-    xyl__free(&s->alloc, parent_of);
-    xyl__free(&s->alloc, s->tails);
-    s->tails = NULL;
-    return r;
-}
-
 static xyl_result build_all(stems *s)
 {
-    xyl_result r = index_tree(s);
+    xyl_result r = xyl__stems_index_tree(s);
     for (uint32_t j = 0; j < s->k; ++j) {
         double a = 2.0 * XYL__PI * (double)j / (double)s->k;
         s->cos_a[j] = cos(a);
@@ -1266,13 +101,14 @@ static xyl_result build_all(stems *s)
      * allocator can hand the same pages back on the next build instead of fresh ones */
     size_t rings = 0, chains = 0;
     if (!r) ring_bound(s, &rings, &chains);
-    if (!r && !out_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k)) r = oom(s);
+    if (!r && !xyl__stems_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k))
+        r = xyl__stems_oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
-        r = build_branch(s, (uint32_t)i, NULL);
+        r = xyl__stems_build_branch(s, (uint32_t)i, NULL);
         while (!r && s->npending) {
             stems_pending p = s->pending[--s->npending];
-            r = build_branch(s, p.node, &p.bridge);
+            r = xyl__stems_build_branch(s, p.node, &p.bridge);
         }
         if (!r && (uint64_t)s->nv > s->max_vertices)
             r = xyl__fail(s->diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
@@ -1403,59 +239,6 @@ static void free_state(stems *s)
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 
-/* Normals of the mesh before the patches were dropped: a parent vertex on a joint still sees its
- * branch's full tube, so its normal is the parent's own (Skjermo 2008). The quads' share is in
- * s->nrm already; triangles come after all quads, as in xyl__mesh_normals. */
-static xyl_result normals_with_patches(stems *s, xyl_vec3 **out)
-{
-    for (size_t t = 0; t < s->nt; ++t) {
-        const uint32_t *f = s->tris + 3 * t;
-        xyl_vec3 fn = xyl__tri_normal(s->pos, f);
-        for (int k = 0; k < 3; ++k)
-            if (s->vbranch[f[k]] == s->tbranch[t]) xyl__add_f3(&s->nrm[f[k]], fn);
-    }
-    xyl__mesh_arrays view; /* all faces, taken ones too: for vertices without own-branch faces */
-    memset(&view, 0, sizeof view);
-    view.positions = s->pos;
-    view.vertex_count = s->nv;
-    view.quads = s->quads;
-    view.quad_count = s->nq;
-    view.triangles = s->tris;
-    view.triangle_count = s->nt;
-    xyl_result r = XYL_OK;
-    if (!s->unit_per_branch) r = xyl__mesh_normals_finish(&view, true, &s->alloc, s->nrm);
-    else if (s->lonely) r = xyl__mesh_normals_lonely(&view, &s->alloc, s->nrm);
-    if (r) return oom(s);
-    *out = s->nrm;
-    s->nrm = NULL;
-    return XYL_OK;
-}
-
-/* Per-branch normals on a mesh whose vertices sit on the limit surface: the limit normal
- * (exact) wherever all of a vertex's faces are of its own branch, the own-branch face average
- * at the seams between branches, where the limit normal would lean towards the other branch. */
-static xyl_result branch_normals_on_limit(stems *s, xyl__mesh_arrays *a)
-{
-    xyl_vec3 *limit = a->normals;
-    uint8_t *seam = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, 1);
-    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
-    xyl_result r = seam && a->normals ? xyl__mesh_normals(a, a->face_branches, &s->alloc, a->normals)
-                                      : XYL_ERR_OUT_OF_MEMORY;
-    if (!r) {
-        for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
-            bool quad = f < a->quad_count;
-            const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
-            for (int c = 0; c < (quad ? 4 : 3); ++c)
-                if (a->branch_ids[idx[c]] != a->face_branches[f]) seam[idx[c]] = 1;
-        }
-        for (size_t v = 0; v < a->vertex_count; ++v)
-            if (!seam[v]) a->normals[v] = limit[v];
-    }
-    xyl__free(&s->alloc, seam);
-    xyl__free(&s->alloc, limit);
-    return r ? oom(s) : XYL_OK;
-}
-
 static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, uint32_t *tv,
                          xyl_mesh **out)
 {
@@ -1470,13 +253,13 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
         *a = fine;
     }
     if (a->normals && d->normals == XYL_NORMALS_BRANCH) {
-        r = branch_normals_on_limit(s, a);
+        r = xyl__stems_branch_normals_on_limit(s, a);
     } else if (!a->normals) { /* limit normals are the smooth normals */
         a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
-        if (!a->normals) r = oom(s);
+        if (!a->normals) r = xyl__stems_oom(s);
         if (!r) {
             const uint32_t *fb = d->normals == XYL_NORMALS_BRANCH ? a->face_branches : NULL;
-            if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = oom(s);
+            if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = xyl__stems_oom(s);
         }
     }
     if (r) {
@@ -1497,14 +280,14 @@ static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
                              sizeof *s->fbranch) ||
                   !xyl__grow(&s->alloc, (void **)&s->qwrap, &wcap, s->nq, s->nq + s->nt,
                              sizeof *s->qwrap)))
-        return oom(s);
+        return xyl__stems_oom(s);
     if (s->sum_normals) {
-        xyl_result r = normals_with_patches(s, &normals);
+        xyl_result r = xyl__stems_normals_with_patches(s, &normals);
         if (r) return r;
         *tv = xyl__alloc_array(&s->alloc, 2 * s->nq + s->nt, 3 * sizeof **tv);
         if (!*tv) {
             xyl__free(&s->alloc, normals);
-            return oom(s);
+            return xyl__stems_oom(s);
         }
     }
     take_arrays(s, a, *tv);
@@ -1544,6 +327,19 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     return r ? r : finish(&s, desc, &a, tv, out);
 }
 
+/* Judges the intersecting pairs of mesh m (stems_joints.c): *t counts them, and drop has the
+ * levels raised for those at joints. */
+static xyl_result judge_mesh(const xyl_skeleton *sk, const xyl_mesh *m, uint8_t *drop,
+                             const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag)
+{
+    uint64_t *pairs = NULL;
+    size_t count = 0;
+    xyl_result r = xyl__mesh_intersecting_pairs(m, alloc, &pairs, &count, diag);
+    if (!r) r = xyl__stems_judge_joints(sk, m, pairs, count, drop, alloc, t, diag);
+    xyl__free(alloc, pairs);
+    return r;
+}
+
 /* Checked joints (docs/stems.md): builds, tests the mesh for intersecting pairs, and for each
  * pair at a joint raises one lateral's level (stems_joints.c): it starts a node later, then
  * another, then is left out with all that grows from it; and builds again, until a mesh has no
@@ -1564,12 +360,8 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
         r = build_once(skeleton, &plain, drop, &m, diag);
         if (r) break;
         if (++st->builds == 1) st->faces_first = m->quad_count + m->triangle_count;
-        uint64_t *pairs = NULL;
-        size_t count = 0;
-        r = xyl__mesh_intersecting_pairs(m, &desc->alloc, &pairs, &count, diag);
         xyl__joint_tally t;
-        if (!r) r = xyl__stems_judge_joints(skeleton, m, pairs, count, drop, &desc->alloc, &t, diag);
-        xyl__free(&desc->alloc, pairs);
+        r = judge_mesh(skeleton, m, drop, &desc->alloc, &t, diag);
         if (r) break;
         if (st->builds == 1) st->joint_pairs_first = t.joint;
         if (!t.marked) {

@@ -1,9 +1,25 @@
-/* The stem mesher's state (stems_build.c). Not installed. */
+/* The stem mesher's state and what its files (stems_*.c) share. Not installed. */
 #ifndef XYL_STEMS_INTERNAL_H
 #define XYL_STEMS_INTERNAL_H
 
 #include "mesh_internal.h"
 #include "xylem/xyl_stems.h"
+
+/* The SSE2 loops stand for scalar ones with the same operations in the same order, and give the
+ * same bits; XYL_NO_SIMD compiles the scalar ones alone (tests/stems_scalar.c builds the mesher
+ * so, to check that). */
+#if defined(__SSE2__) && !defined(XYL_NO_SIMD)
+#define XYL__SSE2 1
+#include <emmintrin.h>
+#endif
+
+/* The linkage of the functions below that the mesher's files share. tests/stems_scalar.c
+ * compiles those files once more, without SSE2, in one translation unit and defines this as
+ * static there: its copy then neither clashes with the library's nor stands in for any of it.
+ * (stems_merge.c and stems_joints.c have no SIMD loops; the copy calls the library's.) */
+#ifndef XYL__STEMS_SHARED
+#define XYL__STEMS_SHARED
+#endif
 
 /* One ring of a branch tube, and the patch bookkeeping of the band that follows it. */
 typedef struct stems_ring {
@@ -151,5 +167,162 @@ typedef struct xyl__joint_tally {
 xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
                                    const uint64_t *pairs, size_t count, uint8_t *drop,
                                    const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag);
+
+/* ---- small inline functions of the mesher's files ------------------------------------------ */
+
+#ifdef XYL__SSE2
+/* Lanes (v[i].x, v[i1].x) and so on as doubles, built in registers: stores of single floats
+ * read back as a pair would stall on store forwarding. */
+static XYL__ALWAYS_INLINE void xyl__load_pair(const xyl_vec3 *v, uint32_t i, uint32_t i1,
+                                              __m128d *out)
+{
+    out[0] = _mm_set_pd((double)v[i1].x, (double)v[i].x);
+    out[1] = _mm_set_pd((double)v[i1].y, (double)v[i].y);
+    out[2] = _mm_set_pd((double)v[i1].z, (double)v[i].z);
+}
+
+/* The low two lanes of x, y and z (floats) as out[0] and out[1]. */
+static XYL__ALWAYS_INLINE void xyl__store_pair(__m128 x, __m128 y, __m128 z, xyl_vec3 *out)
+{
+    out[0].x = _mm_cvtss_f32(x);
+    out[0].y = _mm_cvtss_f32(y);
+    out[0].z = _mm_cvtss_f32(z);
+    out[1].x = _mm_cvtss_f32(_mm_shuffle_ps(x, x, 1));
+    out[1].y = _mm_cvtss_f32(_mm_shuffle_ps(y, y, 1));
+    out[1].z = _mm_cvtss_f32(_mm_shuffle_ps(z, z, 1));
+}
+#endif
+
+/* The child that continues n's branch (same branch id), or UINT32_MAX at a tip. */
+static inline uint32_t xyl__stems_main_child(const stems *s, uint32_t n)
+{
+    return s->main[n];
+}
+
+static inline xyl__dvec3 xyl__stems_node_pos(const stems *s, uint32_t n)
+{
+    return xyl__from_f3(s->sk->nodes[n].pos);
+}
+
+/* The unit direction from a to b; fallback where they coincide. */
+static inline xyl__dvec3 xyl__dir_between(xyl__dvec3 a, xyl__dvec3 b, xyl__dvec3 fallback)
+{
+    return xyl__d3_normalize_or(xyl__d3_sub(b, a), fallback);
+}
+
+/* ---- output (stems_build.c; the usual cases inline) ---------------------------------------- */
+
+/* Room in the output arrays for verts vertices and quads quads; false when out of memory. The
+ * usual case, reserved up front, is decided inline; xyl__stems_reserve_slow grows the arrays. */
+XYL__STEMS_SHARED bool xyl__stems_reserve_slow(stems *s, size_t verts, size_t quads);
+static inline bool xyl__stems_reserve(stems *s, size_t verts, size_t quads)
+{
+    if (verts <= s->vcap && quads <= s->qcap) return true;
+    return xyl__stems_reserve_slow(s, verts, quads);
+}
+
+/* Adds quad q's normal to the sums of its vertices of its branch. Quads are made in index order
+ * and their vertices are final by then, so each vertex sums the same faces in the same order as
+ * xyl__mesh_normals would, while they are still in cache. */
+static inline void xyl__stems_sum_quad_normal(stems *s, const uint32_t *q, uint32_t branch)
+{
+    xyl_vec3 fn = xyl__quad_normal(s->pos, q);
+    for (int k = 0; k < 4; ++k)
+        if (s->vbranch[q[k]] == branch) xyl__add_f3(&s->nrm[q[k]], fn);
+}
+
+/* The uv_wraps bits of a face of n corners (idx), by the rule of xyl__uv_wraps_of. Band quads
+ * do not come here (put_band_k knows theirs); caps and bridge faces do. */
+static inline uint8_t xyl__stems_face_wraps(const stems *s, const uint32_t *idx, int n)
+{
+    float u[4];
+    for (int c = 0; c < n; ++c) u[c] = s->uv[2 * idx[c]];
+    return xyl__uv_wraps_of(u, n);
+}
+
+/* Appends a quad; its branch is the branch being built. */
+static inline void xyl__stems_put_quad(stems *s, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
+                                       uint32_t branch)
+{
+    size_t n = s->nq;
+    uint32_t *q = s->quads + 4 * n;
+    q[0] = a;
+    q[1] = b;
+    q[2] = c;
+    q[3] = d;
+    s->fbranch[n] = branch;
+    s->qwrap[n] = xyl__stems_face_wraps(s, q, 4);
+    s->nq = n + 1;
+    if (s->nrm) xyl__stems_sum_quad_normal(s, q, branch);
+}
+
+/* XYL_ERR_OUT_OF_MEMORY, told to s->diag. */
+XYL__STEMS_SHARED xyl_result xyl__stems_oom(stems *s);
+
+/* Appends a triangle (odd k: caps and bridges have one). */
+XYL__STEMS_SHARED xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b, uint32_t c,
+                                                uint32_t branch);
+
+/* ---- the tree as meshed (stems_tree.c) ----------------------------------------------------- */
+
+/* Indexes the children and main child of every node (child_start, child_list, main) of the tree
+ * as meshed: laterals placed out of their parent's tube, overlapping siblings merged, and the
+ * branches s->drop leaves out detached. */
+XYL__STEMS_SHARED xyl_result xyl__stems_index_tree(stems *s);
+
+/* ---- a branch's tube (stems_rings.c) ------------------------------------------------------- */
+
+/* Builds the branch that starts at node start: its tube, caps and the bridges of its laterals,
+ * whose branches it queues in s->pending. from: the bridge ring a lateral's tube starts from;
+ * NULL for a root. */
+XYL__STEMS_SHARED xyl_result xyl__stems_build_branch(stems *s, uint32_t start,
+                                                     const stems_ring *from);
+
+/* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
+ * radius r (times s->inflate), texture v. Returns the first vertex index. */
+XYL__STEMS_SHARED uint32_t xyl__stems_put_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, xyl__dvec3 u,
+                                               double r, double v, uint32_t branch);
+
+/* Plans the next ring of the branch being built: centre c, unit tangent t, radius r. */
+XYL__STEMS_SHARED xyl_result xyl__stems_add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r);
+
+/* Lateral children of the nodes merged into station st. */
+XYL__STEMS_SHARED size_t xyl__stems_lateral_count(const stems *s, const stems_station *st);
+
+/* ---- forks (stems_fork.c) ------------------------------------------------------------------ */
+
+/* Rings a fork with `laterals` lateral children adds around its own. */
+XYL__STEMS_SHARED size_t xyl__stems_fork_extra_rings(const stems *s, size_t laterals);
+
+/* The rings of station i, a fork with `laterals` lateral children: its own ring, turned to t,
+ * and the extra rings around it, which the tube comes into along t_in and leaves along t_out. */
+XYL__STEMS_SHARED xyl_result xyl__stems_fork_rings(stems *s, size_t i, xyl__dvec3 t_in,
+                                                   xyl__dvec3 t, xyl__dvec3 t_out,
+                                                   size_t laterals);
+
+/* Bridges every lateral child of station i from a patch in the bands between rings lo .. hi,
+ * and queues its branch in s->pending. */
+XYL__STEMS_SHARED xyl_result xyl__stems_attach_laterals(stems *s, size_t i, size_t lo, size_t hi);
+
+/* The direction a lateral's tube comes into its first station along from its bridge ring (its
+ * stations made). */
+XYL__STEMS_SHARED xyl__dvec3 xyl__stems_first_direction(const stems *s, const stems_ring *bridge);
+
+/* Puts a node-less station (an elbow) between a lateral's bridge ring and its first station
+ * where the band between them would cross the bridges of that station's laterals. */
+XYL__STEMS_SHARED xyl_result xyl__stems_add_elbow(stems *s, const stems_ring *bridge);
+
+/* ---- normals (stems_normals.c) ------------------------------------------------------------- */
+
+/* Makes the normals summed for the branch just built (its rings and cap apexes) unit;
+ * k even, while they are still in cache. */
+XYL__STEMS_SHARED void xyl__stems_unit_branch_normals(stems *s);
+
+/* The vertex normals of the mesh as it stood before bridges replaced their patches, finished
+ * from the sums in s->nrm, which it hands over as *out. */
+XYL__STEMS_SHARED xyl_result xyl__stems_normals_with_patches(stems *s, xyl_vec3 **out);
+
+/* Replaces the limit normals in a->normals by branch normals at the seams between branches. */
+XYL__STEMS_SHARED xyl_result xyl__stems_branch_normals_on_limit(stems *s, xyl__mesh_arrays *a);
 
 #endif

@@ -1,0 +1,109 @@
+/* Stem mesh normals: unit sums per branch, the joints' normals, branch normals on the limit. */
+#include <float.h>
+#include <string.h>
+
+#include "mesh_internal.h"
+#include "stems_internal.h"
+
+/* With even k (no triangles) a vertex's own-branch faces are the bands, caps and bridge of its
+ * branch, all made once the branch is built: its normals are normalised then, while they are
+ * still in cache, instead of in one more pass over the whole mesh. A vertex without any keeps
+ * its sum for xyl__mesh_normals_lonely. The branch's vertices are those of its rings and the
+ * apexes of its domed caps. */
+static void unit_normal(stems *s, xyl_vec3 *n)
+{
+    if (xyl__has_direction(*n)) *n = xyl__unit_or_up(*n);
+    else s->lonely = true;
+}
+
+#ifdef XYL__SSE2
+/* unit_normal on n[0] and n[1] at once: the same double operations in the same order, so the
+ * same bits, two lanes per instruction (the square root and the division dominate this pass). */
+static void unit_normal_pair(stems *s, xyl_vec3 *n)
+{
+    __m128d v[3];
+    xyl__load_pair(n, 0, 1, v);
+    __m128d l2 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(v[0], v[0]), _mm_mul_pd(v[1], v[1])),
+                            _mm_mul_pd(v[2], v[2]));
+    /* both with a direction and finite: else each on its own */
+    __m128d ok = _mm_and_pd(_mm_cmpgt_pd(l2, _mm_set1_pd(XYL__EPS_NORMALIZE)),
+                            _mm_cmple_pd(l2, _mm_set1_pd(DBL_MAX)));
+    if (_mm_movemask_pd(ok) != 3) {
+        unit_normal(s, &n[0]);
+        unit_normal(s, &n[1]);
+        return;
+    }
+    __m128d inv = _mm_div_pd(_mm_set1_pd(1.0), _mm_sqrt_pd(l2));
+    xyl__store_pair(_mm_cvtpd_ps(_mm_mul_pd(v[0], inv)), _mm_cvtpd_ps(_mm_mul_pd(v[1], inv)),
+               _mm_cvtpd_ps(_mm_mul_pd(v[2], inv)), n);
+}
+#endif
+
+void xyl__stems_unit_branch_normals(stems *s)
+{
+    for (size_t i = 0; i < s->nrings; ++i) {
+        xyl_vec3 *n = s->nrm + s->rings[i].first;
+        uint32_t j = 0;
+#ifdef XYL__SSE2
+        for (; j + 2 <= s->k; j += 2) unit_normal_pair(s, n + j);
+#endif
+        for (; j < s->k; ++j) unit_normal(s, n + j);
+    }
+    for (int e = 0; e < 2; ++e) {
+        if (s->apex[e] == UINT32_MAX) continue;
+        unit_normal(s, s->nrm + s->apex[e]);
+    }
+}
+
+/* Normals of the mesh before the patches were dropped: a parent vertex on a joint still sees its
+ * branch's full tube, so its normal is the parent's own (Skjermo 2008). The quads' share is in
+ * s->nrm already; triangles come after all quads, as in xyl__mesh_normals. */
+xyl_result xyl__stems_normals_with_patches(stems *s, xyl_vec3 **out)
+{
+    for (size_t t = 0; t < s->nt; ++t) {
+        const uint32_t *f = s->tris + 3 * t;
+        xyl_vec3 fn = xyl__tri_normal(s->pos, f);
+        for (int k = 0; k < 3; ++k)
+            if (s->vbranch[f[k]] == s->tbranch[t]) xyl__add_f3(&s->nrm[f[k]], fn);
+    }
+    xyl__mesh_arrays view; /* all faces, taken ones too: for vertices without own-branch faces */
+    memset(&view, 0, sizeof view);
+    view.positions = s->pos;
+    view.vertex_count = s->nv;
+    view.quads = s->quads;
+    view.quad_count = s->nq;
+    view.triangles = s->tris;
+    view.triangle_count = s->nt;
+    xyl_result r = XYL_OK;
+    if (!s->unit_per_branch) r = xyl__mesh_normals_finish(&view, true, &s->alloc, s->nrm);
+    else if (s->lonely) r = xyl__mesh_normals_lonely(&view, &s->alloc, s->nrm);
+    if (r) return xyl__stems_oom(s);
+    *out = s->nrm;
+    s->nrm = NULL;
+    return XYL_OK;
+}
+
+/* Per-branch normals on a mesh whose vertices sit on the limit surface: the limit normal
+ * (exact) wherever all of a vertex's faces are of its own branch, the own-branch face average
+ * at the seams between branches, where the limit normal would lean towards the other branch. */
+xyl_result xyl__stems_branch_normals_on_limit(stems *s, xyl__mesh_arrays *a)
+{
+    xyl_vec3 *limit = a->normals;
+    uint8_t *seam = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, 1);
+    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
+    xyl_result r = seam && a->normals ? xyl__mesh_normals(a, a->face_branches, &s->alloc, a->normals)
+                                      : XYL_ERR_OUT_OF_MEMORY;
+    if (!r) {
+        for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
+            bool quad = f < a->quad_count;
+            const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
+            for (int c = 0; c < (quad ? 4 : 3); ++c)
+                if (a->branch_ids[idx[c]] != a->face_branches[f]) seam[idx[c]] = 1;
+        }
+        for (size_t v = 0; v < a->vertex_count; ++v)
+            if (!seam[v]) a->normals[v] = limit[v];
+    }
+    xyl__free(&s->alloc, seam);
+    xyl__free(&s->alloc, limit);
+    return r ? xyl__stems_oom(s) : XYL_OK;
+}
