@@ -1,3 +1,5 @@
+/* The joint check and repair: which intersecting pairs lie at joints, which lateral each blames. */
+
 /* Checked joints (docs/stems.md, "Checked joints"): which intersecting triangle pairs of a stem
  * mesh lie at joints, and which lateral to blame for each (to start later, or leave out).
  *

@@ -1,3 +1,5 @@
+/* Lateral placement: which skeleton nodes are meshed, and from which node each lateral grows. */
+
 /* Which skeleton nodes are meshed, and from where (docs/stems.md, "Laterals inside their
  * parent", "Overlapping siblings").
  *
