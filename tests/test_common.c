@@ -159,6 +159,49 @@ static void big_blocks_survive_threads(void **state)
     xyl_memory_trim();
 }
 
+static int u64_order(const void *pa, const void *pb)
+{
+    uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+    return (a > b) - (a < b);
+}
+
+/* 12-byte elements ordered by their first word only: ties are told apart by the rest. */
+typedef struct keyed {
+    uint32_t key, a, b;
+} keyed;
+
+static int keyed_order(const void *pa, const void *pb)
+{
+    const keyed *x = pa, *y = pb;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->a != y->a ? (x->a < y->a ? -1 : 1) : (x->b > y->b) - (x->b < y->b);
+}
+
+/* xyl__sort gives what qsort gives, for any length, with and without repeated keys. */
+static void sort_orders_like_qsort(void **state)
+{
+    (void)state;
+    enum { N = 700 };
+    static uint64_t a[N], b[N];
+    static keyed ka[N], kb[N];
+    uint64_t seed = 11;
+    for (size_t n = 0; n <= N; n = n < 40 ? n + 1 : n * 2 + 3) {
+        size_t len = n < N ? n : N;
+        for (size_t i = 0; i < len; ++i) {
+            seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+            a[i] = b[i] = (seed >> 33) % (n / 2 + 1);
+            ka[i] = (keyed){(uint32_t)(seed >> 60), (uint32_t)(seed >> 40) & 7u, (uint32_t)i};
+            kb[i] = ka[i];
+        }
+        xyl__sort(a, len, sizeof a[0], u64_order);
+        qsort(b, len, sizeof b[0], u64_order);
+        assert_memory_equal(a, b, len * sizeof a[0]);
+        xyl__sort(ka, len, sizeof ka[0], keyed_order);
+        qsort(kb, len, sizeof kb[0], keyed_order);
+        assert_memory_equal(ka, kb, len * sizeof ka[0]);
+    }
+}
+
 static void normalising_a_zero_or_nan_vector_gives_the_fallback(void **state)
 {
     (void)state;
@@ -256,6 +299,7 @@ int main(void)
         cmocka_unit_test(grow_and_calloc_refuse_overflowing_sizes),
         cmocka_unit_test(big_blocks_are_zeroed_reused_bounded_and_trimmed),
         cmocka_unit_test(big_blocks_survive_threads),
+        cmocka_unit_test(sort_orders_like_qsort),
         cmocka_unit_test(normalising_a_zero_or_nan_vector_gives_the_fallback),
         cmocka_unit_test(any_orthogonal_is_unit_and_orthogonal_everywhere),
         cmocka_unit_test(rotation_preserves_length_and_turns_by_the_angle),

@@ -56,6 +56,39 @@ bool xyl__grow_slow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used
     return true;
 }
 
+/* ---- sorting ------------------------------------------------------------------------------ */
+
+static void swap_bytes(unsigned char *a, unsigned char *b, size_t size)
+{
+    for (size_t i = 0; i < size; ++i) {
+        unsigned char t = a[i];
+        a[i] = b[i];
+        b[i] = t;
+    }
+}
+
+/* Moves the element at root down the max-heap of the first n elements. */
+static void sift_down(unsigned char *base, size_t root, size_t n, size_t size,
+                      int (*cmp)(const void *, const void *))
+{
+    for (size_t child; (child = 2 * root + 1) < n; root = child) {
+        if (child + 1 < n && cmp(base + child * size, base + (child + 1) * size) < 0) ++child;
+        if (cmp(base + root * size, base + child * size) >= 0) return;
+        swap_bytes(base + root * size, base + child * size, size);
+    }
+}
+
+void xyl__sort(void *base, size_t n, size_t size, int (*cmp)(const void *, const void *))
+{
+    unsigned char *b = base;
+    if (n < 2) return;
+    for (size_t i = n / 2; i-- > 0;) sift_down(b, i, n, size, cmp);
+    for (size_t end = n - 1; end > 0; --end) {
+        swap_bytes(b, b + end * size, size);
+        sift_down(b, 0, end, size, cmp);
+    }
+}
+
 /* ---- diagnostics --------------------------------------------------------------------------- */
 
 xyl_result xyl__fail(xyl_diag *diag, xyl_result code, uint32_t line, uint32_t column,
@@ -218,34 +251,38 @@ xyl_result xyl__read_file(const char *path, size_t max_bytes, const xyl_allocato
 {
     if (!path || !out || !size)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "no input path");
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot open '%s': %s", path,
                          strerror(errno));
     size_t cap = 0, used = 0;
     char *buf = NULL;
+    xyl_result r = XYL_OK;
     for (;;) {
         if (!xyl__grow(a, (void **)&buf, &cap, used, used + 65536 + 1, 1)) {
-            fclose(f);
-            xyl__free(a, buf);
-            return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory reading '%s'",
-                             path);
+            r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory reading '%s'",
+                          path);
+            break;
         }
-        size_t n = fread(buf + used, 1, cap - used - 1, f);
-        used += n;
+        ssize_t n = read(fd, buf + used, cap - used - 1);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+            r = xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot read '%s': %s", path,
+                          strerror(errno));
+            break;
+        }
+        used += (size_t)n;
         if (used > max_bytes) {
-            fclose(f);
-            xyl__free(a, buf);
-            return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
-                             "'%s' is larger than the limit of %zu bytes", path, max_bytes);
+            r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                          "'%s' is larger than the limit of %zu bytes", path, max_bytes);
+            break;
         }
         if (n == 0) break;
     }
-    int err = ferror(f);
-    fclose(f);
-    if (err) {
+    close(fd);
+    if (r != XYL_OK) {
         xyl__free(a, buf);
-        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot read '%s'", path);
+        return r;
     }
     buf[used] = '\0';
     *out = buf;

@@ -7,7 +7,6 @@
  * by the larger one inside each bucket, so every undirected edge becomes one run: O(V + F) plus
  * O(k log k) per bucket of k half-edges, O(F log F) at worst. Duplicate faces are found the same
  * way, bucketed by their smallest vertex. */
-#include <stdlib.h>
 #include <string.h>
 
 #include "mesh_internal.h"
@@ -247,7 +246,7 @@ static int he_compare(const void *pa, const void *pb)
 static void sort_half_edges(half_edge *e, size_t n)
 {
     if (n > SMALL_BUCKET) {
-        qsort(e, n, sizeof *e, he_compare);
+        xyl__sort(e, n, sizeof *e, he_compare);
         return;
     }
     for (size_t i = 1; i < n; ++i) {
@@ -358,7 +357,7 @@ static int key_compare(const void *pa, const void *pb)
 static void sort_keys(face_key *k, size_t n)
 {
     if (n > SMALL_BUCKET) {
-        qsort(k, n, sizeof *k, key_compare);
+        xyl__sort(k, n, sizeof *k, key_compare);
         return;
     }
     for (size_t i = 1; i < n; ++i) {

@@ -7,7 +7,6 @@
  * more than the shared edge for two (only possible when they lie flat on each other), never for
  * three. Degenerate triangles (see mesh_check.c) are skipped. */
 #include <float.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "mesh_internal.h"
@@ -566,7 +565,7 @@ static bool find_pairs(tri_set *s, morton_entry *tmp)
     build(s, 0, s->n);
     collide_self(s, 0);
     if (s->out_of_memory) return false;
-    if (s->kept > 1) qsort(s->pairs, s->kept, sizeof *s->pairs, u64_compare);
+    xyl__sort(s->pairs, s->kept, sizeof *s->pairs, u64_compare);
     return true;
 }
 
