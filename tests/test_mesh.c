@@ -978,6 +978,56 @@ static void check_validates_a_caller_made_view(void **state)
     builder_free(&b);
 }
 
+/* A view with normals and UVs (now checked wherever they are given: finite, as in a desc) must
+ * be refused by the check, the intersection test and the seam split, naming the vertex. */
+static void calls_refuse_a_view_with_a_non_finite_normal_or_uv(void **state)
+{
+    (void)state;
+    builder b = {0};
+    add_cube(&b, 0, 0, 0, 1);
+    xyl_mesh *m = make_mesh(&b);
+    xyl_vec3 normals[8];
+    float uvs[16];
+    memcpy(normals, m->normals, sizeof normals);
+    memcpy(uvs, m->uvs, sizeof uvs);
+    xyl_mesh view = *m;
+    view.normals = normals;
+    view.uvs = uvs;
+    for (int bad = 0; bad < 3; ++bad) {
+        normals[3].y = bad == 0 ? NAN : m->normals[3].y;
+        uvs[2 * 5 + 1] = bad == 1 ? INFINITY : m->uvs[2 * 5 + 1];
+        int64_t vertex = bad == 0 ? 3 : 5;
+        xyl_result want = bad < 2 ? XYL_ERR_NON_FINITE : XYL_OK;
+        xyl_mesh_report r;
+        size_t count = 77;
+        xyl_mesh *split = UNTOUCHED;
+        xyl_diag diag = fresh_diag();
+        assert_int_equal(xyl_mesh_check(&view, &r, &diag), want);
+        if (want) assert_int_equal(diag.index, vertex);
+        diag = fresh_diag();
+        assert_int_equal(xyl_mesh_self_intersections(&view, NULL, 0, &count, &diag), want);
+        if (want) assert_int_equal(diag.index, vertex);
+        if (want) assert_int_equal(count, 77);
+        diag = fresh_diag();
+        assert_int_equal(xyl_mesh_split_seams(&view, NULL, &split, &diag), want);
+        if (want) assert_int_equal(diag.index, vertex);
+        if (want) assert_ptr_equal(split, UNTOUCHED);
+        else xyl_mesh_destroy(split);
+    }
+    /* the seam split reads every array, so it is refused a non-finite position too */
+    xyl_vec3 pos[8];
+    memcpy(pos, m->positions, sizeof pos);
+    pos[6].z = -INFINITY;
+    view.positions = pos;
+    xyl_mesh *split = UNTOUCHED;
+    xyl_diag diag = fresh_diag();
+    assert_int_equal(xyl_mesh_split_seams(&view, NULL, &split, &diag), XYL_ERR_NON_FINITE);
+    assert_int_equal(diag.index, 6);
+    assert_ptr_equal(split, UNTOUCHED);
+    xyl_mesh_destroy(m);
+    builder_free(&b);
+}
+
 /* ---- xyl_mesh_self_intersections ------------------------------------------------------------ */
 
 static void self_intersections_of_a_cube_are_none(void **state)
@@ -1485,6 +1535,7 @@ int main(void)
         cmocka_unit_test(check_of_an_empty_mesh_is_all_zero),
         cmocka_unit_test(check_rejects_null_arguments),
         cmocka_unit_test(check_validates_a_caller_made_view),
+        cmocka_unit_test(calls_refuse_a_view_with_a_non_finite_normal_or_uv),
         cmocka_unit_test(self_intersections_of_a_cube_are_none),
         cmocka_unit_test(self_intersections_of_a_torus_are_none),
         cmocka_unit_test(self_intersections_of_interpenetrating_cubes_are_genuine),

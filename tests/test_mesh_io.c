@@ -785,6 +785,30 @@ static void views_with_bad_indices_or_arrays_are_refused(void **state)
     expect_both(&v, XYL_ERR_INVALID_ARGUMENT, XYL_ERR_INVALID_ARGUMENT);
 }
 
+/* A face that uses one vertex twice is refused by both writers, as by xyl_mesh_create, and
+ * named in the diagnostic; nothing is written. */
+static void views_with_a_face_repeating_a_vertex_are_refused(void **state)
+{
+    (void)state;
+    view_store st;
+    xyl_mesh v = cube_view(&st);
+    st.quads[4 * 2 + 2] = st.quads[4 * 2 + 0];
+    expect_both(&v, XYL_ERR_INVALID_ARGUMENT, XYL_ERR_INVALID_ARGUMENT);
+    tmpdir t;
+    make_tmpdir(&t);
+    char path[128];
+    snprintf(path, sizeof path, "%s/never.obj", t.path);
+    for (int f = 0; f < 2; ++f) {
+        xyl_diag d;
+        memset(&d, 0, sizeof d);
+        assert_int_equal(xyl_mesh_write_file(&v, path, (xyl_mesh_format)f, &d),
+                         XYL_ERR_INVALID_ARGUMENT);
+        assert_int_equal(d.index, 2);
+        assert_int_equal(dir_entries(t.path), 0);
+    }
+    rmdir(t.path);
+}
+
 static void glb_refuses_branch_ids_a_float_cannot_hold(void **state)
 {
     (void)state;
@@ -1141,6 +1165,7 @@ int main(void)
         cmocka_unit_test(write_memory_rejects_bad_arguments),
         cmocka_unit_test(views_with_non_finite_numbers_are_refused),
         cmocka_unit_test(views_with_bad_indices_or_arrays_are_refused),
+        cmocka_unit_test(views_with_a_face_repeating_a_vertex_are_refused),
         cmocka_unit_test(glb_refuses_branch_ids_a_float_cannot_hold),
         cmocka_unit_test(glb_larger_than_4_gib_is_refused),
         cmocka_unit_test(write_file_writes_what_write_memory_renders),

@@ -703,6 +703,42 @@ static void bad_input_gets_result_codes(void **state)
     xyl_mesh_destroy(m);
 }
 
+/* A mesh the caller built is checked before its patches are made (it used to be read as it
+ * was): normals must be there, faces in range and without a repeated vertex, numbers finite. */
+static void patches_refuse_a_broken_caller_made_mesh(void **state)
+{
+    (void)state;
+    xyl_vec3 pos[4] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    xyl_vec3 nrm[4] = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    uint32_t quad[4] = {0, 1, 2, 3};
+    xyl_mesh v = {0};
+    v.positions = pos, v.normals = nrm, v.vertex_count = 4, v.quads = quad, v.quad_count = 1;
+    xyl_tess_patches *tp = NULL;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, NULL), XYL_OK);
+    xyl_tess_patches_destroy(tp);
+    tp = (xyl_tess_patches *)(uintptr_t)1;
+    xyl_diag d = {0};
+    v.normals = NULL;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(d.index, -1);
+    v.normals = nrm;
+    quad[2] = 4;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(d.index, 0);
+    quad[2] = 1;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(d.index, 0);
+    quad[2] = 2;
+    pos[3].x = NAN;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(d.index, 3);
+    pos[3].x = 0;
+    nrm[1].z = INFINITY;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(d.index, 1);
+    assert_ptr_equal(tp, (xyl_tess_patches *)(uintptr_t)1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -719,6 +755,7 @@ int main(void)
         cmocka_unit_test(refined_adaptive_mesh_welds_into_a_closed_surface),
         cmocka_unit_test(camera_maps_target_to_the_centre_in_both_conventions),
         cmocka_unit_test(bad_input_gets_result_codes),
+        cmocka_unit_test(patches_refuse_a_broken_caller_made_mesh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -62,28 +62,17 @@ static uint32_t slot_next(const xyl_mesh *m, uint32_t h)
     return (h - q4) % 3 == 2 ? h - 2u : h + 1u;
 }
 
-/* ---- validation ----------------------------------------------------------------------------- */
+/* ---- limits ------------------------------------------------------------------------------- */
 
-/* The mesh may be a caller-built view, so it gets the checks xyl_mesh_create makes. */
-static xyl_result validate(const xyl_mesh *m, xyl_diag *diag)
+/* Slots are numbered with uint32_t. */
+static xyl_result check_limits(const xyl_mesh *m, xyl_diag *diag)
 {
-    if ((m->vertex_count && !m->positions) || (m->quad_count && !m->quads) ||
-        (m->triangle_count && !m->triangles))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "array is NULL but count is not 0");
-    /* Slots are numbered with uint32_t. */
     if ((uint64_t)m->vertex_count > MAX_CHECK_VERTICES || m->quad_count > UINT32_MAX / 4 ||
         m->triangle_count > (UINT32_MAX - 4 * m->quad_count) / 3)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%zu vertices, %zu quads and %zu triangles exceed the check's indexing",
                          m->vertex_count, m->quad_count, m->triangle_count);
-    for (size_t v = 0; v < m->vertex_count; ++v) {
-        xyl_vec3 p = m->positions[v];
-        if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
-                             "vertex %zu has a non-finite position", v);
-    }
-    return xyl__check_mesh_faces(m, diag);
+    return XYL_OK;
 }
 
 /* ---- scratch memory ------------------------------------------------------------------------- */
@@ -423,7 +412,8 @@ xyl_result xyl_mesh_check(const xyl_mesh *mesh, xyl_mesh_report *report, xyl_dia
     if (!mesh || !report)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "mesh and report must not be NULL");
-    xyl_result res = validate(mesh, diag);
+    xyl_result res = check_limits(mesh, diag);
+    if (res == XYL_OK) res = xyl__mesh_validate(mesh, XYL__MESH_FACES, diag);
     if (res) return res;
     size_t faces = mesh->quad_count + mesh->triangle_count;
     size_t slots = 4 * mesh->quad_count + 3 * mesh->triangle_count;

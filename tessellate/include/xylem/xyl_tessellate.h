@@ -88,9 +88,12 @@ typedef struct xyl_tess_patches {
     float size;                    /* largest extent of the mesh's bounding box */
 } xyl_tess_patches;
 
-/* Errors: XYL_ERR_INVALID_ARGUMENT (NULL, bad variant, a face whose vertices or normals are
- * unusable: diag.index is the face), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY. On failure *out
- * is untouched. */
+/* The mesh may be one the caller built: it needs normals, and is checked as xyl_mesh_create
+ * checks a desc. Errors: XYL_ERR_INVALID_ARGUMENT (NULL, bad variant, a NULL array with a count,
+ * a face with a vertex out of range, repeated or with a zero normal: diag.index is the face),
+ * XYL_ERR_NON_FINITE (a position or normal: diag.index is the vertex; control points that
+ * overflow: the face), XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is
+ * untouched. */
 XYL_API xyl_result xyl_tess_patches_create(const xyl_mesh *mesh, const xyl_tess_patches_desc *desc,
                                            xyl_tess_patches **out, xyl_diag *diag);
 XYL_API void xyl_tess_patches_destroy(xyl_tess_patches *patches);
