@@ -270,8 +270,8 @@ static void atomic_write_replaces_whole_files_and_reports_errors(void **state)
     char path[256];
     snprintf(path, sizeof path, "%s/out.txt", dir);
     xyl_diag d = {0};
-    assert_int_equal(xyl__write_file_atomic(path, "first", 5, &d), XYL_OK);
-    assert_int_equal(xyl__write_file_atomic(path, "second", 6, &d), XYL_OK);
+    assert_int_equal(xyl__write_file_atomic(path, "first", 5, NULL, &d), XYL_OK);
+    assert_int_equal(xyl__write_file_atomic(path, "second", 6, NULL, &d), XYL_OK);
     char *buf = NULL;
     size_t n = 0;
     assert_int_equal(xyl__read_file(path, 100, NULL, &buf, &n, &d), XYL_OK);
@@ -281,7 +281,7 @@ static void atomic_write_replaces_whole_files_and_reports_errors(void **state)
     assert_int_equal(xyl__read_file(path, 3, NULL, &buf, &n, &d), XYL_ERR_LIMIT_EXCEEDED);
     char missing[300];
     snprintf(missing, sizeof missing, "%s/no/such/dir/out.txt", dir);
-    assert_int_equal(xyl__write_file_atomic(missing, "x", 1, &d), XYL_ERR_IO);
+    assert_int_equal(xyl__write_file_atomic(missing, "x", 1, NULL, &d), XYL_ERR_IO);
     assert_non_null(strstr(d.message, "cannot create"));
     assert_int_equal(xyl__read_file(missing, 100, NULL, &buf, &n, &d), XYL_ERR_IO);
     struct stat st;

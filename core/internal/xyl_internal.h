@@ -188,8 +188,9 @@ static inline xyl__dvec3 xyl__from_f3(xyl_vec3 a)
 /* ---- files --------------------------------------------------------------------------------- */
 
 /* Writes size bytes to path through a temporary file in the same folder and a rename, so path is
- * either the old file or the complete new one. */
-xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag);
+ * either the old file or the complete new one. The temporary name comes from a. */
+xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size,
+                                  const xyl_allocator *a, xyl_diag *diag);
 /* Reads a whole file (at most max_bytes) into a NUL-terminated buffer from a; through read(2),
  * not stdio, whose buffers would come from malloc. */
 xyl_result xyl__read_file(const char *path, size_t max_bytes, const xyl_allocator *a, char **out,

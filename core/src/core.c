@@ -193,19 +193,20 @@ static void sync_parent(char *path)
     close(fd);
 }
 
-xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag)
+xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size,
+                                  const xyl_allocator *a, xyl_diag *diag)
 {
     if (!path || !*path || (!data && size))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "no output path");
     size_t plen = strlen(path);
-    char *tmp = malloc(plen + 16);
+    char *tmp = plen < SIZE_MAX - 16 ? xyl__alloc(a, plen + 16) : NULL;
     if (!tmp) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     memcpy(tmp, path, plen);
     memcpy(tmp + plen, ".tmp-XXXXXX", 12);
     int fd = mkstemp(tmp);
     if (fd < 0) {
         int e = errno;
-        free(tmp);
+        xyl__free(a, tmp);
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot create a file next to '%s': %s", path,
                          strerror(e));
     }
@@ -218,7 +219,7 @@ xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t siz
             int e = errno;
             close(fd);
             unlink(tmp);
-            free(tmp);
+            xyl__free(a, tmp);
             return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot write '%s': %s", path,
                              strerror(e));
         }
@@ -231,18 +232,18 @@ xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t siz
     if (fchmod(fd, 0666 & ~mask) != 0 || fsync(fd) != 0 || close(fd) != 0) {
         int e = errno;
         unlink(tmp);
-        free(tmp);
+        xyl__free(a, tmp);
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot finish '%s': %s", path, strerror(e));
     }
     if (rename(tmp, path) != 0) {
         int e = errno;
         unlink(tmp);
-        free(tmp);
+        xyl__free(a, tmp);
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot rename onto '%s': %s", path,
                          strerror(e));
     }
     sync_parent(tmp);
-    free(tmp);
+    xyl__free(a, tmp);
     return XYL_OK;
 }
 

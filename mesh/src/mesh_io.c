@@ -555,7 +555,7 @@ xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the %s",
                          format == XYL_MESH_FORMAT_OBJ ? "OBJ text" : "GLB");
     }
-    r = xyl__write_file_atomic(path, out.buf, out.len, diag);
+    r = xyl__write_file_atomic(path, out.buf, out.len, NULL, diag);
     xyl__free(NULL, out.buf);
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;

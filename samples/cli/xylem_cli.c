@@ -448,7 +448,7 @@ static int write_skeleton(const xyl_skeleton *sk, const char *path)
 {
     xyl_skel_format fmt = ends_with(path, ".obj") ? XYL_SKEL_FORMAT_OBJ : XYL_SKEL_FORMAT_SKEL;
     xyl_diag d = {0};
-    return written(path, xyl_skeleton_write_file(sk, path, fmt, &d), &d);
+    return written(path, xyl_skeleton_write_file(sk, path, fmt, NULL, &d), &d);
 }
 
 static int grow(const options *o, const xyl_grammar *g, const char *source, double t0)
