@@ -544,7 +544,7 @@ static void check_refined_is_closed(const xyl_mesh *r)
     xyl_mesh *w = NULL;
     assert_int_equal(xyl_mesh_create(&md, &w, NULL), XYL_OK);
     xyl_mesh_report rep;
-    assert_int_equal(xyl_mesh_check(w, &rep, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_check(w, NULL, &rep, NULL), XYL_OK);
     if (rep.boundary_edges || rep.nonmanifold_edges || rep.misoriented_edges)
         fail_msg("welded refinement: %zu boundary, %zu non-manifold, %zu misoriented edges",
                  rep.boundary_edges, rep.nonmanifold_edges, rep.misoriented_edges);

@@ -56,7 +56,7 @@ typedef struct tri_set {
     size_t capacity;     /* how many the caller wants: pairs never holds more */
     size_t total;        /* pairs found */
     bool out_of_memory;
-    const xyl_allocator *alloc; /* of the scratch and the pairs: NULL is malloc */
+    const xyl_allocator *alloc; /* of the scratch and the pairs */
 } tri_set;
 
 typedef struct p2 {
@@ -553,8 +553,7 @@ static bool find_pairs(tri_set *s, morton_entry *tmp)
 }
 
 /* Every intersecting pair of a valid mesh in one pass, into s->pairs (i << 32 | j, sorted; s->kept
- * of them); false when memory ran out, with nothing to free. Memory comes from alloc (NULL:
- * malloc). */
+ * of them); false when memory ran out, with nothing to free. Memory comes from alloc. */
 static bool all_pairs(const xyl_mesh *mesh, size_t capacity, const xyl_allocator *alloc,
                       tri_set *out)
 {
@@ -589,16 +588,17 @@ xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocato
     return XYL_OK;
 }
 
-xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs, size_t capacity,
-                                       size_t *count, xyl_diag *diag)
+xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                       uint32_t *pairs, size_t capacity, size_t *count,
+                                       xyl_diag *diag)
 {
     if (!mesh || !count || (!pairs && capacity))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "mesh and count must not be NULL, nor pairs with a capacity");
     xyl_result r = validate(mesh, diag);
     if (r) return r;
-    tri_set s; /* scratch from malloc: the call takes no allocator */
-    if (!all_pairs(mesh, capacity, NULL, &s))
+    tri_set s;
+    if (!all_pairs(mesh, capacity, alloc, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
     /* Written only now, so a failure leaves pairs and count untouched. */

@@ -42,23 +42,24 @@
 /* ==== byte sink ============================================================================== */
 
 /* Counts bytes, and also stores them when buf is set: sized by an earlier counting pass, or,
- * with cap set, grown as it goes (from the C library's allocator; overflow on failure). */
+ * with cap set, grown as it goes (from alloc; overflow on failure). */
 typedef struct sink {
     unsigned char *buf;
     size_t len;
     bool overflow; /* the output would not fit in a size_t (with room for a NUL), or memory
                       ran out */
     size_t cap;    /* 0: buf has room for everything */
+    const xyl_allocator *alloc;
 } sink;
 
 static bool sink_room(sink *s, size_t n)
 {
     size_t cap = s->cap;
     while (cap - s->len < n) cap = cap > SIZE_MAX / 2 ? SIZE_MAX : 2 * cap;
-    unsigned char *b = xyl__alloc(NULL, cap);
+    unsigned char *b = xyl__alloc(s->alloc, cap);
     if (!b) return false;
     memcpy(b, s->buf, s->len);
-    xyl__free(NULL, s->buf);
+    xyl__free(s->alloc, s->buf);
     s->buf = b;
     s->cap = cap;
     return true;
@@ -423,7 +424,7 @@ static xyl_result size_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
 static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
 {
     if (m->vertex_count) position_bounds(m, l);
-    sink count = {NULL, 0, false, 0};
+    sink count = {NULL, 0, false, 0, NULL};
     render_json(l, &count);
     l->json_len = count.len;
     l->total = glb_total(l);
@@ -465,7 +466,8 @@ static bool format_ok(xyl_mesh_format format)
 }
 
 /* On success the plan may hold the split mesh (plan_free); on failure it holds nothing. */
-static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xyl_diag *diag)
+static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, const xyl_allocator *alloc,
+                          plan *p, xyl_diag *diag)
 {
     p->format = format;
     p->split = NULL;
@@ -474,8 +476,7 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
     xyl_result r = glb ? size_glb(m, &p->glb, diag) : XYL_OK;
     if (r == XYL_OK) r = xyl__mesh_validate(m, WRITER_READS, diag);
     if (r == XYL_OK && glb) r = check_float_ids(m, diag);
-    /* the view may be the caller's own, so the C library's allocator is used, not the mesh's */
-    if (r == XYL_OK && has_wraps(m)) r = xyl__mesh_split_seams(m, NULL, &p->split, diag);
+    if (r == XYL_OK && has_wraps(m)) r = xyl__mesh_split_seams(m, alloc, &p->split, diag);
     /* the split only adds vertices: its GLB is sized again */
     if (r == XYL_OK && glb && p->split) r = size_glb(p->split, &p->glb, diag);
     if (r == XYL_OK && glb) r = plan_glb(uv_mesh(m, p), &p->glb, diag);
@@ -489,7 +490,7 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
 static xyl_result size_output(const xyl_mesh *m, plan *p)
 {
     if (p->format == XYL_MESH_FORMAT_GLB) return XYL_OK;
-    sink count = {NULL, 0, false, 0};
+    sink count = {NULL, 0, false, 0, NULL};
     render_obj(m, uv_mesh(m, p), &count);
     p->size = count.len;
     if (!count.overflow) return XYL_OK;
@@ -500,7 +501,7 @@ static xyl_result size_output(const xyl_mesh *m, plan *p)
 /* Writes exactly p->size bytes (and a NUL after OBJ text, whose room the caller checked). */
 static void emit(const xyl_mesh *m, const plan *p, unsigned char *out)
 {
-    sink fill = {out, 0, false, 0};
+    sink fill = {out, 0, false, 0, NULL};
     if (p->format == XYL_MESH_FORMAT_GLB) {
         emit_glb(uv_mesh(m, p), &p->glb, &fill);
     } else {
@@ -510,12 +511,13 @@ static void emit(const xyl_mesh *m, const plan *p, unsigned char *out)
     assert(!fill.overflow && fill.len == p->size);
 }
 
-xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, void *buffer,
-                                 size_t capacity, size_t *needed)
+xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format,
+                                 const xyl_allocator *alloc, void *buffer, size_t capacity,
+                                 size_t *needed)
 {
     if (!mesh || !format_ok(format) || (!buffer && !needed)) return XYL_ERR_INVALID_ARGUMENT;
     plan p;
-    xyl_result r = prepare(mesh, format, &p, NULL);
+    xyl_result r = prepare(mesh, format, alloc, &p, NULL);
     if (r == XYL_OK) r = size_output(mesh, &p);
     if (r != XYL_OK) return r;
     if (needed) *needed = p.size;
@@ -528,7 +530,7 @@ xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, v
 }
 
 xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_format format,
-                               xyl_diag *diag)
+                               const xyl_allocator *alloc, xyl_diag *diag)
 {
     if (!mesh || !path || !*path || !format_ok(format))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -536,27 +538,26 @@ xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_
     /* OBJ text is rendered once, into a buffer that grows, not counted first: formatting the
      * floats is most of its cost */
     plan p;
-    xyl_result r = prepare(mesh, format, &p, diag);
+    xyl_result r = prepare(mesh, format, alloc, &p, diag);
     if (r != XYL_OK) return r;
-    /* The view may be the caller's own, so the C library's allocator is used, not the mesh's. */
-    sink out = {NULL, 0, false, 0};
+    sink out = {NULL, 0, false, 0, alloc};
     if (format == XYL_MESH_FORMAT_OBJ) {
         out.cap = (size_t)1 << 16;
-        out.buf = xyl__alloc(NULL, out.cap);
+        out.buf = xyl__alloc(alloc, out.cap);
         if (out.buf) render_obj(mesh, uv_mesh(mesh, &p), &out);
     } else {
-        out.buf = xyl__alloc(NULL, p.size + 1);
+        out.buf = xyl__alloc(alloc, p.size + 1);
         if (out.buf) emit(mesh, &p, out.buf);
         out.len = p.size;
     }
     plan_free(&p);
     if (!out.buf || out.overflow) {
-        xyl__free(NULL, out.buf);
+        xyl__free(alloc, out.buf);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the %s",
                          format == XYL_MESH_FORMAT_OBJ ? "OBJ text" : "GLB");
     }
-    r = xyl__write_file_atomic(path, out.buf, out.len, NULL, diag);
-    xyl__free(NULL, out.buf);
+    r = xyl__write_file_atomic(path, out.buf, out.len, alloc, diag);
+    xyl__free(alloc, out.buf);
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }

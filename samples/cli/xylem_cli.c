@@ -521,7 +521,7 @@ static int write_mesh(const xyl_mesh *m, const char *path)
 {
     xyl_mesh_format fmt = ends_with(path, ".obj") ? XYL_MESH_FORMAT_OBJ : XYL_MESH_FORMAT_GLB;
     xyl_diag d = {0};
-    return written(path, xyl_mesh_write_file(m, path, fmt, &d), &d);
+    return written(path, xyl_mesh_write_file(m, path, fmt, NULL, &d), &d);
 }
 
 static int cmd_mesh(const options *o)
