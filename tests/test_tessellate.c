@@ -568,7 +568,7 @@ static void refined_adaptive_mesh_welds_into_a_closed_surface(void **state)
         assert_int_equal(xyl_tess_select(tp, pat, &view, &b, NULL), XYL_OK);
         assert_true(b.cmd_count >= 3);
         xyl_mesh *r = NULL;
-        assert_int_equal(xyl_tess_refine(tp, pat, &b, NULL, &r, NULL), XYL_OK);
+        assert_int_equal(xyl_tess_refine(tp, pat, &b, NULL, NULL, &r, NULL), XYL_OK);
         assert_int_equal(r->vertex_count, b.vertices);
         assert_int_equal(r->triangle_count, b.triangles);
         check_refined_is_closed(r);
@@ -576,7 +576,8 @@ static void refined_adaptive_mesh_welds_into_a_closed_surface(void **state)
         xyl_mesh_limits lim = {0};
         lim.max_vertices = b.vertices - 1;
         xyl_mesh *none = (xyl_mesh *)(uintptr_t)1;
-        assert_int_equal(xyl_tess_refine(tp, pat, &b, &lim, &none, NULL), XYL_ERR_LIMIT_EXCEEDED);
+        assert_int_equal(xyl_tess_refine(tp, pat, &b, &lim, NULL, &none, NULL),
+                         XYL_ERR_LIMIT_EXCEEDED);
         assert_ptr_equal(none, (xyl_mesh *)(uintptr_t)1);
         xyl_mesh_destroy(r);
         xyl_tess_batches_free(&b);

@@ -626,7 +626,8 @@ static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_
  * level 1, where a patch shows exactly its three corners (a plain triangle). */
 static xyl_result refine_on_cpu(render_job *j, xyl_diag *d)
 {
-    xyl_result r = xyl_tess_refine(j->patches, j->patterns, &j->batches, NULL, &j->refined, d);
+    xyl_result r = xyl_tess_refine(j->patches, j->patterns, &j->batches, NULL, NULL,
+                                   &j->refined, d);
     if (r == XYL_OK) r = xyl_tess_patches_create(j->refined, NULL, &j->drawn, d);
     return r;
 }

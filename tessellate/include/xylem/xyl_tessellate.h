@@ -181,12 +181,14 @@ XYL_API uint32_t xyl_tess_level_for(float coefficient, float distance, const xyl
  * each instance's pattern vertices in instance order (not welded across patches: the shared
  * edges' points are bit-identical, so xyl_mesh_check-style welding by position is exact), the
  * patterns' triangles. Drawing it as plain triangles is the "cpu" path of `xylem render`.
- * Errors: XYL_ERR_INVALID_ARGUMENT (instances that do not match the patches or patterns),
- * XYL_ERR_LIMIT_EXCEEDED (limits: default 2^26 vertices and faces), XYL_ERR_OUT_OF_MEMORY. */
+ * limits may be NULL (defaults); alloc may be NULL (the default allocator), else the mesh and
+ * the call's scratch come from it. Errors: XYL_ERR_INVALID_ARGUMENT (instances that do not
+ * match the patches or patterns), XYL_ERR_LIMIT_EXCEEDED (limits: default 2^26 vertices and
+ * faces), XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_tess_refine(const xyl_tess_patches *patches,
                                    const xyl_tess_patterns *patterns,
                                    const xyl_tess_batches *batches, const xyl_mesh_limits *limits,
-                                   xyl_mesh **out, xyl_diag *diag);
+                                   const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag);
 
 /* ---- cameras and GPU readback (shared by the GL and Vulkan backends) ------------------------ */
 
