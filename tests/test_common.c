@@ -177,29 +177,44 @@ static int keyed_order(const void *pa, const void *pb)
     return x->a != y->a ? (x->a < y->a ? -1 : 1) : (x->b > y->b) - (x->b < y->b);
 }
 
-/* xyl__sort gives what qsort gives, for any length, with and without repeated keys. */
+/* A test array of n keys: random with repeats, ascending, descending, all equal, or rising then
+ * falling (the shapes that unbalance a quicksort's partitions). */
+static uint64_t sort_key(int shape, size_t i, size_t n, uint64_t *seed)
+{
+    *seed = *seed * 6364136223846793005ull + 1442695040888963407ull;
+    switch (shape) {
+    case 0: return (*seed >> 33) % (n / 2 + 1);
+    case 1: return i;
+    case 2: return n - i;
+    case 3: return 7;
+    default: return i < n / 2 ? i : n - i;
+    }
+}
+
+/* xyl__sort gives what qsort gives, for any length and shape, with and without repeated keys,
+ * for 8-byte elements and 12-byte ones (ordered by all their words, ties told apart). */
 static void sort_orders_like_qsort(void **state)
 {
     (void)state;
-    enum { N = 700 };
+    enum { N = 5000 };
     static uint64_t a[N], b[N];
     static keyed ka[N], kb[N];
     uint64_t seed = 11;
-    for (size_t n = 0; n <= N; n = n < 40 ? n + 1 : n * 2 + 3) {
-        size_t len = n < N ? n : N;
-        for (size_t i = 0; i < len; ++i) {
-            seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-            a[i] = b[i] = (seed >> 33) % (n / 2 + 1);
-            ka[i] = (keyed){(uint32_t)(seed >> 60), (uint32_t)(seed >> 40) & 7u, (uint32_t)i};
-            kb[i] = ka[i];
+    for (int shape = 0; shape < 5; ++shape)
+        for (size_t n = 0; n <= N; n = n < 40 ? n + 1 : n * 2 + 3) {
+            size_t len = n < N ? n : N;
+            for (size_t i = 0; i < len; ++i) {
+                a[i] = b[i] = sort_key(shape, i, len, &seed);
+                ka[i] = (keyed){(uint32_t)a[i], (uint32_t)(seed >> 40) & 7u, (uint32_t)i};
+                kb[i] = ka[i];
+            }
+            xyl__sort(a, len, sizeof a[0], u64_order);
+            qsort(b, len, sizeof b[0], u64_order);
+            assert_memory_equal(a, b, len * sizeof a[0]);
+            xyl__sort(ka, len, sizeof ka[0], keyed_order);
+            qsort(kb, len, sizeof kb[0], keyed_order);
+            assert_memory_equal(ka, kb, len * sizeof ka[0]);
         }
-        xyl__sort(a, len, sizeof a[0], u64_order);
-        qsort(b, len, sizeof b[0], u64_order);
-        assert_memory_equal(a, b, len * sizeof a[0]);
-        xyl__sort(ka, len, sizeof ka[0], keyed_order);
-        qsort(kb, len, sizeof kb[0], keyed_order);
-        assert_memory_equal(ka, kb, len * sizeof ka[0]);
-    }
 }
 
 static void normalising_a_zero_or_nan_vector_gives_the_fallback(void **state)

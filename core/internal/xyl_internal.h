@@ -79,8 +79,8 @@ static inline void *xyl__alloc_array(const xyl_allocator *a, size_t count, size_
 }
 
 /* Sorts n elements of size bytes in place by cmp, as qsort does but without allocating (the C
- * library's qsort may take a buffer from malloc, past the caller's allocator). A heapsort, so
- * not stable: cmp must order every two elements that are not interchangeable. */
+ * library's qsort may take a buffer from malloc, past the caller's allocator). An introsort,
+ * O(n log n) and not stable: cmp must order every two elements that are not interchangeable. */
 void xyl__sort(void *base, size_t n, size_t size, int (*cmp)(const void *, const void *));
 
 /* ---- diagnostics --------------------------------------------------------------------------- */

@@ -58,35 +58,97 @@ bool xyl__grow_slow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used
 
 /* ---- sorting ------------------------------------------------------------------------------ */
 
-static void swap_bytes(unsigned char *a, unsigned char *b, size_t size)
+typedef int (*cmp_fn)(const void *, const void *);
+
+/* Elements are moved word by word where their size allows (the sorts' elements are 8 or 16
+ * bytes). */
+static void swap_elems(unsigned char *a, unsigned char *b, size_t size)
 {
-    for (size_t i = 0; i < size; ++i) {
+    size_t i = 0;
+    for (; i + 8 <= size; i += 8) {
+        uint64_t x, y;
+        memcpy(&x, a + i, 8);
+        memcpy(&y, b + i, 8);
+        memcpy(a + i, &y, 8);
+        memcpy(b + i, &x, 8);
+    }
+    for (; i < size; ++i) {
         unsigned char t = a[i];
         a[i] = b[i];
         b[i] = t;
     }
 }
 
+static void insertion_sort(unsigned char *b, size_t n, size_t size, cmp_fn cmp)
+{
+    for (size_t i = 1; i < n; ++i)
+        for (size_t j = i; j > 0 && cmp(b + (j - 1) * size, b + j * size) > 0; --j)
+            swap_elems(b + (j - 1) * size, b + j * size, size);
+}
+
 /* Moves the element at root down the max-heap of the first n elements. */
-static void sift_down(unsigned char *base, size_t root, size_t n, size_t size,
-                      int (*cmp)(const void *, const void *))
+static void sift_down(unsigned char *b, size_t root, size_t n, size_t size, cmp_fn cmp)
 {
     for (size_t child; (child = 2 * root + 1) < n; root = child) {
-        if (child + 1 < n && cmp(base + child * size, base + (child + 1) * size) < 0) ++child;
-        if (cmp(base + root * size, base + child * size) >= 0) return;
-        swap_bytes(base + root * size, base + child * size, size);
+        if (child + 1 < n && cmp(b + child * size, b + (child + 1) * size) < 0) ++child;
+        if (cmp(b + root * size, b + child * size) >= 0) return;
+        swap_elems(b + root * size, b + child * size, size);
     }
+}
+
+static void heap_sort(unsigned char *b, size_t n, size_t size, cmp_fn cmp)
+{
+    for (size_t i = n / 2; i-- > 0;) sift_down(b, i, n, size, cmp);
+    for (size_t end = n - 1; end > 0; --end) {
+        swap_elems(b, b + end * size, size);
+        sift_down(b, 0, end, size, cmp);
+    }
+}
+
+/* Introsort: quicksort with the median of three as pivot, insertion sort for short runs, and
+ * heapsort where the partitions stay unbalanced (depth), so O(n log n) always. */
+static void intro_sort(unsigned char *b, size_t n, size_t size, cmp_fn cmp, unsigned depth)
+{
+    while (n > 12) {
+        if (depth-- == 0) {
+            heap_sort(b, n, size, cmp);
+            return;
+        }
+        unsigned char *mid = b + n / 2 * size, *last = b + (n - 1) * size;
+        if (cmp(mid, b) < 0) swap_elems(mid, b, size);
+        if (cmp(last, mid) < 0) {
+            swap_elems(last, mid, size);
+            if (cmp(mid, b) < 0) swap_elems(mid, b, size);
+        }
+        swap_elems(b, mid, size); /* the pivot to the front; last (>= it) stops the scan up */
+        size_t i = 0, j = n;
+        for (;;) {
+            do ++i;
+            while (cmp(b + i * size, b) < 0);
+            do --j;
+            while (cmp(b + j * size, b) > 0);
+            if (i >= j) break;
+            swap_elems(b + i * size, b + j * size, size);
+        }
+        swap_elems(b, b + j * size, size); /* [0, j) <= pivot = [j] <= (j, n) */
+        size_t right = n - j - 1;
+        if (j < right) {
+            intro_sort(b, j, size, cmp, depth);
+            b += (j + 1) * size;
+            n = right;
+        } else {
+            intro_sort(b + (j + 1) * size, right, size, cmp, depth);
+            n = j;
+        }
+    }
+    insertion_sort(b, n, size, cmp);
 }
 
 void xyl__sort(void *base, size_t n, size_t size, int (*cmp)(const void *, const void *))
 {
-    unsigned char *b = base;
-    if (n < 2) return;
-    for (size_t i = n / 2; i-- > 0;) sift_down(b, i, n, size, cmp);
-    for (size_t end = n - 1; end > 0; --end) {
-        swap_bytes(b, b + end * size, size);
-        sift_down(b, 0, end, size, cmp);
-    }
+    unsigned depth = 0;
+    for (size_t m = n; m > 1; m >>= 1) depth += 2;
+    intro_sort(base, n, size, cmp, depth);
 }
 
 /* ---- diagnostics --------------------------------------------------------------------------- */
