@@ -104,7 +104,7 @@ static void check_mesh(const xyl_skeleton *sk, uint32_t sides)
     if (r == XYL_ERR_LIMIT_EXCEEDED) return;
     check(r == XYL_OK);
     xyl_mesh_report rep;
-    check(xyl_mesh_check(m, &rep, NULL) == XYL_OK);
+    check(xyl_mesh_check(m, NULL, &rep, NULL) == XYL_OK);
     check(rep.boundary_edges == 0 && rep.nonmanifold_edges == 0 && rep.misoriented_edges == 0);
     check(rep.nonmanifold_vertices == 0 && rep.duplicate_faces == 0);
     check(rep.euler == 2 * (int64_t)sk->root_count && rep.components == sk->root_count);

@@ -159,6 +159,64 @@ static void big_blocks_survive_threads(void **state)
     xyl_memory_trim();
 }
 
+static int u64_order(const void *pa, const void *pb)
+{
+    uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+    return (a > b) - (a < b);
+}
+
+/* 12-byte elements ordered by their first word only: ties are told apart by the rest. */
+typedef struct keyed {
+    uint32_t key, a, b;
+} keyed;
+
+static int keyed_order(const void *pa, const void *pb)
+{
+    const keyed *x = pa, *y = pb;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->a != y->a ? (x->a < y->a ? -1 : 1) : (x->b > y->b) - (x->b < y->b);
+}
+
+/* A test array of n keys: random with repeats, ascending, descending, all equal, or rising then
+ * falling (the shapes that unbalance a quicksort's partitions). */
+static uint64_t sort_key(int shape, size_t i, size_t n, uint64_t *seed)
+{
+    *seed = *seed * 6364136223846793005ull + 1442695040888963407ull;
+    switch (shape) {
+    case 0: return (*seed >> 33) % (n / 2 + 1);
+    case 1: return i;
+    case 2: return n - i;
+    case 3: return 7;
+    default: return i < n / 2 ? i : n - i;
+    }
+}
+
+/* xyl__sort gives what qsort gives, for any length and shape, with and without repeated keys,
+ * for 8-byte elements and 12-byte ones (ordered by all their words, ties told apart). */
+static void sort_orders_like_qsort(void **state)
+{
+    (void)state;
+    enum { N = 5000 };
+    static uint64_t a[N], b[N];
+    static keyed ka[N], kb[N];
+    uint64_t seed = 11;
+    for (int shape = 0; shape < 5; ++shape)
+        for (size_t n = 0; n <= N; n = n < 40 ? n + 1 : n * 2 + 3) {
+            size_t len = n < N ? n : N;
+            for (size_t i = 0; i < len; ++i) {
+                a[i] = b[i] = sort_key(shape, i, len, &seed);
+                ka[i] = (keyed){(uint32_t)a[i], (uint32_t)(seed >> 40) & 7u, (uint32_t)i};
+                kb[i] = ka[i];
+            }
+            xyl__sort(a, len, sizeof a[0], u64_order);
+            qsort(b, len, sizeof b[0], u64_order);
+            assert_memory_equal(a, b, len * sizeof a[0]);
+            xyl__sort(ka, len, sizeof ka[0], keyed_order);
+            qsort(kb, len, sizeof kb[0], keyed_order);
+            assert_memory_equal(ka, kb, len * sizeof ka[0]);
+        }
+}
+
 static void normalising_a_zero_or_nan_vector_gives_the_fallback(void **state)
 {
     (void)state;
@@ -227,8 +285,8 @@ static void atomic_write_replaces_whole_files_and_reports_errors(void **state)
     char path[256];
     snprintf(path, sizeof path, "%s/out.txt", dir);
     xyl_diag d = {0};
-    assert_int_equal(xyl__write_file_atomic(path, "first", 5, &d), XYL_OK);
-    assert_int_equal(xyl__write_file_atomic(path, "second", 6, &d), XYL_OK);
+    assert_int_equal(xyl__write_file_atomic(path, "first", 5, NULL, &d), XYL_OK);
+    assert_int_equal(xyl__write_file_atomic(path, "second", 6, NULL, &d), XYL_OK);
     char *buf = NULL;
     size_t n = 0;
     assert_int_equal(xyl__read_file(path, 100, NULL, &buf, &n, &d), XYL_OK);
@@ -238,7 +296,7 @@ static void atomic_write_replaces_whole_files_and_reports_errors(void **state)
     assert_int_equal(xyl__read_file(path, 3, NULL, &buf, &n, &d), XYL_ERR_LIMIT_EXCEEDED);
     char missing[300];
     snprintf(missing, sizeof missing, "%s/no/such/dir/out.txt", dir);
-    assert_int_equal(xyl__write_file_atomic(missing, "x", 1, &d), XYL_ERR_IO);
+    assert_int_equal(xyl__write_file_atomic(missing, "x", 1, NULL, &d), XYL_ERR_IO);
     assert_non_null(strstr(d.message, "cannot create"));
     assert_int_equal(xyl__read_file(missing, 100, NULL, &buf, &n, &d), XYL_ERR_IO);
     struct stat st;
@@ -256,6 +314,7 @@ int main(void)
         cmocka_unit_test(grow_and_calloc_refuse_overflowing_sizes),
         cmocka_unit_test(big_blocks_are_zeroed_reused_bounded_and_trimmed),
         cmocka_unit_test(big_blocks_survive_threads),
+        cmocka_unit_test(sort_orders_like_qsort),
         cmocka_unit_test(normalising_a_zero_or_nan_vector_gives_the_fallback),
         cmocka_unit_test(any_orthogonal_is_unit_and_orthogonal_everywhere),
         cmocka_unit_test(rotation_preserves_length_and_turns_by_the_angle),

@@ -215,7 +215,7 @@ static xyl_mesh_report check(const builder *b)
     xyl_mesh_report rep;
     xyl_diag diag;
     memset(&diag, 0, sizeof diag);
-    assert_int_equal(xyl_mesh_check(m, &rep, &diag), XYL_OK);
+    assert_int_equal(xyl_mesh_check(m, NULL, &rep, &diag), XYL_OK);
     assert_int_equal(diag.code, XYL_OK);
     xyl_mesh_destroy(m);
     return rep;
@@ -226,7 +226,7 @@ static size_t intersections(const builder *b, uint32_t *out, size_t cap)
 {
     xyl_mesh *m = make_mesh(b);
     size_t count = 12345;
-    assert_int_equal(xyl_mesh_self_intersections(m, out, cap, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, out, cap, &count, NULL), XYL_OK);
     xyl_mesh_destroy(m);
     return count;
 }
@@ -355,11 +355,11 @@ static size_t assert_pairs_match_reference(const builder *b)
 {
     xyl_mesh *m = make_mesh(b);
     size_t n = m->tri_view_count, count = 0, expected = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, &count, NULL), XYL_OK);
     uint32_t *pairs = malloc(2 * (count + 1) * sizeof *pairs);
     assert_non_null(pairs);
     size_t again = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &again, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, pairs, count, &again, NULL), XYL_OK);
     assert_int_equal(again, count);
     for (uint32_t i = 0; i < n; ++i)
         for (uint32_t j = i + 1; j < n; ++j) {
@@ -928,9 +928,9 @@ static void check_rejects_null_arguments(void **state)
     xyl_mesh *m = make_mesh(&b);
     xyl_mesh_report r;
     xyl_diag diag = fresh_diag();
-    assert_int_equal(xyl_mesh_check(NULL, &r, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_mesh_check(NULL, NULL, &r, &diag), XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(diag.code, XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_check(m, NULL, NULL), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_mesh_check(m, NULL, NULL, NULL), XYL_ERR_INVALID_ARGUMENT);
     xyl_mesh_destroy(m);
     builder_free(&b);
 }
@@ -941,7 +941,7 @@ static void expect_check_error(const xyl_mesh *view, xyl_result code, int64_t in
     xyl_mesh_report r;
     memset(&r, 0xAB, sizeof r);
     xyl_diag diag = fresh_diag();
-    assert_int_equal(xyl_mesh_check(view, &r, &diag), code);
+    assert_int_equal(xyl_mesh_check(view, NULL, &r, &diag), code);
     assert_int_equal(diag.code, code);
     assert_int_equal(diag.index, index);
     assert_true(strlen(diag.message) > 0);
@@ -964,7 +964,7 @@ static void check_validates_a_caller_made_view(void **state)
     view.triangles = b.tris;
     view.triangle_count = b.nt;
     xyl_mesh_report r;
-    assert_int_equal(xyl_mesh_check(&view, &r, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_check(&view, NULL, &r, NULL), XYL_OK);
     b.tris[1] = 8;
     expect_check_error(&view, XYL_ERR_INVALID_ARGUMENT, 6);
     b.tris[1] = 0;
@@ -975,6 +975,56 @@ static void check_validates_a_caller_made_view(void **state)
     b.pos[4].x = 0;
     view.quads = NULL;
     expect_check_error(&view, XYL_ERR_INVALID_ARGUMENT, -1);
+    builder_free(&b);
+}
+
+/* A view with normals and UVs (now checked wherever they are given: finite, as in a desc) must
+ * be refused by the check, the intersection test and the seam split, naming the vertex. */
+static void calls_refuse_a_view_with_a_non_finite_normal_or_uv(void **state)
+{
+    (void)state;
+    builder b = {0};
+    add_cube(&b, 0, 0, 0, 1);
+    xyl_mesh *m = make_mesh(&b);
+    xyl_vec3 normals[8];
+    float uvs[16];
+    memcpy(normals, m->normals, sizeof normals);
+    memcpy(uvs, m->uvs, sizeof uvs);
+    xyl_mesh view = *m;
+    view.normals = normals;
+    view.uvs = uvs;
+    for (int bad = 0; bad < 3; ++bad) {
+        normals[3].y = bad == 0 ? NAN : m->normals[3].y;
+        uvs[2 * 5 + 1] = bad == 1 ? INFINITY : m->uvs[2 * 5 + 1];
+        int64_t vertex = bad == 0 ? 3 : 5;
+        xyl_result want = bad < 2 ? XYL_ERR_NON_FINITE : XYL_OK;
+        xyl_mesh_report r;
+        size_t count = 77;
+        xyl_mesh *split = UNTOUCHED;
+        xyl_diag diag = fresh_diag();
+        assert_int_equal(xyl_mesh_check(&view, NULL, &r, &diag), want);
+        if (want) assert_int_equal(diag.index, vertex);
+        diag = fresh_diag();
+        assert_int_equal(xyl_mesh_self_intersections(&view, NULL, NULL, 0, &count, &diag), want);
+        if (want) assert_int_equal(diag.index, vertex);
+        if (want) assert_int_equal(count, 77);
+        diag = fresh_diag();
+        assert_int_equal(xyl_mesh_split_seams(&view, NULL, &split, &diag), want);
+        if (want) assert_int_equal(diag.index, vertex);
+        if (want) assert_ptr_equal(split, UNTOUCHED);
+        else xyl_mesh_destroy(split);
+    }
+    /* the seam split reads every array, so it is refused a non-finite position too */
+    xyl_vec3 pos[8];
+    memcpy(pos, m->positions, sizeof pos);
+    pos[6].z = -INFINITY;
+    view.positions = pos;
+    xyl_mesh *split = UNTOUCHED;
+    xyl_diag diag = fresh_diag();
+    assert_int_equal(xyl_mesh_split_seams(&view, NULL, &split, &diag), XYL_ERR_NON_FINITE);
+    assert_int_equal(diag.index, 6);
+    assert_ptr_equal(split, UNTOUCHED);
+    xyl_mesh_destroy(m);
     builder_free(&b);
 }
 
@@ -1032,7 +1082,7 @@ static void self_intersections_find_a_fold_between_triangles_that_share_a_vertex
     uint32_t *pairs = malloc(2 * n * sizeof *pairs);
     assert_non_null(pairs);
     size_t count = 0, one_shared = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, pairs, n, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, pairs, n, &count, NULL), XYL_OK);
     for (size_t k = 0; k < count; ++k) {
         const uint32_t *a = m->tri_view + 3 * pairs[2 * k], *c = m->tri_view + 3 * pairs[2 * k + 1];
         int shared = 0;
@@ -1346,11 +1396,12 @@ static void self_intersections_reject_bad_arguments(void **state)
     xyl_mesh *m = make_mesh(&b);
     size_t count = 77;
     xyl_diag diag = fresh_diag();
-    assert_int_equal(xyl_mesh_self_intersections(NULL, NULL, 0, &count, &diag),
+    assert_int_equal(xyl_mesh_self_intersections(NULL, NULL, NULL, 0, &count, &diag),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(diag.code, XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, NULL, NULL), XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 4, &count, NULL),
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, NULL, NULL),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 4, &count, NULL),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(count, 77);
     /* A caller-made view with a bad index or position. */
@@ -1359,7 +1410,7 @@ static void self_intersections_reject_bad_arguments(void **state)
     view.tri_view = tv;
     view.tri_view_count = 1;
     diag = fresh_diag();
-    assert_int_equal(xyl_mesh_self_intersections(&view, NULL, 0, &count, &diag),
+    assert_int_equal(xyl_mesh_self_intersections(&view, NULL, NULL, 0, &count, &diag),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(diag.index, 0);
     tv[2] = 2;
@@ -1367,7 +1418,7 @@ static void self_intersections_reject_bad_arguments(void **state)
     memcpy(pos, m->positions, sizeof pos);
     pos[1].y = NAN;
     view.positions = pos;
-    assert_int_equal(xyl_mesh_self_intersections(&view, NULL, 0, &count, &diag),
+    assert_int_equal(xyl_mesh_self_intersections(&view, NULL, NULL, 0, &count, &diag),
                      XYL_ERR_NON_FINITE);
     assert_int_equal(diag.index, 1);
     assert_int_equal(count, 77);
@@ -1383,12 +1434,12 @@ static void a_bumpy_sphere_of_100k_triangles_is_closed_and_free_of_intersections
     xyl_mesh *m = make_mesh(&b);
     assert_true(m->tri_view_count > 100000);
     xyl_mesh_report r;
-    assert_int_equal(xyl_mesh_check(m, &r, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_check(m, NULL, &r, NULL), XYL_OK);
     assert_int_equal(r.euler, 2);
     assert_int_equal(r.components, 1);
     assert_closed(&r);
     size_t count = 1;
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, &count, NULL), XYL_OK);
     assert_int_equal(count, 0);
     xyl_mesh_destroy(m);
     builder_free(&b);
@@ -1485,6 +1536,7 @@ int main(void)
         cmocka_unit_test(check_of_an_empty_mesh_is_all_zero),
         cmocka_unit_test(check_rejects_null_arguments),
         cmocka_unit_test(check_validates_a_caller_made_view),
+        cmocka_unit_test(calls_refuse_a_view_with_a_non_finite_normal_or_uv),
         cmocka_unit_test(self_intersections_of_a_cube_are_none),
         cmocka_unit_test(self_intersections_of_a_torus_are_none),
         cmocka_unit_test(self_intersections_of_interpenetrating_cubes_are_genuine),

@@ -227,12 +227,12 @@ static xyl_mesh *sloppy_normals(void)
 static unsigned char *write_alloc(const xyl_mesh *m, xyl_mesh_format f, size_t *len)
 {
     size_t need = 0;
-    xyl_result r = xyl_mesh_write_memory(m, f, NULL, 0, &need);
+    xyl_result r = xyl_mesh_write_memory(m, f, NULL, NULL, 0, &need);
     if (r != XYL_OK) fail_msg("count pass: %s", xyl_result_string(r));
     unsigned char *buf = malloc(need + 1);
     assert_non_null(buf);
     size_t again = 0;
-    assert_int_equal(xyl_mesh_write_memory(m, f, buf, need + 1, &again), XYL_OK);
+    assert_int_equal(xyl_mesh_write_memory(m, f, NULL, buf, need + 1, &again), XYL_OK);
     assert_int_equal(again, need);
     *len = need;
     return buf;
@@ -576,9 +576,9 @@ static void glb_rejects_vertices_without_faces(void **state)
     mesh_spec s = {CUBE_POS, NULL, NULL, NULL, 8, NULL, 0, NULL, 0, NULL};
     xyl_mesh *m = build(&s);
     size_t need = 0;
-    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, 0, &need),
+    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &need),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_OBJ, NULL, 0, &need), XYL_OK);
+    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_OBJ, NULL, NULL, 0, &need), XYL_OK);
     xyl_mesh_destroy(m);
 }
 
@@ -636,18 +636,18 @@ static void count_then_fill_refuses_a_small_buffer_untouched(void **state)
     for (int f = 0; f < 2; ++f) {
         xyl_mesh_format fmt = (xyl_mesh_format)f;
         size_t need = 0, again = 0;
-        assert_int_equal(xyl_mesh_write_memory(m, fmt, NULL, 0, &need), XYL_OK);
+        assert_int_equal(xyl_mesh_write_memory(m, fmt, NULL, NULL, 0, &need), XYL_OK);
         assert_true(need > 0);
         /* OBJ is text and needs room for its NUL; GLB is exactly need bytes. */
         size_t exact = fmt == XYL_MESH_FORMAT_OBJ ? need + 1 : need;
         unsigned char *buf = malloc(exact + 8);
         assert_non_null(buf);
         memset(buf, 0xAB, exact + 8);
-        assert_int_equal(xyl_mesh_write_memory(m, fmt, buf, exact - 1, &again),
+        assert_int_equal(xyl_mesh_write_memory(m, fmt, NULL, buf, exact - 1, &again),
                          XYL_ERR_INVALID_ARGUMENT);
         assert_int_equal(again, need);
         for (size_t i = 0; i < exact + 8; ++i) assert_int_equal(buf[i], 0xAB);
-        assert_int_equal(xyl_mesh_write_memory(m, fmt, buf, exact, NULL), XYL_OK);
+        assert_int_equal(xyl_mesh_write_memory(m, fmt, NULL, buf, exact, NULL), XYL_OK);
         for (size_t i = exact; i < exact + 8; ++i) assert_int_equal(buf[i], 0xAB);
         if (fmt == XYL_MESH_FORMAT_OBJ) assert_int_equal(buf[need], '\0');
         else assert_int_equal(le32(buf + 8), need);
@@ -662,13 +662,13 @@ static void write_memory_rejects_bad_arguments(void **state)
     xyl_mesh *m = cube();
     size_t need = 7;
     char buf[16];
-    assert_int_equal(xyl_mesh_write_memory(NULL, XYL_MESH_FORMAT_OBJ, NULL, 0, &need),
+    assert_int_equal(xyl_mesh_write_memory(NULL, XYL_MESH_FORMAT_OBJ, NULL, NULL, 0, &need),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_OBJ, NULL, 0, NULL),
+    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_OBJ, NULL, NULL, 0, NULL),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_memory(m, (xyl_mesh_format)2, NULL, 0, &need),
+    assert_int_equal(xyl_mesh_write_memory(m, (xyl_mesh_format)2, NULL, NULL, 0, &need),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_memory(m, (xyl_mesh_format)-1, buf, sizeof buf, &need),
+    assert_int_equal(xyl_mesh_write_memory(m, (xyl_mesh_format)-1, NULL, buf, sizeof buf, &need),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(need, 7);
     xyl_mesh_destroy(m);
@@ -732,8 +732,9 @@ static xyl_mesh cube_view(view_store *st)
 static void expect_both(const xyl_mesh *v, xyl_result obj, xyl_result glb_result)
 {
     size_t need = 0;
-    assert_int_equal(xyl_mesh_write_memory(v, XYL_MESH_FORMAT_OBJ, NULL, 0, &need), obj);
-    assert_int_equal(xyl_mesh_write_memory(v, XYL_MESH_FORMAT_GLB, NULL, 0, &need), glb_result);
+    assert_int_equal(xyl_mesh_write_memory(v, XYL_MESH_FORMAT_OBJ, NULL, NULL, 0, &need), obj);
+    assert_int_equal(xyl_mesh_write_memory(v, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &need),
+                     glb_result);
 }
 
 static void views_with_non_finite_numbers_are_refused(void **state)
@@ -755,7 +756,8 @@ static void views_with_non_finite_numbers_are_refused(void **state)
     snprintf(path, sizeof path, "%s/never.glb", t.path);
     xyl_diag d;
     memset(&d, 0, sizeof d);
-    assert_int_equal(xyl_mesh_write_file(&v, path, XYL_MESH_FORMAT_GLB, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(xyl_mesh_write_file(&v, path, XYL_MESH_FORMAT_GLB, NULL, &d),
+                     XYL_ERR_NON_FINITE);
     assert_int_equal(d.index, 2);
     assert_int_equal(dir_entries(t.path), 0);
     rmdir(t.path);
@@ -785,6 +787,30 @@ static void views_with_bad_indices_or_arrays_are_refused(void **state)
     expect_both(&v, XYL_ERR_INVALID_ARGUMENT, XYL_ERR_INVALID_ARGUMENT);
 }
 
+/* A face that uses one vertex twice is refused by both writers, as by xyl_mesh_create, and
+ * named in the diagnostic; nothing is written. */
+static void views_with_a_face_repeating_a_vertex_are_refused(void **state)
+{
+    (void)state;
+    view_store st;
+    xyl_mesh v = cube_view(&st);
+    st.quads[4 * 2 + 2] = st.quads[4 * 2 + 0];
+    expect_both(&v, XYL_ERR_INVALID_ARGUMENT, XYL_ERR_INVALID_ARGUMENT);
+    tmpdir t;
+    make_tmpdir(&t);
+    char path[128];
+    snprintf(path, sizeof path, "%s/never.obj", t.path);
+    for (int f = 0; f < 2; ++f) {
+        xyl_diag d;
+        memset(&d, 0, sizeof d);
+        assert_int_equal(xyl_mesh_write_file(&v, path, (xyl_mesh_format)f, NULL, &d),
+                         XYL_ERR_INVALID_ARGUMENT);
+        assert_int_equal(d.index, 2);
+        assert_int_equal(dir_entries(t.path), 0);
+    }
+    rmdir(t.path);
+}
+
 static void glb_refuses_branch_ids_a_float_cannot_hold(void **state)
 {
     (void)state;
@@ -805,12 +831,12 @@ static void glb_larger_than_4_gib_is_refused(void **state)
     xyl_mesh v = cube_view(&st);
     v.vertex_count = 120000000; /* 36 bytes each: 4.32e9 */
     size_t need = 5;
-    assert_int_equal(xyl_mesh_write_memory(&v, XYL_MESH_FORMAT_GLB, NULL, 0, &need),
+    assert_int_equal(xyl_mesh_write_memory(&v, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &need),
                      XYL_ERR_LIMIT_EXCEEDED);
     assert_int_equal(need, 5);
     v = cube_view(&st);
     v.vertex_count = (size_t)UINT32_MAX + 1;
-    assert_int_equal(xyl_mesh_write_memory(&v, XYL_MESH_FORMAT_GLB, NULL, 0, &need),
+    assert_int_equal(xyl_mesh_write_memory(&v, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &need),
                      XYL_ERR_LIMIT_EXCEEDED);
     v = cube_view(&st);
     v.triangle_count = 400000000;
@@ -822,7 +848,7 @@ static void glb_larger_than_4_gib_is_refused(void **state)
     snprintf(path, sizeof path, "%s/never.glb", t.path);
     xyl_diag d;
     memset(&d, 0, sizeof d);
-    assert_int_equal(xyl_mesh_write_file(&v, path, XYL_MESH_FORMAT_GLB, &d),
+    assert_int_equal(xyl_mesh_write_file(&v, path, XYL_MESH_FORMAT_GLB, NULL, &d),
                      XYL_ERR_LIMIT_EXCEEDED);
     assert_int_equal(d.code, XYL_ERR_LIMIT_EXCEEDED);
     assert_true(strlen(d.message) > 0);
@@ -886,7 +912,7 @@ static void write_file_writes_what_write_memory_renders(void **state)
             xyl_diag d;
             memset(&d, 0, sizeof d);
             d.code = XYL_ERR_IO;
-            assert_int_equal(xyl_mesh_write_file(m, path, (xyl_mesh_format)f, &d), XYL_OK);
+            assert_int_equal(xyl_mesh_write_file(m, path, (xyl_mesh_format)f, NULL, &d), XYL_OK);
             assert_int_equal(d.code, XYL_OK);
             size_t len, elen;
             unsigned char *got = slurp(path, &len);
@@ -923,7 +949,7 @@ static void write_file_replaces_an_existing_file_atomically(void **state)
     int old_fd = open(path, O_RDONLY);
     assert_true(old_fd >= 0);
     xyl_mesh *m = cube();
-    assert_int_equal(xyl_mesh_write_file(m, path, XYL_MESH_FORMAT_GLB, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_write_file(m, path, XYL_MESH_FORMAT_GLB, NULL, NULL), XYL_OK);
     char old[32] = {0};
     assert_int_equal(read(old_fd, old, sizeof old - 1), 13);
     assert_string_equal(old, "old contents\n");
@@ -950,7 +976,7 @@ static void write_file_into_a_missing_folder_fails_with_io_and_leaves_nothing(vo
     for (int f = 0; f < 2; ++f) {
         xyl_diag d;
         memset(&d, 0, sizeof d);
-        assert_int_equal(xyl_mesh_write_file(m, path, (xyl_mesh_format)f, &d), XYL_ERR_IO);
+        assert_int_equal(xyl_mesh_write_file(m, path, (xyl_mesh_format)f, NULL, &d), XYL_ERR_IO);
         assert_int_equal(d.code, XYL_ERR_IO);
         assert_true(strlen(d.message) > 0);
         assert_int_equal(dir_entries(t.path), 0);
@@ -965,14 +991,14 @@ static void write_file_rejects_bad_arguments(void **state)
     xyl_mesh *m = cube();
     xyl_diag d;
     memset(&d, 0, sizeof d);
-    assert_int_equal(xyl_mesh_write_file(NULL, "/tmp/x.obj", XYL_MESH_FORMAT_OBJ, &d),
+    assert_int_equal(xyl_mesh_write_file(NULL, "/tmp/x.obj", XYL_MESH_FORMAT_OBJ, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(d.code, XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_file(m, NULL, XYL_MESH_FORMAT_OBJ, &d),
+    assert_int_equal(xyl_mesh_write_file(m, NULL, XYL_MESH_FORMAT_OBJ, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_file(m, "", XYL_MESH_FORMAT_GLB, NULL),
+    assert_int_equal(xyl_mesh_write_file(m, "", XYL_MESH_FORMAT_GLB, NULL, NULL),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_mesh_write_file(m, "/tmp/x.obj", (xyl_mesh_format)5, &d),
+    assert_int_equal(xyl_mesh_write_file(m, "/tmp/x.obj", (xyl_mesh_format)5, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     xyl_mesh_destroy(m);
 }
@@ -1008,7 +1034,7 @@ static int write_samples(const char *folder)
         xyl_mesh *m = SAMPLES[i].make();
         xyl_diag d;
         memset(&d, 0, sizeof d);
-        xyl_result r = xyl_mesh_write_file(m, path, XYL_MESH_FORMAT_GLB, &d);
+        xyl_result r = xyl_mesh_write_file(m, path, XYL_MESH_FORMAT_GLB, NULL, &d);
         xyl_mesh_destroy(m);
         if (r != XYL_OK) {
             fprintf(stderr, "%s: %s: %s\n", path, xyl_result_string(r), d.message);
@@ -1141,6 +1167,7 @@ int main(void)
         cmocka_unit_test(write_memory_rejects_bad_arguments),
         cmocka_unit_test(views_with_non_finite_numbers_are_refused),
         cmocka_unit_test(views_with_bad_indices_or_arrays_are_refused),
+        cmocka_unit_test(views_with_a_face_repeating_a_vertex_are_refused),
         cmocka_unit_test(glb_refuses_branch_ids_a_float_cannot_hold),
         cmocka_unit_test(glb_larger_than_4_gib_is_refused),
         cmocka_unit_test(write_file_writes_what_write_memory_renders),

@@ -1285,13 +1285,13 @@ static void write_file_round_trips_through_read_file(void **state)
     xyl_skeleton *sk = NULL, *back = NULL;
     assert_int_equal(xyl_skeleton_read_file(SKEL_DIR "forks.skel", NULL, &sk, NULL), XYL_OK);
     xyl_diag d = fresh_diag();
-    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_SKEL, &d), XYL_OK);
+    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_SKEL, NULL, &d), XYL_OK);
     assert_int_equal(d.code, XYL_OK);
     assert_int_equal(xyl_skeleton_read_file(path, NULL, &back, NULL), XYL_OK);
     assert_same_skeleton(sk, back);
     assert_int_equal(dir_entries(t.path), 1);
     join(path, sizeof path, &t, "tree.obj");
-    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_OBJ, NULL), XYL_OK);
+    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_OBJ, NULL, NULL), XYL_OK);
     size_t len, expect_len;
     char *text = slurp(path, &len);
     char *expect = write_alloc(sk, XYL_SKEL_FORMAT_OBJ, &expect_len);
@@ -1316,7 +1316,7 @@ static void write_file_into_missing_directory_fails_with_io_and_leaves_nothing(v
     join(path, sizeof path, &t, "missing/tree.skel");
     xyl_skeleton *sk = example_skeleton();
     xyl_diag d = fresh_diag();
-    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_SKEL, &d), XYL_ERR_IO);
+    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_SKEL, NULL, &d), XYL_ERR_IO);
     assert_int_equal(d.code, XYL_ERR_IO);
     assert_true(strlen(d.message) > 0);
     assert_int_equal(dir_entries(t.path), 0);
@@ -1339,7 +1339,7 @@ static void write_file_replaces_existing_file_atomically(void **state)
     int old_fd = open(path, O_RDONLY);
     assert_true(old_fd >= 0);
     xyl_skeleton *sk = example_skeleton(), *back = NULL;
-    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_SKEL, NULL), XYL_OK);
+    assert_int_equal(xyl_skeleton_write_file(sk, path, XYL_SKEL_FORMAT_SKEL, NULL, NULL), XYL_OK);
     char old[32] = {0};
     assert_int_equal(read(old_fd, old, sizeof old - 1), 13);
     assert_string_equal(old, "old contents\n");
@@ -1358,14 +1358,14 @@ static void write_file_rejects_bad_arguments(void **state)
     (void)state;
     xyl_skeleton *sk = example_skeleton();
     xyl_diag d = fresh_diag();
-    assert_int_equal(xyl_skeleton_write_file(NULL, "/tmp/x.skel", XYL_SKEL_FORMAT_SKEL, &d),
+    assert_int_equal(xyl_skeleton_write_file(NULL, "/tmp/x.skel", XYL_SKEL_FORMAT_SKEL, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     assert_int_equal(d.code, XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_skeleton_write_file(sk, NULL, XYL_SKEL_FORMAT_SKEL, &d),
+    assert_int_equal(xyl_skeleton_write_file(sk, NULL, XYL_SKEL_FORMAT_SKEL, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_skeleton_write_file(sk, "", XYL_SKEL_FORMAT_SKEL, &d),
+    assert_int_equal(xyl_skeleton_write_file(sk, "", XYL_SKEL_FORMAT_SKEL, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
-    assert_int_equal(xyl_skeleton_write_file(sk, "/tmp/x.skel", (xyl_skel_format)9, &d),
+    assert_int_equal(xyl_skeleton_write_file(sk, "/tmp/x.skel", (xyl_skel_format)9, NULL, &d),
                      XYL_ERR_INVALID_ARGUMENT);
     xyl_skeleton_destroy(sk);
 }

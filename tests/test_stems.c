@@ -62,7 +62,7 @@ static void assert_finite(const xyl_mesh *m, const char *what)
 static void assert_closed(const xyl_mesh *m, const xyl_skeleton *sk, const char *what)
 {
     xyl_mesh_report rep;
-    assert_int_equal(xyl_mesh_check(m, &rep, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_check(m, NULL, &rep, NULL), XYL_OK);
     if (!rep.closed_manifold || rep.euler != 2 * (int64_t)sk->root_count ||
         rep.components != sk->root_count)
         fail_msg("%s: closed %d euler %lld components %zu (roots %u) boundary %zu nonmanifold "
@@ -217,12 +217,12 @@ typedef struct isect_ctx {
 static so_tally joint_tally(const xyl_skeleton *sk, const xyl_mesh *m)
 {
     size_t count = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, &count, NULL), XYL_OK);
     so_tally t = {0, 0, 0, {0, 0}, {0, 0}};
     if (count == 0) return t;
     uint32_t *pairs = malloc(2 * count * sizeof *pairs);
     assert_non_null(pairs);
-    assert_int_equal(xyl_mesh_self_intersections(m, pairs, count, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, pairs, count, &count, NULL), XYL_OK);
     assert_true(so_classify(sk, m, pairs, count, &t));
     free(pairs);
     return t;
@@ -561,7 +561,7 @@ static void a_child_that_curls_back_keeps_its_tip(void **state)
     }
     if (!(nearest <= 0.05 * 1.0001)) fail_msg("the child's tip ring is %g from its tip node", nearest);
     size_t count = 0;
-    assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, &count, NULL), XYL_OK);
     assert_int_equal(count, 0);
     xyl_mesh_destroy(m);
     xyl_skeleton_destroy(sk);
@@ -623,7 +623,7 @@ static void siblings_that_never_part_become_one_tube(void **state)
         assert_closed(m, sk, "fork_siblings_1deg");
         assert_int_equal(meshed_branches(m, sk), 2);
         size_t count = 0;
-        assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+        assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, &count, NULL), XYL_OK);
         if (count) fail_msg("k = %u: %zu intersecting pairs", k, count);
         xyl_mesh_destroy(m);
     }
@@ -666,7 +666,7 @@ static void siblings_that_part_later_grow_out_of_each_other(void **state)
         }
         if (!(nearest <= 0.05 * 1.0001)) fail_msg("k = %u: tip ring %g from the tip", k, nearest);
         size_t count = 0;
-        assert_int_equal(xyl_mesh_self_intersections(m, NULL, 0, &count, NULL), XYL_OK);
+        assert_int_equal(xyl_mesh_self_intersections(m, NULL, NULL, 0, &count, NULL), XYL_OK);
         if (count) fail_msg("k = %u: %zu intersecting pairs", k, count);
         xyl_mesh_destroy(m);
     }
@@ -726,7 +726,7 @@ static void assert_fuzz_case_meshes(const char *file)
     for (uint32_t k = 3; k <= 8; ++k) {
         xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
         xyl_mesh_report rep;
-        assert_int_equal(xyl_mesh_check(m, &rep, NULL), XYL_OK);
+        assert_int_equal(xyl_mesh_check(m, NULL, &rep, NULL), XYL_OK);
         assert_int_equal(rep.boundary_edges + rep.nonmanifold_edges + rep.misoriented_edges, 0);
         assert_int_equal(rep.nonmanifold_vertices + rep.duplicate_faces, 0);
         assert_int_equal(rep.euler, 2 * (int64_t)sk->root_count);
@@ -735,7 +735,8 @@ static void assert_fuzz_case_meshes(const char *file)
         snprintf(what, sizeof what, "%s k = %u", file, k);
         assert_finite(m, what);
         size_t need = 0;
-        assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, 0, &need), XYL_OK);
+        assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &need),
+                         XYL_OK);
         xyl_mesh_destroy(m);
     }
     xyl_skeleton_destroy(sk);
@@ -1061,7 +1062,7 @@ static void split_seams_give_every_corner_its_uv(void **state)
         assert_split_matches(m, s);
         /* open by index along the seams, still closed by position (the mesh it came from) */
         xyl_mesh_report rep;
-        assert_int_equal(xyl_mesh_check(s, &rep, NULL), XYL_OK);
+        assert_int_equal(xyl_mesh_check(s, NULL, &rep, NULL), XYL_OK);
         assert_true(rep.boundary_edges > 0 && rep.unused_vertices == 0);
         xyl_mesh_destroy(s);
         xyl_mesh_destroy(m);
@@ -1120,10 +1121,10 @@ static void split_seams_reject_bad_views(void **state)
 /* m written to memory in format (NUL-terminated), its size without the NUL in *size. */
 static char *written(const xyl_mesh *m, xyl_mesh_format format, size_t *size)
 {
-    assert_int_equal(xyl_mesh_write_memory(m, format, NULL, 0, size), XYL_OK);
+    assert_int_equal(xyl_mesh_write_memory(m, format, NULL, NULL, 0, size), XYL_OK);
     char *bytes = calloc(*size + 1, 1);
     assert_non_null(bytes);
-    assert_int_equal(xyl_mesh_write_memory(m, format, bytes, *size + 1, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_write_memory(m, format, NULL, bytes, *size + 1, NULL), XYL_OK);
     return bytes;
 }
 

@@ -12,6 +12,7 @@
 #include <cmocka.h>
 
 #include "subdivide.h"
+#include "test_util.h"
 #include "xylem/xyl_mesh.h"
 
 #define PI 3.14159265358979323846
@@ -1126,26 +1127,6 @@ static void refused_topology_fails_with_unsupported(void **state)
     xyl_mesh_destroy(c);
 }
 
-/* Counts and optionally fails allocations, so tests can prove nothing leaks. */
-typedef struct counter {
-    size_t attempts, allocs, frees, fail_at;
-} counter;
-
-static void *count_alloc(size_t size, void *user)
-{
-    counter *c = user;
-    if (++c->attempts == c->fail_at) return NULL;
-    c->allocs++;
-    return malloc(size);
-}
-
-static void count_free(void *p, void *user)
-{
-    counter *c = user;
-    c->frees++;
-    free(p);
-}
-
 static void allocation_failures_fail_cleanly_and_leak_nothing(void **state)
 {
     (void)state;
@@ -1153,13 +1134,11 @@ static void allocation_failures_fail_cleanly_and_leak_nothing(void **state)
     for (int scheme = XYL_SUBDIVIDE_NONE; scheme <= XYL_SUBDIVIDE_LOOP; ++scheme) {
         size_t failures = 0;
         for (size_t n = 1;; ++n) {
-            counter cnt = {0, 0, 0, n};
+            tu_counter cnt = {0, 0, 0, n};
             xyl_subdivide_desc sd;
             memset(&sd, 0, sizeof sd);
             sd.scheme = (xyl_subdivision)scheme;
-            sd.alloc.alloc = count_alloc;
-            sd.alloc.free = count_free;
-            sd.alloc.user = &cnt;
+            sd.alloc = tu_counting(&cnt);
             xyl_mesh *out = UNTOUCHED;
             xyl_diag diag = fresh_diag();
             xyl_result r = xyl_mesh_subdivide(c, &sd, &out, &diag);

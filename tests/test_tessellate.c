@@ -600,7 +600,7 @@ static void check_refined_is_closed(const xyl_mesh *r)
     xyl_mesh *w = NULL;
     assert_int_equal(xyl_mesh_create(&md, &w, NULL), XYL_OK);
     xyl_mesh_report rep;
-    assert_int_equal(xyl_mesh_check(w, &rep, NULL), XYL_OK);
+    assert_int_equal(xyl_mesh_check(w, NULL, &rep, NULL), XYL_OK);
     if (rep.boundary_edges || rep.nonmanifold_edges || rep.misoriented_edges)
         fail_msg("welded refinement: %zu boundary, %zu non-manifold, %zu misoriented edges",
                  rep.boundary_edges, rep.nonmanifold_edges, rep.misoriented_edges);
@@ -624,7 +624,7 @@ static void refined_adaptive_mesh_welds_into_a_closed_surface(void **state)
         assert_int_equal(xyl_tess_select(tp, pat, &view, b, NULL), XYL_OK);
         assert_true(b->cmd_count >= 3);
         xyl_mesh *r = NULL;
-        assert_int_equal(xyl_tess_refine(tp, pat, b, NULL, &r, NULL), XYL_OK);
+        assert_int_equal(xyl_tess_refine(tp, pat, b, NULL, NULL, &r, NULL), XYL_OK);
         assert_int_equal(r->vertex_count, b->vertices);
         assert_int_equal(r->triangle_count, b->triangles);
         check_refined_is_closed(r);
@@ -632,7 +632,8 @@ static void refined_adaptive_mesh_welds_into_a_closed_surface(void **state)
         xyl_mesh_limits lim = {0};
         lim.max_vertices = b->vertices - 1;
         xyl_mesh *none = (xyl_mesh *)(uintptr_t)1;
-        assert_int_equal(xyl_tess_refine(tp, pat, b, &lim, &none, NULL), XYL_ERR_LIMIT_EXCEEDED);
+        assert_int_equal(xyl_tess_refine(tp, pat, b, &lim, NULL, &none, NULL),
+                         XYL_ERR_LIMIT_EXCEEDED);
         assert_ptr_equal(none, (xyl_mesh *)(uintptr_t)1);
         xyl_mesh_destroy(r);
         xyl_tess_batches_destroy(b);
@@ -759,6 +760,42 @@ static void bad_input_gets_result_codes(void **state)
     xyl_mesh_destroy(m);
 }
 
+/* A mesh the caller built is checked before its patches are made (it used to be read as it
+ * was): normals must be there, faces in range and without a repeated vertex, numbers finite. */
+static void patches_refuse_a_broken_caller_made_mesh(void **state)
+{
+    (void)state;
+    xyl_vec3 pos[4] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    xyl_vec3 nrm[4] = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
+    uint32_t quad[4] = {0, 1, 2, 3};
+    xyl_mesh v = {0};
+    v.positions = pos, v.normals = nrm, v.vertex_count = 4, v.quads = quad, v.quad_count = 1;
+    xyl_tess_patches *tp = NULL;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, NULL), XYL_OK);
+    xyl_tess_patches_destroy(tp);
+    tp = (xyl_tess_patches *)(uintptr_t)1;
+    xyl_diag d = {0};
+    v.normals = NULL;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(d.index, -1);
+    v.normals = nrm;
+    quad[2] = 4;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(d.index, 0);
+    quad[2] = 1;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(d.index, 0);
+    quad[2] = 2;
+    pos[3].x = NAN;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(d.index, 3);
+    pos[3].x = 0;
+    nrm[1].z = INFINITY;
+    assert_int_equal(xyl_tess_patches_create(&v, NULL, &tp, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(d.index, 1);
+    assert_ptr_equal(tp, (xyl_tess_patches *)(uintptr_t)1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -776,6 +813,7 @@ int main(void)
         cmocka_unit_test(refined_adaptive_mesh_welds_into_a_closed_surface),
         cmocka_unit_test(camera_maps_target_to_the_centre_in_both_conventions),
         cmocka_unit_test(bad_input_gets_result_codes),
+        cmocka_unit_test(patches_refuse_a_broken_caller_made_mesh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

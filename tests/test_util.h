@@ -30,6 +30,36 @@
 #define SANITIZED 0
 #endif
 
+/* ---- allocation counting and failure injection ---------------------------------------------- */
+
+/* Counts what goes through it and fails the fail_at-th attempt (1-based; 0: none). */
+typedef struct tu_counter {
+    size_t attempts, allocs, frees;
+    size_t fail_at;
+} tu_counter;
+
+static inline void *tu_count_alloc(size_t size, void *user)
+{
+    tu_counter *c = user;
+    if (++c->attempts == c->fail_at) return NULL;
+    void *p = malloc(size);
+    if (p) c->allocs++;
+    return p;
+}
+
+static inline void tu_count_free(void *p, void *user)
+{
+    tu_counter *c = user;
+    c->frees++;
+    free(p);
+}
+
+static inline xyl_allocator tu_counting(tu_counter *c)
+{
+    xyl_allocator a = {tu_count_alloc, tu_count_free, c};
+    return a;
+}
+
 /* Parses text; fails the test with the diagnostic if it does not parse. */
 static inline xyl_grammar *tu_parse(const char *text)
 {

@@ -78,6 +78,11 @@ static inline void *xyl__alloc_array(const xyl_allocator *a, size_t count, size_
     return xyl__alloc(a, bytes);
 }
 
+/* Sorts n elements of size bytes in place by cmp, as qsort does but without allocating (the C
+ * library's qsort may take a buffer from malloc, past the caller's allocator). An introsort,
+ * O(n log n) and not stable: cmp must order every two elements that are not interchangeable. */
+void xyl__sort(void *base, size_t n, size_t size, int (*cmp)(const void *, const void *));
+
 /* ---- diagnostics --------------------------------------------------------------------------- */
 
 /* Fills diag (if not NULL) and returns code. line/column 0 and index -1 mean "none". */
@@ -183,9 +188,11 @@ static inline xyl__dvec3 xyl__from_f3(xyl_vec3 a)
 /* ---- files --------------------------------------------------------------------------------- */
 
 /* Writes size bytes to path through a temporary file in the same folder and a rename, so path is
- * either the old file or the complete new one. */
-xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag);
-/* Reads a whole file (at most max_bytes) into a NUL-terminated buffer from a. */
+ * either the old file or the complete new one. The temporary name comes from a. */
+xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size,
+                                  const xyl_allocator *a, xyl_diag *diag);
+/* Reads a whole file (at most max_bytes) into a NUL-terminated buffer from a; through read(2),
+ * not stdio, whose buffers would come from malloc. */
 xyl_result xyl__read_file(const char *path, size_t max_bytes, const xyl_allocator *a, char **out,
                           size_t *size, xyl_diag *diag);
 

@@ -56,6 +56,101 @@ bool xyl__grow_slow(const xyl_allocator *a, void **ptr, size_t *cap, size_t used
     return true;
 }
 
+/* ---- sorting ------------------------------------------------------------------------------ */
+
+typedef int (*cmp_fn)(const void *, const void *);
+
+/* Elements are moved word by word where their size allows (the sorts' elements are 8 or 16
+ * bytes). */
+static void swap_elems(unsigned char *a, unsigned char *b, size_t size)
+{
+    size_t i = 0;
+    for (; i + 8 <= size; i += 8) {
+        uint64_t x, y;
+        memcpy(&x, a + i, 8);
+        memcpy(&y, b + i, 8);
+        memcpy(a + i, &y, 8);
+        memcpy(b + i, &x, 8);
+    }
+    for (; i < size; ++i) {
+        unsigned char t = a[i];
+        a[i] = b[i];
+        b[i] = t;
+    }
+}
+
+static void insertion_sort(unsigned char *b, size_t n, size_t size, cmp_fn cmp)
+{
+    for (size_t i = 1; i < n; ++i)
+        for (size_t j = i; j > 0 && cmp(b + (j - 1) * size, b + j * size) > 0; --j)
+            swap_elems(b + (j - 1) * size, b + j * size, size);
+}
+
+/* Moves the element at root down the max-heap of the first n elements. */
+static void sift_down(unsigned char *b, size_t root, size_t n, size_t size, cmp_fn cmp)
+{
+    for (size_t child; (child = 2 * root + 1) < n; root = child) {
+        if (child + 1 < n && cmp(b + child * size, b + (child + 1) * size) < 0) ++child;
+        if (cmp(b + root * size, b + child * size) >= 0) return;
+        swap_elems(b + root * size, b + child * size, size);
+    }
+}
+
+static void heap_sort(unsigned char *b, size_t n, size_t size, cmp_fn cmp)
+{
+    for (size_t i = n / 2; i-- > 0;) sift_down(b, i, n, size, cmp);
+    for (size_t end = n - 1; end > 0; --end) {
+        swap_elems(b, b + end * size, size);
+        sift_down(b, 0, end, size, cmp);
+    }
+}
+
+/* Introsort: quicksort with the median of three as pivot, insertion sort for short runs, and
+ * heapsort where the partitions stay unbalanced (depth), so O(n log n) always. */
+static void intro_sort(unsigned char *b, size_t n, size_t size, cmp_fn cmp, unsigned depth)
+{
+    while (n > 12) {
+        if (depth-- == 0) {
+            heap_sort(b, n, size, cmp);
+            return;
+        }
+        unsigned char *mid = b + n / 2 * size, *last = b + (n - 1) * size;
+        if (cmp(mid, b) < 0) swap_elems(mid, b, size);
+        if (cmp(last, mid) < 0) {
+            swap_elems(last, mid, size);
+            if (cmp(mid, b) < 0) swap_elems(mid, b, size);
+        }
+        swap_elems(b, mid, size); /* the pivot to the front; last (>= it) stops the scan up */
+        size_t i = 0, j = n;
+        for (;;) {
+            do ++i;
+            while (cmp(b + i * size, b) < 0);
+            do --j;
+            while (cmp(b + j * size, b) > 0);
+            if (i >= j) break;
+            swap_elems(b + i * size, b + j * size, size);
+        }
+        swap_elems(b, b + j * size, size); /* [0, j) <= pivot = [j] <= (j, n) */
+        size_t right = n - j - 1;
+        if (j < right) {
+            intro_sort(b, j, size, cmp, depth);
+            b += (j + 1) * size;
+            n = right;
+        } else {
+            intro_sort(b + (j + 1) * size, right, size, cmp, depth);
+            n = j;
+        }
+    }
+    insertion_sort(b, n, size, cmp);
+}
+
+void xyl__sort(void *base, size_t n, size_t size, int (*cmp)(const void *, const void *))
+{
+    unsigned depth = 0;
+    for (size_t m = n; m > 1; m >>= 1) depth += 2;
+    intro_sort(base, n, size, cmp, depth);
+}
+
 /* ---- diagnostics --------------------------------------------------------------------------- */
 
 xyl_result xyl__fail(xyl_diag *diag, xyl_result code, uint32_t line, uint32_t column,
@@ -160,19 +255,20 @@ static void sync_parent(char *path)
     close(fd);
 }
 
-xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size, xyl_diag *diag)
+xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t size,
+                                  const xyl_allocator *a, xyl_diag *diag)
 {
     if (!path || !*path || (!data && size))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "no output path");
     size_t plen = strlen(path);
-    char *tmp = malloc(plen + 16);
+    char *tmp = plen < SIZE_MAX - 16 ? xyl__alloc(a, plen + 16) : NULL;
     if (!tmp) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     memcpy(tmp, path, plen);
     memcpy(tmp + plen, ".tmp-XXXXXX", 12);
     int fd = mkstemp(tmp);
     if (fd < 0) {
         int e = errno;
-        free(tmp);
+        xyl__free(a, tmp);
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot create a file next to '%s': %s", path,
                          strerror(e));
     }
@@ -185,7 +281,7 @@ xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t siz
             int e = errno;
             close(fd);
             unlink(tmp);
-            free(tmp);
+            xyl__free(a, tmp);
             return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot write '%s': %s", path,
                              strerror(e));
         }
@@ -198,18 +294,18 @@ xyl_result xyl__write_file_atomic(const char *path, const void *data, size_t siz
     if (fchmod(fd, 0666 & ~mask) != 0 || fsync(fd) != 0 || close(fd) != 0) {
         int e = errno;
         unlink(tmp);
-        free(tmp);
+        xyl__free(a, tmp);
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot finish '%s': %s", path, strerror(e));
     }
     if (rename(tmp, path) != 0) {
         int e = errno;
         unlink(tmp);
-        free(tmp);
+        xyl__free(a, tmp);
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot rename onto '%s': %s", path,
                          strerror(e));
     }
     sync_parent(tmp);
-    free(tmp);
+    xyl__free(a, tmp);
     return XYL_OK;
 }
 
@@ -218,34 +314,38 @@ xyl_result xyl__read_file(const char *path, size_t max_bytes, const xyl_allocato
 {
     if (!path || !out || !size)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "no input path");
-    FILE *f = fopen(path, "rb");
-    if (!f)
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
         return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot open '%s': %s", path,
                          strerror(errno));
     size_t cap = 0, used = 0;
     char *buf = NULL;
+    xyl_result r = XYL_OK;
     for (;;) {
         if (!xyl__grow(a, (void **)&buf, &cap, used, used + 65536 + 1, 1)) {
-            fclose(f);
-            xyl__free(a, buf);
-            return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory reading '%s'",
-                             path);
+            r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory reading '%s'",
+                          path);
+            break;
         }
-        size_t n = fread(buf + used, 1, cap - used - 1, f);
-        used += n;
+        ssize_t n = read(fd, buf + used, cap - used - 1);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) {
+            r = xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot read '%s': %s", path,
+                          strerror(errno));
+            break;
+        }
+        used += (size_t)n;
         if (used > max_bytes) {
-            fclose(f);
-            xyl__free(a, buf);
-            return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
-                             "'%s' is larger than the limit of %zu bytes", path, max_bytes);
+            r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                          "'%s' is larger than the limit of %zu bytes", path, max_bytes);
+            break;
         }
         if (n == 0) break;
     }
-    int err = ferror(f);
-    fclose(f);
-    if (err) {
+    close(fd);
+    if (r != XYL_OK) {
         xyl__free(a, buf);
-        return xyl__fail(diag, XYL_ERR_IO, 0, 0, -1, "cannot read '%s'", path);
+        return r;
     }
     buf[used] = '\0';
     *out = buf;

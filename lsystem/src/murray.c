@@ -3,7 +3,6 @@
  * from the triangle of forces between it and a virtual branch carrying all its siblings; its
  * azimuth comes from the grammar. Rotations are found from the original geometry, then one
  * walk in node order (parents first) composes them, so the whole pass is O(nodes + leaves). */
-#include <stdlib.h>
 
 #include "turtle_internal.h"
 
@@ -181,10 +180,12 @@ static xyl__dvec3 azimuth_at(const plane *p, double phi)
     return xyl__d3_add(xyl__d3_scale(p->e1, cos(phi)), xyl__d3_scale(p->e2, sin(phi)));
 }
 
+/* Ascending, -0 before +0: xyl__sort is not stable, so equal angles must be the same bits. */
 static int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
+    int order = (x > y) - (x < y);
+    return order ? order : (signbit(y) != 0) - (signbit(x) != 0);
 }
 
 /* The widest empty sector between the sorted angles a[0 .. n): its start and width. With no
@@ -220,7 +221,7 @@ static void grammar_azimuths(const murray *m, kid *kv, uint32_t k, xyl__dvec3 d0
         m->angles[given++] = angle_of(&p, kv[j].az);
     }
     if (missing == 0) return;
-    qsort(m->angles, given, sizeof *m->angles, cmp_double);
+    xyl__sort(m->angles, given, sizeof *m->angles, cmp_double);
     double start, width = widest_gap(m->angles, given, &start);
     double denom = given ? (double)missing + 1.0 : (double)missing;
     double offset = given ? 1.0 : 0.0;

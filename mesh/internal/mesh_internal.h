@@ -1,4 +1,5 @@
-/* Mesh internals shared by stems/ (mesher, subdivision, exporters, checks). Not installed. */
+/* Mesh internals shared by the mesh module's files, stems/ and tessellate/ (validation, ownership,
+ * normals). Not installed. */
 #ifndef XYL_MESH_INTERNAL_H
 #define XYL_MESH_INTERNAL_H
 
@@ -56,25 +57,54 @@ static inline const uint32_t *xyl__mesh_face(const xyl_mesh *m, size_t f, int *n
     return m->triangles + 3 * (f - m->quad_count);
 }
 
-/* xyl_mesh_create's face checks on a view (the caller's, perhaps): XYL_ERR_INVALID_ARGUMENT,
- * diag.index = the face, where a face uses a vertex out of range or one twice. The arrays must
- * be there for the counts. */
-xyl_result xyl__check_mesh_faces(const xyl_mesh *m, xyl_diag *diag);
+/* ---- validation: one check of a mesh for every call that reads one ------------------------- */
+
+/* What a call reads of a mesh besides its positions (always read), for xyl__mesh_validate. */
+enum {
+    XYL__MESH_NORMALS = 1u << 0,
+    XYL__MESH_UVS = 1u << 1,
+    XYL__MESH_BRANCH_IDS = 1u << 2,
+    XYL__MESH_FACES = 1u << 3,         /* quads and triangles */
+    XYL__MESH_FACE_BRANCHES = 1u << 4, /* read with the faces */
+    XYL__MESH_UV_WRAPS = 1u << 5,      /* read with the faces; NULL means none */
+    XYL__MESH_TRI_VIEW = 1u << 6       /* the triangulated view */
+};
+
+/* A mesh a caller may have built, checked before a call reads it: every array the call reads
+ * (reads: XYL__MESH_* flags) is there for its count; positions, and normals and UVs wherever
+ * they are given, are finite; faces use vertices in range, none twice; wrap bits name corners
+ * the face has; the view's indices are in range and, read with the faces, it has 2 q + t
+ * triangles. Checks that need only the counts come first, so a call's own limits, checked
+ * before this, refuse an oversized mesh without reading its arrays. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (diag.index: the face or view triangle, -1 for an array or a count),
+ * XYL_ERR_NON_FINITE (diag.index: the vertex). */
+xyl_result xyl__mesh_validate(const xyl_mesh *m, unsigned reads, xyl_diag *diag);
+
+/* A read-only xyl_mesh over anything with xyl_mesh_desc's field names (a desc,
+ * xyl__mesh_arrays), without a triangulated view: `xyl_mesh v = XYL__MESH_VIEW_OF(&desc);` */
+#define XYL__MESH_VIEW_OF(s)                                                                   \
+    {(s)->positions, (s)->normals, (s)->uvs, (s)->branch_ids, (s)->vertex_count, (s)->quads,   \
+     (s)->quad_count, (s)->triangles, (s)->triangle_count, (s)->face_branches, NULL, 0,        \
+     (s)->uv_wraps}
+
+/* What xyl_mesh_split_seams reads; xyl__mesh_split_seams is the call for a mesh that has passed
+ * xyl__mesh_validate with these. */
+#define XYL__SPLIT_SEAMS_READS                                                                 \
+    (XYL__MESH_NORMALS | XYL__MESH_UVS | XYL__MESH_BRANCH_IDS | XYL__MESH_FACE_BRANCHES |      \
+     XYL__MESH_UV_WRAPS)
+xyl_result xyl__mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, xyl_mesh **out,
+                                 xyl_diag *diag);
 
 /* Every intersecting triangle pair of a mesh's triangulated view, as xyl_mesh_self_intersections
- * finds them, in one pass: *pairs (from alloc, NULL for malloc; i << 32 | j with i < j, sorted;
- * free with xyl__free(alloc, .)) and *count. Errors: those of xyl_mesh_self_intersections. */
+ * finds them, in one pass: *pairs (from alloc, NULL for the default allocator; i << 32 | j with
+ * i < j, sorted; free with xyl__free(alloc, .)) and *count. Errors: those of
+ * xyl_mesh_self_intersections. */
 xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         uint64_t **pairs, size_t *count, xyl_diag *diag);
 
 /* Bit c of a face's uv_wraps set: corner c's u is its vertex's u + 1. The bits a face of n
  * corners may use. */
 #define XYL__WRAP_BITS(n) ((uint8_t)((1u << (n)) - 1u))
-
-/* XYL_ERR_INVALID_ARGUMENT (diag.index = the face) where a face's wrap bits name a corner it does
- * not have; NULL wraps are none. */
-xyl_result xyl__check_uv_wraps(const uint8_t *wraps, size_t quads, size_t triangles,
-                               xyl_diag *diag);
 
 /* The wrap bits of a face of n <= 4 corners whose u's lie on a circle of circumference 1 (a
  * cylindrical map): the cut at the widest gap, which leaves the corners the shortest span,

@@ -26,8 +26,9 @@ extern "C" {
  * (varying), face branch ids are inherited from the parent face, vertex branch ids by the rules
  * in docs/subdivision.md. XYL_SUBDIVIDE_NONE copies every array, normals included. Missing
  * uvs / branch_ids / face_branches in the input read as zeros; out's arrays are never NULL.
- * The input is validated (NULL arrays with counts, indices out of range or repeated within a
- * face: XYL_ERR_INVALID_ARGUMENT; a non-finite position, normal or UV: XYL_ERR_NON_FINITE,
+ * The input is validated as xyl_mesh_create validates a desc (xyl__mesh_validate: NULL arrays
+ * with counts, indices out of range or repeated within a face, wrap bits beyond a face's
+ * corners: XYL_ERR_INVALID_ARGUMENT; a non-finite position, normal or UV: XYL_ERR_NON_FINITE,
  * diag.index = the vertex); the refined counts
  * are checked against limits (NULL = defaults) before anything large is allocated
  * (XYL_ERR_LIMIT_EXCEEDED). Other errors: XYL_ERR_UNSUPPORTED (OpenSubdiv refuses the topology,

@@ -77,32 +77,72 @@ xyl_result xyl__mesh_normals(const xyl__mesh_arrays *a, const uint32_t *face_bra
     return xyl__mesh_normals_finish(a, face_branch != NULL, alloc, out);
 }
 
-/* ---- the public mesh ---------------------------------------------------------------------- */
+/* ---- validation ---------------------------------------------------------------------------- */
 
-static xyl_result check_face(const uint32_t *f, int n, size_t vertex_count, size_t index,
-                             xyl_diag *diag)
+/* Every array the call reads is there for its count; read with the faces, the view has the
+ * count of their triangulation. Reads no array. */
+static xyl_result check_arrays(const xyl_mesh *m, unsigned reads, xyl_diag *diag)
 {
-    for (int k = 0; k < n; ++k) {
-        if (f[k] >= vertex_count)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)index,
-                             "face %zu uses vertex %u of %zu", index, f[k], vertex_count);
-        for (int j = 0; j < k; ++j)
-            if (f[j] == f[k])
-                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)index,
-                                 "face %zu repeats vertex %u", index, f[k]);
-    }
+    size_t nv = m->vertex_count;
+    const struct {
+        unsigned read;
+        const void *array;
+        const char *name, *count_name;
+        size_t count;
+    } need[] = {
+        {0, m->positions, "positions", "vertex_count", nv},
+        {XYL__MESH_NORMALS, m->normals, "normals", "vertex_count", nv},
+        {XYL__MESH_UVS, m->uvs, "uvs", "vertex_count", nv},
+        {XYL__MESH_BRANCH_IDS, m->branch_ids, "branch_ids", "vertex_count", nv},
+        {XYL__MESH_FACES, m->quads, "quads", "quad_count", m->quad_count},
+        {XYL__MESH_FACES, m->triangles, "triangles", "triangle_count", m->triangle_count},
+        {XYL__MESH_FACE_BRANCHES, m->face_branches, "face_branches", "quad_count",
+         m->quad_count},
+        {XYL__MESH_FACE_BRANCHES, m->face_branches, "face_branches", "triangle_count",
+         m->triangle_count},
+        {XYL__MESH_TRI_VIEW, m->tri_view, "tri_view", "tri_view_count", m->tri_view_count},
+    };
+    for (size_t i = 0; i < sizeof need / sizeof need[0]; ++i)
+        if ((!need[i].read || (reads & need[i].read)) && need[i].count && !need[i].array)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "%s is NULL but %s is %zu",
+                             need[i].name, need[i].count_name, need[i].count);
+    bool view_of_faces = (reads & XYL__MESH_TRI_VIEW) && (reads & XYL__MESH_FACES);
+    if (view_of_faces && (m->quad_count > (SIZE_MAX - m->triangle_count) / 2 ||
+                          m->tri_view_count != 2 * m->quad_count + m->triangle_count))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "tri_view_count %zu is not 2 * %zu quads + %zu triangles",
+                         m->tri_view_count, m->quad_count, m->triangle_count);
     return XYL_OK;
 }
 
-xyl_result xyl__check_uv_wraps(const uint8_t *wraps, size_t quads, size_t triangles,
-                               xyl_diag *diag)
+/* The scans first ask only whether anything is wrong, without branches (so the compiler
+ * vectorises them: the checked stem build validates every mesh it tests); the checks below them
+ * look for the first offender only when there is one. */
+
+/* n floats from p, none an infinity or a NaN (all exponent bits set). */
+static bool floats_finite(const void *p, size_t n)
 {
-    for (size_t f = 0; wraps && f < quads + triangles; ++f)
-        if (wraps[f] & (uint8_t)~XYL__WRAP_BITS(f < quads ? 4 : 3))
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)f,
-                             "face %zu has uv wrap bits 0x%x beyond its %d corners", f,
-                             (unsigned)wraps[f], f < quads ? 4 : 3);
-    return XYL_OK;
+    const unsigned char *b = p;
+    unsigned bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+        uint32_t bits;
+        memcpy(&bits, b + 4 * i, sizeof bits);
+        bad |= (unsigned)((bits & 0x7f800000u) == 0x7f800000u);
+    }
+    return bad == 0;
+}
+
+/* count faces of n corners: every index below vertex_count, none twice in a face. */
+static XYL__ALWAYS_INLINE bool faces_ok(const uint32_t *idx, size_t count, int n,
+                                        size_t vertex_count)
+{
+    unsigned bad = 0;
+    for (size_t f = 0; f < count; ++f, idx += n)
+        for (int k = 0; k < n; ++k) {
+            bad |= (unsigned)(idx[k] >= vertex_count);
+            for (int j = 0; j < k; ++j) bad |= (unsigned)(idx[j] == idx[k]);
+        }
+    return bad == 0;
 }
 
 static bool finite3(xyl_vec3 v)
@@ -110,35 +150,107 @@ static bool finite3(xyl_vec3 v)
     return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
 }
 
-static xyl_result validate(const xyl_mesh_desc *d, xyl_diag *diag)
+/* What of vertex v is not finite: its position, or its normal or UV where the mesh has them. */
+static const char *non_finite_part(const xyl_mesh *m, size_t v)
 {
-    uint64_t max_v = d->limits.max_vertices ? d->limits.max_vertices : XYL__MESH_DEFAULT_MAX_VERTICES;
+    if (!finite3(m->positions[v])) return "position";
+    if (m->normals && !finite3(m->normals[v])) return "normal";
+    if (m->uvs && !(isfinite(m->uvs[2 * v]) && isfinite(m->uvs[2 * v + 1]))) return "UV";
+    return NULL;
+}
+
+static xyl_result check_vertices(const xyl_mesh *m, xyl_diag *diag)
+{
+    size_t nv = m->vertex_count;
+    bool fine = nv <= SIZE_MAX / 3 && floats_finite(m->positions, 3 * nv) &&
+                (!m->normals || floats_finite(m->normals, 3 * nv)) &&
+                (!m->uvs || floats_finite(m->uvs, 2 * nv));
+    if (fine) return XYL_OK;
+    for (size_t v = 0; v < nv; ++v) {
+        const char *bad = non_finite_part(m, v);
+        if (bad)
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
+                             "vertex %zu has a non-finite %s", v, bad);
+    }
+    return XYL_OK;
+}
+
+/* count faces of n corners, named first, first + 1, ...: vertices in range, none twice. */
+static xyl_result check_faces(const uint32_t *idx, size_t count, int n, size_t first,
+                              size_t vertex_count, xyl_diag *diag)
+{
+    if (n == 4 ? faces_ok(idx, count, 4, vertex_count) : faces_ok(idx, count, 3, vertex_count))
+        return XYL_OK;
+    for (size_t f = 0; f < count; ++f, idx += n)
+        for (int k = 0; k < n; ++k) {
+            if (idx[k] >= vertex_count)
+                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)(first + f),
+                                 "face %zu uses vertex %u of %zu", first + f, idx[k],
+                                 vertex_count);
+            for (int j = 0; j < k; ++j)
+                if (idx[j] == idx[k])
+                    return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)(first + f),
+                                     "face %zu repeats vertex %u", first + f, idx[k]);
+        }
+    return XYL_OK;
+}
+
+static xyl_result check_uv_wraps(const xyl_mesh *m, xyl_diag *diag)
+{
+    size_t quads = m->quad_count, faces = quads + m->triangle_count;
+    for (size_t f = 0; m->uv_wraps && f < faces; ++f)
+        if (m->uv_wraps[f] & (uint8_t)~XYL__WRAP_BITS(f < quads ? 4 : 3))
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)f,
+                             "face %zu has uv wrap bits 0x%x beyond its %d corners", f,
+                             (unsigned)m->uv_wraps[f], f < quads ? 4 : 3);
+    return XYL_OK;
+}
+
+static xyl_result check_tri_view(const xyl_mesh *m, xyl_diag *diag)
+{
+    const uint32_t *t = m->tri_view;
+    uint32_t top = 0;
+    size_t n = m->tri_view_count <= SIZE_MAX / 3 ? 3 * m->tri_view_count : 0;
+    for (size_t k = 0; k < n; ++k) top = t[k] > top ? t[k] : top;
+    if (m->tri_view_count == 0 || (n && top < m->vertex_count)) return XYL_OK;
+    for (size_t i = 0; i < m->tri_view_count; ++i, t += 3)
+        for (int k = 0; k < 3; ++k)
+            if (t[k] >= m->vertex_count)
+                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)i,
+                                 "view triangle %zu uses vertex %u of %zu", i, t[k],
+                                 m->vertex_count);
+    return XYL_OK;
+}
+
+xyl_result xyl__mesh_validate(const xyl_mesh *m, unsigned reads, xyl_diag *diag)
+{
+    if (reads & (XYL__MESH_FACE_BRANCHES | XYL__MESH_UV_WRAPS)) reads |= XYL__MESH_FACES;
+    xyl_result r = check_arrays(m, reads, diag);
+    if (r == XYL_OK) r = check_vertices(m, diag);
+    if (r == XYL_OK && (reads & XYL__MESH_FACES))
+        r = check_faces(m->quads, m->quad_count, 4, 0, m->vertex_count, diag);
+    if (r == XYL_OK && (reads & XYL__MESH_FACES))
+        r = check_faces(m->triangles, m->triangle_count, 3, m->quad_count, m->vertex_count, diag);
+    if (r == XYL_OK && (reads & XYL__MESH_UV_WRAPS)) r = check_uv_wraps(m, diag);
+    if (r == XYL_OK && (reads & XYL__MESH_TRI_VIEW)) r = check_tri_view(m, diag);
+    return r;
+}
+
+/* ---- the public mesh ---------------------------------------------------------------------- */
+
+/* The desc's own limits, from its counts alone. */
+static xyl_result check_limits(const xyl_mesh_desc *d, xyl_diag *diag)
+{
+    uint64_t max_v = d->limits.max_vertices ? d->limits.max_vertices
+                                            : XYL__MESH_DEFAULT_MAX_VERTICES;
     uint64_t max_f = d->limits.max_faces ? d->limits.max_faces : XYL__MESH_DEFAULT_MAX_FACES;
-    if ((d->vertex_count && !d->positions) || (d->quad_count && !d->quads) ||
-        (d->triangle_count && !d->triangles))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "array is NULL but count is not 0");
     if ((uint64_t)d->vertex_count > max_v || d->vertex_count > UINT32_MAX ||
         (uint64_t)d->quad_count + d->triangle_count > max_f)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%zu vertices and %zu faces exceed the limits (%llu, %llu)",
                          d->vertex_count, d->quad_count + d->triangle_count,
                          (unsigned long long)max_v, (unsigned long long)max_f);
-    for (size_t v = 0; v < d->vertex_count; ++v) {
-        bool ok = finite3(d->positions[v]) && (!d->normals || finite3(d->normals[v])) &&
-                  (!d->uvs || (isfinite(d->uvs[2 * v]) && isfinite(d->uvs[2 * v + 1])));
-        if (!ok)
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
-                             "vertex %zu has a non-finite position, normal or UV", v);
-    }
-    for (size_t f = 0; f < d->quad_count; ++f) {
-        xyl_result r = check_face(d->quads + 4 * f, 4, d->vertex_count, f, diag);
-        if (r) return r;
-    }
-    for (size_t f = 0; f < d->triangle_count; ++f) {
-        xyl_result r = check_face(d->triangles + 3 * f, 3, d->vertex_count, d->quad_count + f, diag);
-        if (r) return r;
-    }
-    return xyl__check_uv_wraps(d->uv_wraps, d->quad_count, d->triangle_count, diag);
+    return XYL_OK;
 }
 
 /* Copies count * size bytes of src (or zeroes when src is NULL) into a new zeroed array of room
@@ -162,7 +274,9 @@ xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *
 {
     if (!desc || !out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "desc and out must not be NULL");
-    xyl_result r = validate(desc, diag);
+    xyl_mesh view = XYL__MESH_VIEW_OF(desc);
+    xyl_result r = check_limits(desc, diag);
+    if (r == XYL_OK) r = xyl__mesh_validate(&view, XYL__MESH_FACES | XYL__MESH_UV_WRAPS, diag);
     if (r) return r;
     const xyl_allocator *al = &desc->alloc;
     bool ok = true;
@@ -278,30 +392,6 @@ void xyl_mesh_destroy(xyl_mesh *mesh)
 
 enum { USED_PLAIN = 1, USED_WRAPPED = 2 };
 
-xyl_result xyl__check_mesh_faces(const xyl_mesh *m, xyl_diag *diag)
-{
-    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f) {
-        int n;
-        const uint32_t *c = xyl__mesh_face(m, f, &n);
-        xyl_result r = check_face(c, n, m->vertex_count, f, diag);
-        if (r) return r;
-    }
-    return XYL_OK;
-}
-
-/* A caller's view gets the face checks of xyl_mesh_create and its wrap bits. */
-static xyl_result check_view(const xyl_mesh *m, xyl_diag *diag)
-{
-    size_t faces = m->quad_count + m->triangle_count;
-    if ((m->vertex_count && (!m->positions || !m->normals || !m->uvs || !m->branch_ids)) ||
-        (m->quad_count && !m->quads) || (m->triangle_count && !m->triangles) ||
-        (faces && !m->face_branches))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a mesh array is NULL but its count is not 0");
-    xyl_result r = xyl__check_mesh_faces(m, diag);
-    return r ? r : xyl__check_uv_wraps(m->uv_wraps, m->quad_count, m->triangle_count, diag);
-}
-
 /* How each vertex is used: USED_PLAIN and/or USED_WRAPPED, from every face corner. */
 static void mark_uses(const xyl_mesh *m, uint8_t *use)
 {
@@ -330,8 +420,13 @@ xyl_result xyl_mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, x
 {
     if (!m || !out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "mesh and out must not be NULL");
-    xyl_result r = check_view(m, diag);
-    if (r) return r;
+    xyl_result r = xyl__mesh_validate(m, XYL__SPLIT_SEAMS_READS, diag);
+    return r ? r : xyl__mesh_split_seams(m, alloc, out, diag);
+}
+
+xyl_result xyl__mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, xyl_mesh **out,
+                                 xyl_diag *diag)
+{
     size_t nv = m->vertex_count, nf = m->quad_count + m->triangle_count, copies = 0;
     uint8_t *use = xyl__calloc(alloc, nv ? nv : 1, 1);
     uint32_t *copy = xyl__alloc_array(alloc, nv ? nv : 1, sizeof *copy);

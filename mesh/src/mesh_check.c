@@ -7,7 +7,6 @@
  * by the larger one inside each bucket, so every undirected edge becomes one run: O(V + F) plus
  * O(k log k) per bucket of k half-edges, O(F log F) at worst. Duplicate faces are found the same
  * way, bucketed by their smallest vertex. */
-#include <stdlib.h>
 #include <string.h>
 
 #include "mesh_internal.h"
@@ -63,62 +62,44 @@ static uint32_t slot_next(const xyl_mesh *m, uint32_t h)
     return (h - q4) % 3 == 2 ? h - 2u : h + 1u;
 }
 
-/* ---- validation ----------------------------------------------------------------------------- */
+/* ---- limits and scratch memory --------------------------------------------------------------- */
 
-/* The mesh may be a caller-built view, so it gets the checks xyl_mesh_create makes. */
-static xyl_result validate(const xyl_mesh *m, xyl_diag *diag)
+/* Slots are numbered with uint32_t. */
+static xyl_result check_limits(const xyl_mesh *m, xyl_diag *diag)
 {
-    if ((m->vertex_count && !m->positions) || (m->quad_count && !m->quads) ||
-        (m->triangle_count && !m->triangles))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "array is NULL but count is not 0");
-    /* Slots are numbered with uint32_t. */
     if ((uint64_t)m->vertex_count > MAX_CHECK_VERTICES || m->quad_count > UINT32_MAX / 4 ||
         m->triangle_count > (UINT32_MAX - 4 * m->quad_count) / 3)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%zu vertices, %zu quads and %zu triangles exceed the check's indexing",
                          m->vertex_count, m->quad_count, m->triangle_count);
-    for (size_t v = 0; v < m->vertex_count; ++v) {
-        xyl_vec3 p = m->positions[v];
-        if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
-                             "vertex %zu has a non-finite position", v);
-    }
-    return xyl__check_mesh_faces(m, diag);
+    return XYL_OK;
 }
 
-/* ---- scratch memory ------------------------------------------------------------------------- */
-
-static void scratch_free(scratch *s)
+static void scratch_free(scratch *s, const xyl_allocator *a)
 {
-    xyl__free(NULL, s->offsets);
-    xyl__free(NULL, s->he);
-    xyl__free(NULL, s->face_parent);
-    xyl__free(NULL, s->corner_parent);
-    xyl__free(NULL, s->vertex_state);
-    xyl__free(NULL, s->keys);
+    xyl__free(a, s->offsets);
+    xyl__free(a, s->he);
+    xyl__free(a, s->face_parent);
+    xyl__free(a, s->corner_parent);
+    xyl__free(a, s->vertex_state);
+    xyl__free(a, s->keys);
     memset(s, 0, sizeof *s);
 }
 
-/* Uninitialised: every entry is written before it is read. */
-static void *alloc_array(size_t count, size_t size)
+/* Arrays of he, face_parent, corner_parent and keys are left uninitialised: every entry is
+ * written before it is read. */
+static bool scratch_alloc(scratch *s, size_t vertices, size_t faces, size_t slots,
+                          const xyl_allocator *a)
 {
-    size_t bytes;
-    return xyl__mul_ok(count, size, &bytes) ? xyl__alloc(NULL, bytes) : NULL;
-}
-
-/* From malloc: the call takes no allocator. */
-static bool scratch_alloc(scratch *s, size_t vertices, size_t faces, size_t slots)
-{
-    s->offsets = xyl__calloc(NULL, vertices + 1, sizeof *s->offsets);
-    s->he = alloc_array(slots, sizeof *s->he);
-    s->face_parent = alloc_array(faces, sizeof *s->face_parent);
-    s->corner_parent = alloc_array(slots, sizeof *s->corner_parent);
-    s->vertex_state = xyl__calloc(NULL, vertices, sizeof *s->vertex_state);
-    s->keys = alloc_array(faces, sizeof *s->keys);
+    s->offsets = xyl__calloc(a, vertices + 1, sizeof *s->offsets);
+    s->he = xyl__alloc_array(a, slots, sizeof *s->he);
+    s->face_parent = xyl__alloc_array(a, faces, sizeof *s->face_parent);
+    s->corner_parent = xyl__alloc_array(a, slots, sizeof *s->corner_parent);
+    s->vertex_state = xyl__calloc(a, vertices, sizeof *s->vertex_state);
+    s->keys = xyl__alloc_array(a, faces, sizeof *s->keys);
     bool ok = s->offsets && s->he && s->face_parent && s->corner_parent && s->vertex_state &&
               s->keys;
-    if (!ok) scratch_free(s);
+    if (!ok) scratch_free(s, a);
     return ok;
 }
 
@@ -247,7 +228,7 @@ static int he_compare(const void *pa, const void *pb)
 static void sort_half_edges(half_edge *e, size_t n)
 {
     if (n > SMALL_BUCKET) {
-        qsort(e, n, sizeof *e, he_compare);
+        xyl__sort(e, n, sizeof *e, he_compare);
         return;
     }
     for (size_t i = 1; i < n; ++i) {
@@ -358,7 +339,7 @@ static int key_compare(const void *pa, const void *pb)
 static void sort_keys(face_key *k, size_t n)
 {
     if (n > SMALL_BUCKET) {
-        qsort(k, n, sizeof *k, key_compare);
+        xyl__sort(k, n, sizeof *k, key_compare);
         return;
     }
     for (size_t i = 1; i < n; ++i) {
@@ -419,21 +400,23 @@ static void fill_report(const xyl_mesh *m, scratch *s, xyl_mesh_report *r)
                          r->degenerate_faces == 0 && r->duplicate_faces == 0;
 }
 
-xyl_result xyl_mesh_check(const xyl_mesh *mesh, xyl_mesh_report *report, xyl_diag *diag)
+xyl_result xyl_mesh_check(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                          xyl_mesh_report *report, xyl_diag *diag)
 {
     if (!mesh || !report)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "mesh and report must not be NULL");
-    xyl_result res = validate(mesh, diag);
+    xyl_result res = check_limits(mesh, diag);
+    if (res == XYL_OK) res = xyl__mesh_validate(mesh, XYL__MESH_FACES, diag);
     if (res) return res;
     size_t faces = mesh->quad_count + mesh->triangle_count;
     size_t slots = 4 * mesh->quad_count + 3 * mesh->triangle_count;
     scratch s;
-    if (!scratch_alloc(&s, mesh->vertex_count, faces, slots))
+    if (!scratch_alloc(&s, mesh->vertex_count, faces, slots, alloc))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the mesh check");
     xyl_mesh_report r;
     fill_report(mesh, &s, &r);
-    scratch_free(&s);
+    scratch_free(&s, alloc);
     *report = r;
     xyl__diag_ok(diag);
     return XYL_OK;

@@ -7,7 +7,6 @@
  * more than the shared edge for two (only possible when they lie flat on each other), never for
  * three. Degenerate triangles (see mesh_check.c) are skipped. */
 #include <float.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "mesh_internal.h"
@@ -57,7 +56,7 @@ typedef struct tri_set {
     size_t capacity;     /* how many the caller wants: pairs never holds more */
     size_t total;        /* pairs found */
     bool out_of_memory;
-    const xyl_allocator *alloc; /* of the scratch and the pairs: NULL is malloc */
+    const xyl_allocator *alloc; /* of the scratch and the pairs */
 } tri_set;
 
 typedef struct p2 {
@@ -522,31 +521,14 @@ static int u64_compare(const void *pa, const void *pb)
 
 /* ---- the public call ------------------------------------------------------------------------ */
 
-static xyl_result validate(const xyl_mesh *m, const uint32_t *pairs, size_t capacity,
-                           const size_t *count, xyl_diag *diag)
+/* Triangle and node indices are uint32_t (a tree over n triangles has < 2n nodes); the view
+ * is all the test reads. */
+static xyl_result validate(const xyl_mesh *m, xyl_diag *diag)
 {
-    if (!m || !count || (!pairs && capacity))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "mesh and count must not be NULL, nor pairs with a capacity");
-    if ((m->vertex_count && !m->positions) || (m->tri_view_count && !m->tri_view))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "array is NULL but count is not 0");
-    /* Triangle and node indices are uint32_t (a tree over n triangles has < 2n nodes). */
     if (m->tri_view_count > UINT32_MAX / 2)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%zu triangles exceed 32-bit indexing", m->tri_view_count);
-    for (size_t v = 0; v < m->vertex_count; ++v) {
-        xyl_vec3 p = m->positions[v];
-        if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
-                             "vertex %zu has a non-finite position", v);
-    }
-    for (size_t k = 0; k < 3 * m->tri_view_count; ++k)
-        if (m->tri_view[k] >= m->vertex_count)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)(k / 3),
-                             "triangle %zu uses vertex %u of %zu", k / 3, m->tri_view[k],
-                             m->vertex_count);
-    return XYL_OK;
+    return xyl__mesh_validate(m, XYL__MESH_TRI_VIEW, diag);
 }
 
 static void tri_set_free(tri_set *s)
@@ -566,13 +548,12 @@ static bool find_pairs(tri_set *s, morton_entry *tmp)
     build(s, 0, s->n);
     collide_self(s, 0);
     if (s->out_of_memory) return false;
-    if (s->kept > 1) qsort(s->pairs, s->kept, sizeof *s->pairs, u64_compare);
+    xyl__sort(s->pairs, s->kept, sizeof *s->pairs, u64_compare);
     return true;
 }
 
 /* Every intersecting pair of a valid mesh in one pass, into s->pairs (i << 32 | j, sorted; s->kept
- * of them); false when memory ran out, with nothing to free. Memory comes from alloc (NULL:
- * malloc). */
+ * of them); false when memory ran out, with nothing to free. Memory comes from alloc. */
 static bool all_pairs(const xyl_mesh *mesh, size_t capacity, const xyl_allocator *alloc,
                       tri_set *out)
 {
@@ -594,8 +575,7 @@ static bool all_pairs(const xyl_mesh *mesh, size_t capacity, const xyl_allocator
 xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         uint64_t **pairs, size_t *count, xyl_diag *diag)
 {
-    size_t zero = 0;
-    xyl_result r = validate(mesh, NULL, 0, &zero, diag);
+    xyl_result r = validate(mesh, diag);
     if (r) return r;
     tri_set s;
     if (!all_pairs(mesh, SIZE_MAX, alloc, &s))
@@ -608,13 +588,17 @@ xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocato
     return XYL_OK;
 }
 
-xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs, size_t capacity,
-                                       size_t *count, xyl_diag *diag)
+xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                       uint32_t *pairs, size_t capacity, size_t *count,
+                                       xyl_diag *diag)
 {
-    xyl_result r = validate(mesh, pairs, capacity, count, diag);
+    if (!mesh || !count || (!pairs && capacity))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "mesh and count must not be NULL, nor pairs with a capacity");
+    xyl_result r = validate(mesh, diag);
     if (r) return r;
-    tri_set s; /* scratch from malloc: the call takes no allocator */
-    if (!all_pairs(mesh, capacity, NULL, &s))
+    tri_set s;
+    if (!all_pairs(mesh, capacity, alloc, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
     /* Written only now, so a failure leaves pairs and count untouched. */

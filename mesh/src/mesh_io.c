@@ -42,23 +42,24 @@
 /* ==== byte sink ============================================================================== */
 
 /* Counts bytes, and also stores them when buf is set: sized by an earlier counting pass, or,
- * with cap set, grown as it goes (from the C library's allocator; overflow on failure). */
+ * with cap set, grown as it goes (from alloc; overflow on failure). */
 typedef struct sink {
     unsigned char *buf;
     size_t len;
     bool overflow; /* the output would not fit in a size_t (with room for a NUL), or memory
                       ran out */
     size_t cap;    /* 0: buf has room for everything */
+    const xyl_allocator *alloc;
 } sink;
 
 static bool sink_room(sink *s, size_t n)
 {
     size_t cap = s->cap;
     while (cap - s->len < n) cap = cap > SIZE_MAX / 2 ? SIZE_MAX : 2 * cap;
-    unsigned char *b = xyl__alloc(NULL, cap);
+    unsigned char *b = xyl__alloc(s->alloc, cap);
     if (!b) return false;
     memcpy(b, s->buf, s->len);
-    xyl__free(NULL, s->buf);
+    xyl__free(s->alloc, s->buf);
     s->buf = b;
     s->cap = cap;
     return true;
@@ -120,72 +121,17 @@ static void put_padding(sink *s, size_t n, char byte)
 
 /* ==== checking a view ======================================================================== */
 
-static bool finite3(xyl_vec3 v)
-{
-    return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
-}
+/* What the writers read: everything of a mesh (the seams are split where it has wraps). */
+#define WRITER_READS (XYL__SPLIT_SEAMS_READS | XYL__MESH_TRI_VIEW)
 
-/* The view is public, so a caller may have built it: every array the writers read must be there
- * and the triangulated view must match the faces. */
-static xyl_result check_arrays(const xyl_mesh *m, xyl_diag *diag)
+/* A GLB's own limit on a valid view: its branch ids travel as floats. */
+static xyl_result check_float_ids(const xyl_mesh *m, xyl_diag *diag)
 {
-    bool counts_ok = m->quad_count <= (SIZE_MAX - m->triangle_count) / 2 &&
-                     m->tri_view_count == 2 * m->quad_count + m->triangle_count;
-    if (!counts_ok)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "tri_view_count %zu is not 2 * %zu quads + %zu triangles",
-                         m->tri_view_count, m->quad_count, m->triangle_count);
-    size_t faces = m->quad_count + m->triangle_count;
-    bool vert_ok = !m->vertex_count ||
-                   (m->positions && m->normals && m->uvs && m->branch_ids);
-    bool face_ok = (!m->quad_count || m->quads) && (!m->triangle_count || m->triangles) &&
-                   (!faces || m->face_branches) && (!m->tri_view_count || m->tri_view);
-    if (!vert_ok || !face_ok)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a mesh array is NULL but its count is not 0");
-    return XYL_OK;
-}
-
-/* Checks count runs of n indices; diag.index is first + the run (a face or a view triangle). */
-static xyl_result check_indices(const uint32_t *idx, size_t count, int n, size_t vertex_count,
-                                size_t first, const char *what, xyl_diag *diag)
-{
-    for (size_t f = 0; f < count; ++f) {
-        for (int k = 0; k < n; ++k) {
-            uint32_t v = idx[(size_t)n * f + (size_t)k];
-            if (v >= vertex_count)
-                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)(first + f),
-                                 "%s %zu uses vertex %u of %zu", what, first + f, v,
-                                 vertex_count);
-        }
-    }
-    return XYL_OK;
-}
-
-static xyl_result check_faces(const xyl_mesh *m, xyl_diag *diag)
-{
-    size_t v = m->vertex_count;
-    xyl_result r = check_indices(m->quads, m->quad_count, 4, v, 0, "face", diag);
-    if (r == XYL_OK)
-        r = check_indices(m->triangles, m->triangle_count, 3, v, m->quad_count, "face", diag);
-    if (r == XYL_OK)
-        r = check_indices(m->tri_view, m->tri_view_count, 3, v, 0, "view triangle", diag);
-    return r;
-}
-
-static xyl_result check_vertices(const xyl_mesh *m, bool float_ids, xyl_diag *diag)
-{
-    for (size_t v = 0; v < m->vertex_count; ++v) {
-        bool ok = finite3(m->positions[v]) && finite3(m->normals[v]) &&
-                  isfinite(m->uvs[2 * v]) && isfinite(m->uvs[2 * v + 1]);
-        if (!ok)
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
-                             "vertex %zu has a non-finite position, normal or UV", v);
-        if (float_ids && m->branch_ids[v] > MAX_FLOAT_EXACT_ID)
+    for (size_t v = 0; v < m->vertex_count; ++v)
+        if (m->branch_ids[v] > MAX_FLOAT_EXACT_ID)
             return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, (int64_t)v,
                              "vertex %zu has branch id %u; a GLB stores ids up to %u exactly", v,
                              m->branch_ids[v], (unsigned)MAX_FLOAT_EXACT_ID);
-    }
     return XYL_OK;
 }
 
@@ -457,8 +403,9 @@ static xyl_result fail_too_large(uint64_t bytes, xyl_diag *diag)
                      (unsigned long long)bytes, (unsigned long)UINT32_MAX);
 }
 
-/* The size is checked before the arrays are read, so an oversized view is refused cheaply. */
-static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
+/* The GLB's size from the counts alone, before any array is read, so an oversized view is
+ * refused cheaply. */
+static xyl_result size_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
 {
     memset(l, 0, sizeof *l);
     if (m->vertex_count && !m->tri_view_count)
@@ -470,12 +417,14 @@ static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
                          "%zu vertices and %zu triangles do not fit in a GLB's 4 GiB",
                          m->vertex_count, m->tri_view_count);
     plan_views(m, l);
-    if (glb_total(l) > UINT32_MAX) return fail_too_large(glb_total(l), diag);
-    xyl_result r = check_faces(m, diag);
-    if (r == XYL_OK) r = check_vertices(m, true, diag);
-    if (r != XYL_OK) return r;
+    return glb_total(l) > UINT32_MAX ? fail_too_large(glb_total(l), diag) : XYL_OK;
+}
+
+/* The rest of the layout of a valid view sized by size_glb: bounds and the JSON chunk. */
+static xyl_result plan_glb(const xyl_mesh *m, glb_layout *l, xyl_diag *diag)
+{
     if (m->vertex_count) position_bounds(m, l);
-    sink count = {NULL, 0, false, 0};
+    sink count = {NULL, 0, false, 0, NULL};
     render_json(l, &count);
     l->json_len = count.len;
     l->total = glb_total(l);
@@ -517,23 +466,21 @@ static bool format_ok(xyl_mesh_format format)
 }
 
 /* On success the plan may hold the split mesh (plan_free); on failure it holds nothing. */
-static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xyl_diag *diag)
+static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, const xyl_allocator *alloc,
+                          plan *p, xyl_diag *diag)
 {
     p->format = format;
     p->split = NULL;
     p->size = 0;
-    xyl_result r = check_arrays(m, diag);
-    /* a GLB's size is checked before any array is read (plan_glb); the split only adds to it */
-    if (r == XYL_OK && format == XYL_MESH_FORMAT_GLB) r = plan_glb(m, &p->glb, diag);
-    if (r == XYL_OK && format == XYL_MESH_FORMAT_OBJ) r = check_faces(m, diag);
-    if (r == XYL_OK && format == XYL_MESH_FORMAT_OBJ) r = check_vertices(m, false, diag);
-    /* the view may be the caller's own, so the C library's allocator is used, not the mesh's */
-    if (r == XYL_OK && has_wraps(m)) r = xyl_mesh_split_seams(m, NULL, &p->split, diag);
-    if (r != XYL_OK) return r;
-    if (format == XYL_MESH_FORMAT_GLB) {
-        if (p->split) r = plan_glb(p->split, &p->glb, diag);
-        p->size = (size_t)p->glb.total;
-    }
+    bool glb = format == XYL_MESH_FORMAT_GLB;
+    xyl_result r = glb ? size_glb(m, &p->glb, diag) : XYL_OK;
+    if (r == XYL_OK) r = xyl__mesh_validate(m, WRITER_READS, diag);
+    if (r == XYL_OK && glb) r = check_float_ids(m, diag);
+    if (r == XYL_OK && has_wraps(m)) r = xyl__mesh_split_seams(m, alloc, &p->split, diag);
+    /* the split only adds vertices: its GLB is sized again */
+    if (r == XYL_OK && glb && p->split) r = size_glb(p->split, &p->glb, diag);
+    if (r == XYL_OK && glb) r = plan_glb(uv_mesh(m, p), &p->glb, diag);
+    if (r == XYL_OK && glb) p->size = (size_t)p->glb.total;
     if (r != XYL_OK) plan_free(p);
     return r;
 }
@@ -543,7 +490,7 @@ static xyl_result prepare(const xyl_mesh *m, xyl_mesh_format format, plan *p, xy
 static xyl_result size_output(const xyl_mesh *m, plan *p)
 {
     if (p->format == XYL_MESH_FORMAT_GLB) return XYL_OK;
-    sink count = {NULL, 0, false, 0};
+    sink count = {NULL, 0, false, 0, NULL};
     render_obj(m, uv_mesh(m, p), &count);
     p->size = count.len;
     if (!count.overflow) return XYL_OK;
@@ -554,7 +501,7 @@ static xyl_result size_output(const xyl_mesh *m, plan *p)
 /* Writes exactly p->size bytes (and a NUL after OBJ text, whose room the caller checked). */
 static void emit(const xyl_mesh *m, const plan *p, unsigned char *out)
 {
-    sink fill = {out, 0, false, 0};
+    sink fill = {out, 0, false, 0, NULL};
     if (p->format == XYL_MESH_FORMAT_GLB) {
         emit_glb(uv_mesh(m, p), &p->glb, &fill);
     } else {
@@ -564,12 +511,13 @@ static void emit(const xyl_mesh *m, const plan *p, unsigned char *out)
     assert(!fill.overflow && fill.len == p->size);
 }
 
-xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, void *buffer,
-                                 size_t capacity, size_t *needed)
+xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format,
+                                 const xyl_allocator *alloc, void *buffer, size_t capacity,
+                                 size_t *needed)
 {
     if (!mesh || !format_ok(format) || (!buffer && !needed)) return XYL_ERR_INVALID_ARGUMENT;
     plan p;
-    xyl_result r = prepare(mesh, format, &p, NULL);
+    xyl_result r = prepare(mesh, format, alloc, &p, NULL);
     if (r == XYL_OK) r = size_output(mesh, &p);
     if (r != XYL_OK) return r;
     if (needed) *needed = p.size;
@@ -582,7 +530,7 @@ xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format, v
 }
 
 xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_format format,
-                               xyl_diag *diag)
+                               const xyl_allocator *alloc, xyl_diag *diag)
 {
     if (!mesh || !path || !*path || !format_ok(format))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -590,27 +538,26 @@ xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path, xyl_mesh_
     /* OBJ text is rendered once, into a buffer that grows, not counted first: formatting the
      * floats is most of its cost */
     plan p;
-    xyl_result r = prepare(mesh, format, &p, diag);
+    xyl_result r = prepare(mesh, format, alloc, &p, diag);
     if (r != XYL_OK) return r;
-    /* The view may be the caller's own, so the C library's allocator is used, not the mesh's. */
-    sink out = {NULL, 0, false, 0};
+    sink out = {NULL, 0, false, 0, alloc};
     if (format == XYL_MESH_FORMAT_OBJ) {
         out.cap = (size_t)1 << 16;
-        out.buf = xyl__alloc(NULL, out.cap);
+        out.buf = xyl__alloc(alloc, out.cap);
         if (out.buf) render_obj(mesh, uv_mesh(mesh, &p), &out);
     } else {
-        out.buf = xyl__alloc(NULL, p.size + 1);
+        out.buf = xyl__alloc(alloc, p.size + 1);
         if (out.buf) emit(mesh, &p, out.buf);
         out.len = p.size;
     }
     plan_free(&p);
     if (!out.buf || out.overflow) {
-        xyl__free(NULL, out.buf);
+        xyl__free(alloc, out.buf);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the %s",
                          format == XYL_MESH_FORMAT_OBJ ? "OBJ text" : "GLB");
     }
-    r = xyl__write_file_atomic(path, out.buf, out.len, diag);
-    xyl__free(NULL, out.buf);
+    r = xyl__write_file_atomic(path, out.buf, out.len, alloc, diag);
+    xyl__free(alloc, out.buf);
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }

@@ -103,38 +103,10 @@ const uint32_t *face_vertices(const xyl__mesh_arrays *a, size_t f, int *n)
     return a->triangles + 3 * (f - a->quad_count);
 }
 
-bool finite3(xyl_vec3 p)
-{
-    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
-}
-
 xyl_result validate_input(const xyl__mesh_arrays *a, xyl_diag *diag)
 {
-    if ((a->vertex_count && !a->positions) || (a->quad_count && !a->quads) ||
-        (a->triangle_count && !a->triangles))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "mesh array is NULL but its count is not 0");
-    for (size_t v = 0; v < a->vertex_count; ++v) {
-        const xyl_vec3 p = a->positions[v];
-        bool ok = finite3(p) && (!a->normals || finite3(a->normals[v])) &&
-                  (!a->uvs || (std::isfinite(a->uvs[2 * v]) && std::isfinite(a->uvs[2 * v + 1])));
-        if (!ok)
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, static_cast<int64_t>(v),
-                             "vertex %zu has a non-finite position, normal or UV", v);
-    }
-    for (size_t f = 0; f < face_count(a); ++f) {
-        int n = 0;
-        const uint32_t *idx = face_vertices(a, f, &n);
-        for (int k = 0; k < n; ++k) {
-            bool repeated = false;
-            for (int j = 0; j < k; ++j) repeated = repeated || idx[j] == idx[k];
-            if (idx[k] >= a->vertex_count || repeated)
-                return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, static_cast<int64_t>(f),
-                                 "face %zu uses vertex %u %s", f, idx[k],
-                                 repeated ? "twice" : "out of range");
-        }
-    }
-    return xyl__check_uv_wraps(a->uv_wraps, a->quad_count, a->triangle_count, diag);
+    const xyl_mesh view = XYL__MESH_VIEW_OF(a);
+    return xyl__mesh_validate(&view, XYL__MESH_FACES | XYL__MESH_UV_WRAPS, diag);
 }
 
 struct Limits {

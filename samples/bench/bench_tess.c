@@ -254,7 +254,7 @@ static void refine_fixed(const xyl_mesh *m, uint32_t variant, uint32_t level,
     xyl_tess_view view = {0};
     view.fixed_level = level;
     if (!r) r = xyl_tess_select(*tp, pat, &view, b, &d);
-    if (!r && refined) r = xyl_tess_refine(*tp, pat, b, NULL, refined, &d);
+    if (!r && refined) r = xyl_tess_refine(*tp, pat, b, NULL, NULL, refined, &d);
     if (r) die("tessellate", r, &d);
 }
 

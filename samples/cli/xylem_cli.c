@@ -450,7 +450,7 @@ static int write_skeleton(const xyl_skeleton *sk, const char *path)
 {
     xyl_skel_format fmt = ends_with(path, ".obj") ? XYL_SKEL_FORMAT_OBJ : XYL_SKEL_FORMAT_SKEL;
     xyl_diag d = {0};
-    return written(path, xyl_skeleton_write_file(sk, path, fmt, &d), &d);
+    return written(path, xyl_skeleton_write_file(sk, path, fmt, NULL, &d), &d);
 }
 
 static int grow(const options *o, const xyl_grammar *g, const char *source, double t0)
@@ -523,7 +523,7 @@ static int write_mesh(const xyl_mesh *m, const char *path)
 {
     xyl_mesh_format fmt = ends_with(path, ".obj") ? XYL_MESH_FORMAT_OBJ : XYL_MESH_FORMAT_GLB;
     xyl_diag d = {0};
-    return written(path, xyl_mesh_write_file(m, path, fmt, &d), &d);
+    return written(path, xyl_mesh_write_file(m, path, fmt, NULL, &d), &d);
 }
 
 static int cmd_mesh(const options *o)
@@ -628,7 +628,8 @@ static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_
  * level 1, where a patch shows exactly its three corners (a plain triangle). */
 static xyl_result refine_on_cpu(render_job *j, xyl_diag *d)
 {
-    xyl_result r = xyl_tess_refine(j->patches, j->patterns, j->batches, NULL, &j->refined, d);
+    xyl_result r = xyl_tess_refine(j->patches, j->patterns, j->batches, NULL, NULL,
+                                   &j->refined, d);
     if (r == XYL_OK) r = xyl_tess_patches_create(j->refined, NULL, &j->drawn, d);
     return r;
 }

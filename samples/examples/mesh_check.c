@@ -27,11 +27,11 @@ int main(void)
     }
     xyl_mesh_report rep;
     size_t pairs = 0, bytes = 0;
-    int ok = !xyl_mesh_check(m, &rep, &diag) &&
-             !xyl_mesh_self_intersections(m, NULL, 0, &pairs, &diag) &&
-             !xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, 0, &bytes);
+    int ok = !xyl_mesh_check(m, NULL, &rep, &diag) &&
+             !xyl_mesh_self_intersections(m, NULL, NULL, 0, &pairs, &diag) &&
+             !xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &bytes);
     void *glb = ok ? malloc(bytes) : NULL;
-    ok = ok && glb && !xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, glb, bytes, &bytes);
+    ok = ok && glb && !xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, glb, bytes, &bytes);
     printf("V %zu, E %zu, F %zu, Euler %lld, closed manifold: %s, intersecting pairs: %zu, "
            "GLB %zu bytes\n", rep.vertices, rep.edges, rep.faces, (long long)rep.euler,
            rep.closed_manifold ? "yes" : "no", pairs, bytes);

@@ -30,8 +30,8 @@ int main(void)
     }
     xyl_mesh_report rep;
     size_t obj_bytes = 0;
-    int ok = !xyl_mesh_check(m, &rep, &diag) &&
-             !xyl_mesh_write_memory(m, XYL_MESH_FORMAT_OBJ, NULL, 0, &obj_bytes);
+    int ok = !xyl_mesh_check(m, NULL, &rep, &diag) &&
+             !xyl_mesh_write_memory(m, XYL_MESH_FORMAT_OBJ, NULL, NULL, 0, &obj_bytes);
     printf("%u branches -> %zu vertices, %zu quads, %zu triangles; closed manifold: %s; "
            "%zu joint pairs found, %u laterals moved; OBJ %zu bytes\n", sk->branch_count,
            m->vertex_count, m->quad_count, m->triangle_count, rep.closed_manifold ? "yes" : "no",

@@ -836,7 +836,8 @@ xyl_result xyl_skeleton_write_text(const xyl_skeleton *skeleton, xyl_skel_format
 }
 
 xyl_result xyl_skeleton_write_file(const xyl_skeleton *skeleton, const char *path,
-                                   xyl_skel_format format, xyl_diag *diag)
+                                   xyl_skel_format format, const xyl_allocator *alloc,
+                                   xyl_diag *diag)
 {
     if (!skeleton || !path || !*path || !format_ok(format))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -846,15 +847,13 @@ xyl_result xyl_skeleton_write_file(const xyl_skeleton *skeleton, const char *pat
     size_t size = 0;
     r = xyl_skeleton_write_text(skeleton, format, NULL, 0, &size);
     if (r != XYL_OK) return xyl__fail(diag, r, 0, 0, -1, "the text would not fit in memory");
-    /* The view may be the caller's own, so the C library's allocator is used, not the
-     * skeleton's. */
-    char *text = xyl__alloc(NULL, size + 1);
+    char *text = xyl__alloc(alloc, size + 1);
     if (!text)
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for %zu bytes",
                          size + 1);
     r = xyl_skeleton_write_text(skeleton, format, text, size + 1, &size);
-    if (r == XYL_OK) r = xyl__write_file_atomic(path, text, size, diag);
-    xyl__free(NULL, text);
+    if (r == XYL_OK) r = xyl__write_file_atomic(path, text, size, alloc, diag);
+    xyl__free(alloc, text);
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }

@@ -256,7 +256,7 @@ xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
         uint64_t b = m->face_branches[face_of(m, (uint32_t)pairs[i])];
         keys[i] = (keyed){a <= b ? a << 32 | b : b << 32 | a, pairs[i]};
     }
-    qsort(keys, count, sizeof *keys, key_compare); /* by key, then pair: both are unique */
+    xyl__sort(keys, count, sizeof *keys, key_compare); /* by key, then pair: both are unique */
     for (size_t i = 0, run; i < count; i += run) {
         for (run = 1; i + run < count && keys[i + run].key == keys[i].key; ++run) {}
         uint32_t a = (uint32_t)(keys[i].key >> 32), b = (uint32_t)keys[i].key;

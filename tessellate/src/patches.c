@@ -3,6 +3,7 @@
 #include <float.h>
 #include <string.h>
 
+#include "mesh_internal.h"
 #include "tess_internal.h"
 #include "xyl_internal.h"
 
@@ -198,6 +199,8 @@ xyl_result xyl_tess_patches_create(const xyl_mesh *mesh, const xyl_tess_patches_
     size_t count = mesh->quad_count + mesh->triangle_count;
     if (count > UINT32_MAX / 4)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1, "%zu faces: more than 2^30", count);
+    xyl_result r = xyl__mesh_validate(mesh, XYL__MESH_NORMALS | XYL__MESH_FACES, diag);
+    if (r != XYL_OK) return r;
     size_t slots = 16;
     while (slots < 2 * (4 * count)) slots *= 2;
 
@@ -226,7 +229,7 @@ xyl_result xyl_tess_patches_create(const xyl_mesh *mesh, const xyl_tess_patches_
                          count);
     }
     memset(map.keys, 0xff, slots * sizeof(uint64_t));
-    xyl_result r = fill_all(mesh, t, &map, (xyl_tess_patch *)t->pub.records,
+    r = fill_all(mesh, t, &map, (xyl_tess_patch *)t->pub.records,
                             (uint32_t *)t->pub.patch_edges, diag);
     t->pub.edge_count = map.count;
     xyl__free(a, map.keys);

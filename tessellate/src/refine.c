@@ -53,7 +53,7 @@ static void evaluate(const xyl_tess_patches *tp, const xyl_tess_patterns *pat,
 
 xyl_result xyl_tess_refine(const xyl_tess_patches *patches, const xyl_tess_patterns *patterns,
                            const xyl_tess_batches *batches, const xyl_mesh_limits *limits,
-                           xyl_mesh **out, xyl_diag *diag)
+                           const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag)
 {
     if (!patches || !patterns || !batches || !out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -68,10 +68,9 @@ xyl_result xyl_tess_refine(const xyl_tess_patches *patches, const xyl_tess_patte
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "refined mesh of %zu vertices and %zu triangles exceeds the limits", nv,
                          nt);
-    xyl_allocator a = {0};
-    xyl_vec3 *pos = xyl__calloc(&a, nv ? nv : 1, sizeof *pos);
-    xyl_vec3 *nrm = xyl__calloc(&a, nv ? nv : 1, sizeof *nrm);
-    uint32_t *idx = xyl__calloc(&a, nt ? 3 * nt : 1, sizeof *idx);
+    xyl_vec3 *pos = xyl__calloc(alloc, nv ? nv : 1, sizeof *pos);
+    xyl_vec3 *nrm = xyl__calloc(alloc, nv ? nv : 1, sizeof *nrm);
+    uint32_t *idx = xyl__calloc(alloc, nt ? 3 * nt : 1, sizeof *idx);
     if (!pos || !nrm || !idx) {
         r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for %zu vertices", nv);
     } else {
@@ -83,10 +82,11 @@ xyl_result xyl_tess_refine(const xyl_tess_patches *patches, const xyl_tess_patte
         md.triangles = idx;
         md.triangle_count = nt;
         md.limits = lim;
+        if (alloc) md.alloc = *alloc;
         r = xyl_mesh_create(&md, out, diag);
     }
-    xyl__free(&a, pos);
-    xyl__free(&a, nrm);
-    xyl__free(&a, idx);
+    xyl__free(alloc, pos);
+    xyl__free(alloc, nrm);
+    xyl__free(alloc, idx);
     return r;
 }

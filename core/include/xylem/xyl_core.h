@@ -4,8 +4,9 @@
  *   - Every fallible call returns an xyl_result; XYL_OK is 0. xyl_result_string() names a code.
  *   - Pass an optional xyl_diag* to get details (message, line/column, offending index) of the
  *     last failure of that call, and warnings it raised. There is no global error state.
- *   - Pass an xyl_allocator in a desc to route all allocations of that call; a zero-filled
- *     allocator means malloc/free.
+ *   - Pass an xyl_allocator in a desc (or as the `alloc` argument of a call without one, NULL
+ *     for the default) to route all allocations of that call; a zero-filled allocator means
+ *     the default allocator (docs/memory.md).
  *   - Angles in the C API are radians.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.

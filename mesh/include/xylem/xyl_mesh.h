@@ -8,11 +8,17 @@
  *     xyl_mesh *m = NULL;
  *     if (xyl_mesh_create(&d, &m, &diag) != XYL_OK) puts(diag.message);
  *     xyl_mesh_report r;
- *     xyl_mesh_check(m, &r, &diag);                  // r.closed_manifold, r.euler, ...
- *     xyl_mesh_write_file(m, "out.glb", XYL_MESH_FORMAT_GLB, &diag);
+ *     xyl_mesh_check(m, NULL, &r, &diag);            // r.closed_manifold, r.euler, ...
+ *     xyl_mesh_write_file(m, "out.glb", XYL_MESH_FORMAT_GLB, NULL, &diag);
  *     xyl_mesh_destroy(m);
  *
- * Every call is reentrant; a mesh is immutable once made, so threads may read it at once.
+ * Every call is reentrant; a mesh is immutable once made, so threads may read it at once. Every
+ * allocation of a call comes from its allocator: desc.alloc, or an `alloc` argument where NULL
+ * (or a zero-filled one) means the default allocator; a mesh is freed with the allocator it was
+ * made from. (OpenSubdiv's own topology tables, inside xyl_mesh_subdivide, are the exception:
+ * docs/memory.md.) A call may be given a mesh the caller built (an xyl_mesh of its own arrays): it
+ * checks what it reads first (arrays there for their counts, numbers finite, indices in range,
+ * as xyl_mesh_create checks a desc).
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
  */
@@ -77,10 +83,11 @@ typedef struct xyl_mesh_desc {
     xyl_allocator alloc;
 } xyl_mesh_desc;
 
-/* Validates (indices in range, finite numbers, no face repeating a vertex), copies, and builds
- * the triangulated view. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arrays with counts, an index out
- * of range or repeated within a face: diag.index is the face, quads first), XYL_ERR_NON_FINITE,
- * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched. */
+/* Validates (indices in range, finite numbers, no face repeating a vertex, wrap bits within a
+ * face's corners), copies, and builds the triangulated view. Errors: XYL_ERR_INVALID_ARGUMENT
+ * (NULL arrays with counts, an index out of range or repeated within a face, a wrap bit beyond a
+ * face's corners: diag.index is the face, quads first), XYL_ERR_NON_FINITE (diag.index is the
+ * vertex), XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched. */
 XYL_API xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag);
 XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
 
@@ -92,8 +99,9 @@ XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
  * by each side's vertices) but closed by position, so it is for drawing and export, not for
  * xyl_mesh_check, subdivision or the intersection test. A mesh without wraps comes back as a
  * copy. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, an index out of range or
- * repeated within a face, a wrap bit beyond a face's corners: diag.index is the face), XYL_ERR_LIMIT_EXCEEDED (more than 2^32 - 1 vertices),
- * XYL_ERR_OUT_OF_MEMORY. */
+ * repeated within a face, a wrap bit beyond a face's corners: diag.index is the face),
+ * XYL_ERR_NON_FINITE (diag.index is the vertex), XYL_ERR_LIMIT_EXCEEDED (more than 2^32 - 1
+ * vertices), XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_split_seams(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         xyl_mesh **out, xyl_diag *diag);
 
@@ -137,12 +145,21 @@ typedef enum xyl_mesh_format {
     XYL_MESH_FORMAT_GLB = 1  /* glTF 2.0 binary: POSITION, NORMAL, TEXCOORD_0, _BRANCH_ID, indices */
 } xyl_mesh_format;
 
-/* Count-then-fill, as xyl_skeleton_write_text (bytes; GLB output is binary). */
+/* Count-then-fill, as xyl_skeleton_write_text (bytes; GLB output is binary). A mesh with UV
+ * seams is split for the UVs on the way (xyl_mesh_split_seams), from alloc (NULL: the default
+ * allocator). Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments, a buffer too small, a broken
+ * view as xyl_mesh_split_seams has it, a triangulated view that is not 2 q + t triangles in
+ * range; a GLB of vertices without faces), XYL_ERR_NON_FINITE, XYL_ERR_LIMIT_EXCEEDED (a GLB
+ * over 4 GiB or with branch ids above 2^24), XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_write_memory(const xyl_mesh *mesh, xyl_mesh_format format,
-                                         void *buffer, size_t capacity, size_t *needed);
-/* Writes through a temporary file and a rename; path is never half-written. */
+                                         const xyl_allocator *alloc, void *buffer,
+                                         size_t capacity, size_t *needed);
+/* Writes through a temporary file and a rename; path is never half-written. The file is
+ * rendered in memory from alloc (NULL: the default allocator). Errors: those of
+ * xyl_mesh_write_memory, and XYL_ERR_IO. */
 XYL_API xyl_result xyl_mesh_write_file(const xyl_mesh *mesh, const char *path,
-                                       xyl_mesh_format format, xyl_diag *diag);
+                                       xyl_mesh_format format, const xyl_allocator *alloc,
+                                       xyl_diag *diag);
 
 /* ---- checks -------------------------------------------------------------------------------- */
 
@@ -161,18 +178,23 @@ typedef struct xyl_mesh_report {
 } xyl_mesh_report;
 
 /* Topology and geometry statistics of a mesh (definitions and the one tolerance:
- * docs/mesh-checks.md). Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, a bad index
- * or a vertex repeated in a face: diag.index = the face), XYL_ERR_NON_FINITE,
- * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
-XYL_API xyl_result xyl_mesh_check(const xyl_mesh *mesh, xyl_mesh_report *report, xyl_diag *diag);
+ * docs/mesh-checks.md). Scratch memory comes from alloc (NULL: the default allocator). Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, a bad index or a vertex repeated in a
+ * face: diag.index = the face), XYL_ERR_NON_FINITE (a position, or a normal or UV where the mesh
+ * has them: diag.index = the vertex), XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_mesh_check(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                  xyl_mesh_report *report, xyl_diag *diag);
 
 /* Pairs of triangles of the triangulated view whose intersection is more than the vertices they
  * share (robust triangle-triangle test, BVH broad phase; docs/mesh-checks.md). Writes the pairs
  * (i, j), i < j, sorted, 2 indices each: the first `capacity` of them into pairs (NULL with
- * capacity 0 only counts), and the total into *count. Errors: as xyl_mesh_check, plus
- * XYL_ERR_INVALID_ARGUMENT for pairs NULL with capacity > 0. */
-XYL_API xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, uint32_t *pairs,
-                                               size_t capacity, size_t *count, xyl_diag *diag);
+ * capacity 0 only counts), and the total into *count. Reads positions and the view only (a
+ * view index out of range: diag.index = the view triangle). Scratch memory comes from alloc
+ * (NULL: the default allocator). Errors: as xyl_mesh_check, plus XYL_ERR_INVALID_ARGUMENT for
+ * pairs NULL with capacity > 0. */
+XYL_API xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, const xyl_allocator *alloc,
+                                               uint32_t *pairs, size_t capacity, size_t *count,
+                                               xyl_diag *diag);
 
 #ifdef __cplusplus
 }

@@ -17,7 +17,7 @@
  *
  *     // from / to the .skel text format (docs/skeleton-format.md)
  *     xyl_skeleton_read_file("tree.skel", NULL, &s, &diag);
- *     xyl_skeleton_write_file(s, "tree.skel", XYL_SKEL_FORMAT_SKEL, &diag);
+ *     xyl_skeleton_write_file(s, "tree.skel", XYL_SKEL_FORMAT_SKEL, NULL, &diag);
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
  */
@@ -112,9 +112,12 @@ XYL_API xyl_result xyl_skeleton_write_text(const xyl_skeleton *skeleton, xyl_ske
                                            char *buffer, size_t capacity, size_t *needed);
 
 /* Writes to path.tmp-XXXXXX next to path and renames it over path, so path is never
- * half-written. Errors: XYL_ERR_IO (diag says which call failed and errno text). */
+ * half-written. The text and the temporary name come from alloc (NULL: the default
+ * allocator). Errors: those of xyl_skeleton_write_text, XYL_ERR_OUT_OF_MEMORY, XYL_ERR_IO (diag
+ * says which call failed and errno text). */
 XYL_API xyl_result xyl_skeleton_write_file(const xyl_skeleton *skeleton, const char *path,
-                                           xyl_skel_format format, xyl_diag *diag);
+                                           xyl_skel_format format, const xyl_allocator *alloc,
+                                           xyl_diag *diag);
 
 #ifdef __cplusplus
 }

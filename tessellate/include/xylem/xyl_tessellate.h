@@ -91,9 +91,12 @@ typedef struct xyl_tess_patches {
     float size;                    /* largest extent of the mesh's bounding box */
 } xyl_tess_patches;
 
-/* Errors: XYL_ERR_INVALID_ARGUMENT (NULL, bad variant, a face whose vertices or normals are
- * unusable: diag.index is the face), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY. On failure *out
- * is untouched. */
+/* The mesh may be one the caller built: it needs normals, and is checked as xyl_mesh_create
+ * checks a desc. Errors: XYL_ERR_INVALID_ARGUMENT (NULL, bad variant, a NULL array with a count,
+ * a face with a vertex out of range, repeated or with a zero normal: diag.index is the face),
+ * XYL_ERR_NON_FINITE (a position or normal: diag.index is the vertex; control points that
+ * overflow: the face), XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is
+ * untouched. */
 XYL_API xyl_result xyl_tess_patches_create(const xyl_mesh *mesh, const xyl_tess_patches_desc *desc,
                                            xyl_tess_patches **out, xyl_diag *diag);
 XYL_API void xyl_tess_patches_destroy(xyl_tess_patches *patches);
@@ -180,12 +183,14 @@ XYL_API xyl_result xyl_tess_select(const xyl_tess_patches *patches,
  * each instance's pattern vertices in instance order (not welded across patches: the shared
  * edges' points are bit-identical, so xyl_mesh_check-style welding by position is exact), the
  * patterns' triangles. Drawing it as plain triangles is the "cpu" path of `xylem render`.
- * Errors: XYL_ERR_INVALID_ARGUMENT (instances that do not match the patches or patterns),
- * XYL_ERR_LIMIT_EXCEEDED (limits: default 2^26 vertices and faces), XYL_ERR_OUT_OF_MEMORY. */
+ * limits may be NULL (defaults); alloc may be NULL (the default allocator), else the mesh and
+ * the call's scratch come from it. Errors: XYL_ERR_INVALID_ARGUMENT (instances that do not
+ * match the patches or patterns), XYL_ERR_LIMIT_EXCEEDED (limits: default 2^26 vertices and
+ * faces), XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_tess_refine(const xyl_tess_patches *patches,
                                    const xyl_tess_patterns *patterns,
                                    const xyl_tess_batches *batches, const xyl_mesh_limits *limits,
-                                   xyl_mesh **out, xyl_diag *diag);
+                                   const xyl_allocator *alloc, xyl_mesh **out, xyl_diag *diag);
 
 /* ---- cameras and offscreen images (shared by the GL and Vulkan backends) ------------------- */
 
