@@ -6,6 +6,18 @@
 
 #include "lsys_internal.h"
 
+/* The trees' leaves: a fan at the end of each apex's branch, a leaf along the branch first and
+ * its side leaves rolled around it. The first leaf becomes a cut one step later ("L(s) -> %"),
+ * which erases the fan as the apex grows on, so the derived string holds only the youngest fans
+ * and the tree's nodes are the book's (tests/test_grammar.c compares them with the bare
+ * grammars in tests/data/grammars). */
+#define FAN7 "L(ls)[&(la)$L(ls)]/(60)[&(la)$L(ls)]/(60)[&(la)$L(ls)]/(60)[&(la)$L(ls)]" \
+             "/(60)[&(la)$L(ls)]/(60)[&(la)$L(ls)]"
+#define LEAF_FAN_NOTE                                                                           \
+    "// Each apex's branch ends in a fan of leaves, blades rolled flat ($). p4 turns a fan's\n"  \
+    "// first leaf into a cut one step later, which sheds the fan as the apex grows on: only\n"  \
+    "// the youngest twigs keep leaves, and no leaf adds, moves or thickens a node.\n"
+
 typedef struct preset {
     const char *name;
     const char *summary;
@@ -84,18 +96,24 @@ static const preset presets[] = {
      "axiom: A(1,0.6)\n"
      "p1: A(l,w) : * -> !(w)F(l)[&(a1)B(l*r1,w*wr)]/(180)[&(a2)B(l*r2,w*wr)]\n"
      "p2: B(l,w) : * -> !(w)F(l)[+(a1)$B(l*r1,w*wr)][-(a2)$B(l*r2,w*wr)]\n"},
-    {"abop-2.8-ternary", "ternary tree with gravitropism (ABOP 2.8a): three-way forks, n = 6",
+    {"abop-2.8-ternary",
+     "ternary tree with gravitropism (ABOP 2.8a) and leaves, a fan of 7 at each twig, n = 6",
      "#define d1 94.74  // divergence angle 1\n"
      "#define d2 132.63 // divergence angle 2\n"
      "#define a 18.95   // branching angle\n"
      "#define lr 1.109  // elongation rate\n"
      "#define vr 1.732  // width increase rate\n"
+     "#define ls 40     // leaf length\n"
+     "#define la 55     // angle of a fan's side leaves to their twig\n"
      "#tropism 0 -1 0 0.22\n"
      "#depth 6\n#width 2\n"
+     LEAF_FAN_NOTE
      "axiom: !(1)F(200)/(45)A\n"
-     "p1: A : * -> !(vr)F(50)[&(a)F(50)A]/(d1)[&(a)F(50)A]/(d2)[&(a)F(50)A]\n"
+     "p1: A : * -> !(vr)F(50)[&(a)F(50)A " FAN7 "]/(d1)[&(a)F(50)A " FAN7 "]/(d2)[&(a)F(50)A "
+     FAN7 "]\n"
      "p2: F(l) : * -> F(l*lr)\n"
-     "p3: !(w) : * -> !(w*vr)\n"},
+     "p3: !(w) : * -> !(w*vr)\n"
+     "p4: L(s) : * -> %\n"},
     {"faycal-leaves", "Fayçal & Babahenini's leafy grammar F[+FL][FL-][>FL] ('>' written '/')",
      "#angle 30\n#depth 4\n#width 0.08\n#step 1\n"
      "axiom: F\n"
