@@ -267,6 +267,8 @@ typedef struct leafy_preset {
 } leafy_preset;
 
 static const leafy_preset leafy_presets[] = {
+    {"abop-2.6-monopodial", "abop-2.6-monopodial-bare.lsys", 5000},
+    {"abop-2.7-sympodial", "abop-2.7-sympodial-bare.lsys", 5000},
     {"abop-2.8-ternary", "abop-2.8-ternary-bare.lsys", 5000},
 };
 
