@@ -35,6 +35,8 @@ expect 64 "unknown command" -- "$XYLEM" frobnicate
 expect 0 "presets" -- "$XYLEM" presets
 contains "(default)" "presets mark the default"
 contains "abop-1.24a" "presets list ABOP 1.24a"
+grep -Eq '^abop-2\.8-ternary +[1-9][0-9]* leaves ' "$tmp/out" && grep -Eq '^abop-1\.24a +0 leaves ' "$tmp/out" &&
+  passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: presets show their leaf counts"; }
 expect 0 "preset text" -- "$XYLEM" preset abop-1.24a
 contains "F -> F[+F]F[-F]F" "preset text is the grammar"
 expect 64 "unknown preset" -- "$XYLEM" preset nope
