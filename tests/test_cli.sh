@@ -35,6 +35,8 @@ expect 64 "unknown command" -- "$XYLEM" frobnicate
 expect 0 "presets" -- "$XYLEM" presets
 contains "(default)" "presets mark the default"
 contains "abop-1.24a" "presets list ABOP 1.24a"
+grep -Eq '^abop-2\.8-ternary +[1-9][0-9]* leaves ' "$tmp/out" && grep -Eq '^abop-1\.24a +0 leaves ' "$tmp/out" &&
+  passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: presets show their leaf counts"; }
 expect 0 "preset text" -- "$XYLEM" preset abop-1.24a
 contains "F -> F[+F]F[-F]F" "preset text is the grammar"
 expect 64 "unknown preset" -- "$XYLEM" preset nope
@@ -42,7 +44,8 @@ expect 64 "unknown preset" -- "$XYLEM" preset nope
 expect 0 "derive depth 1" -- "$XYLEM" derive --preset abop-1.24a --depth 1
 [ "$(cat "$tmp/out")" = "F[+F]F[-F]F" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: derive output: $(cat "$tmp/out")"; }
 expect 0 "derive parametric" -- "$XYLEM" derive --preset abop-2.6-monopodial --depth 1
-contains "!(0.6)F(1)[&(45)B(0.6,0.4242)]/(137.5)A(0.9,0.4242)" "parametric output with parameters"
+contains '!(0.6)F(1)[&(45)B(0.6,0.4242)L(0.25)[&(50)$L(0.25)]/(90)' "parametric output with parameters"
+contains ']/(137.5)A(0.9,0.4242)L(0.25)[' "parametric output: the trunk apex and its leaves"
 expect 0 "derive a file" -- "$XYLEM" derive --grammar "$data/grammars/parametric.lsys" --depth 2
 expect 0 "seeded derive" -- "$XYLEM" derive --preset abop-1.28-stochastic --seed 3
 cp "$tmp/out" "$tmp/seed3"

@@ -1,6 +1,8 @@
 /* Grammar parsing: every error class with its code, line and column; header values;
- * expression semantics (precedence, functions in degrees); the syntax corner cases. */
+ * expression semantics (precedence, functions in degrees); the syntax corner cases; the
+ * built-in presets, and the leafy trees' leaves that must leave the book's nodes alone. */
 #include <math.h>
+#include <stdbool.h>
 
 #include "test_util.h"
 
@@ -255,6 +257,96 @@ static void every_preset_parses(void **state)
     }
 }
 
+/* A leafy tree next to its bare grammar in tests/data/grammars: the leaves must add nothing but
+ * leaves, so both grow the same nodes bit for bit under every turtle mode, and every leaf hangs
+ * from a tip (only the youngest twigs keep their fans). */
+typedef struct leafy_preset {
+    const char *name;
+    const char *bare; /* file in tests/data/grammars */
+    size_t min_leaves;
+} leafy_preset;
+
+static const leafy_preset leafy_presets[] = {
+    {"abop-2.6-monopodial", "abop-2.6-monopodial-bare.lsys", 5000},
+    {"abop-2.7-sympodial", "abop-2.7-sympodial-bare.lsys", 5000},
+    {"abop-2.8-ternary", "abop-2.8-ternary-bare.lsys", 5000},
+};
+
+static char *read_grammar_file(const char *file)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/grammars/%s", XYL_TEST_DATA, file);
+    FILE *f = fopen(path, "rb");
+    if (!f) fail_msg("cannot open %s", path);
+    char *text = calloc(1, 1 << 16);
+    assert_non_null(text);
+    size_t n = fread(text, 1, (1 << 16) - 1, f);
+    assert_true(feof(f) && n > 0);
+    fclose(f);
+    return text;
+}
+
+static void assert_leaves_on_tips(const xyl_skeleton *sk, size_t min_leaves)
+{
+    assert_true(sk->leaf_count >= min_leaves);
+    bool *has_child = calloc(sk->node_count, sizeof *has_child);
+    assert_non_null(has_child);
+    for (size_t i = 0; i < sk->node_count; ++i)
+        if (sk->nodes[i].parent >= 0) has_child[sk->nodes[i].parent] = true;
+    for (size_t i = 0; i < sk->leaf_count; ++i) {
+        const xyl_skel_leaf *l = &sk->leaves[i];
+        assert_true(isfinite(l->size) && l->size > 0.0f);
+        assert_true(l->node >= 0 && (size_t)l->node < sk->node_count);
+        assert_false(has_child[l->node]);
+    }
+    free(has_child);
+}
+
+static void leafy_presets_grow_the_bare_trees_nodes_and_leaves_on_their_tips(void **state)
+{
+    (void)state;
+    xyl_turtle_desc modes[4] = {{0}, {0}, {0}, {0}};
+    modes[1].merge_collinear = true;
+    modes[2].radius_mode = XYL_RADIUS_GRAMMAR;
+    modes[3].angle_mode = XYL_ANGLES_MURRAY;
+    modes[3].radius_exponent = 3.0;
+    for (size_t i = 0; i < sizeof leafy_presets / sizeof leafy_presets[0]; ++i) {
+        const leafy_preset *p = &leafy_presets[i];
+        char *bare = read_grammar_file(p->bare);
+        for (size_t m = 0; m < sizeof modes / sizeof modes[0]; ++m) {
+            xyl_skeleton *a = tu_grow(xyl_lsystem_preset_source(p->name), &modes[m]);
+            xyl_skeleton *b = tu_grow(bare, &modes[m]);
+            assert_int_equal(b->leaf_count, 0);
+            assert_int_equal(a->node_count, b->node_count);
+            assert_memory_equal(a->nodes, b->nodes, a->node_count * sizeof *a->nodes);
+            assert_int_equal(a->branch_count, b->branch_count);
+            assert_int_equal(a->clamped_forks, b->clamped_forks);
+            assert_leaves_on_tips(a, p->min_leaves);
+            xyl_skeleton_destroy(a);
+            xyl_skeleton_destroy(b);
+        }
+        free(bare);
+    }
+}
+
+/* xylem presets shows the leaf counts; the summaries say it too, for every preset with leaves. */
+static void presets_with_leaves_say_so_in_their_summary(void **state)
+{
+    (void)state;
+    size_t leafy = 0;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        xyl_skeleton *sk = tu_grow(xyl_lsystem_preset_source(xyl_lsystem_preset_name(i)), NULL);
+        const char *summary = xyl_lsystem_preset_summary(i);
+        bool says = strstr(summary, "leaves") || strstr(summary, "leafy");
+        if (says != (sk->leaf_count > 0))
+            fail_msg("%s: %zu leaves, summary '%s'", xyl_lsystem_preset_name(i), sk->leaf_count,
+                     summary);
+        if (sk->leaf_count > 0) ++leafy;
+        xyl_skeleton_destroy(sk);
+    }
+    assert_true(leafy >= 2 + sizeof leafy_presets / sizeof leafy_presets[0]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -274,6 +366,8 @@ int main(void)
         cmocka_unit_test(rejects_nul_bytes_and_null_arguments),
         cmocka_unit_test(parse_limits_return_limit_exceeded),
         cmocka_unit_test(every_preset_parses),
+        cmocka_unit_test(leafy_presets_grow_the_bare_trees_nodes_and_leaves_on_their_tips),
+        cmocka_unit_test(presets_with_leaves_say_so_in_their_summary),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

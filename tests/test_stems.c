@@ -128,14 +128,7 @@ static xyl_skeleton *skeleton_of(const xyl_skel_node *nodes, size_t count)
 
 static xyl_skeleton *grow_preset(const char *name)
 {
-    xyl_grammar *g = tu_parse(xyl_lsystem_preset_source(name));
-    xyl_lstring *s = NULL;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
-    assert_int_equal(xyl_lsystem_interpret(g, s, NULL, &sk, NULL), XYL_OK);
-    xyl_lstring_destroy(s);
-    xyl_grammar_destroy(g);
-    return sk;
+    return tu_grow(xyl_lsystem_preset_source(name), NULL);
 }
 
 static void every_preset_is_a_closed_manifold(void **state)

@@ -109,6 +109,20 @@ static inline xyl_lstring *tu_derive(const char *text, uint32_t depth, uint64_t 
     return s;
 }
 
+/* Grows text at its own #depth and seed into a skeleton with the turtle options td (NULL:
+ * defaults); fails the test if any step fails. */
+static inline xyl_skeleton *tu_grow(const char *text, const xyl_turtle_desc *td)
+{
+    xyl_grammar *g = tu_parse(text);
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
+    assert_int_equal(xyl_lsystem_interpret(g, s, td, &sk, NULL), XYL_OK);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return sk;
+}
+
 /* Derives text to the given depth and returns the formatted string (malloc'd). */
 static inline char *tu_derive_text(const char *text, uint32_t depth, uint64_t seed)
 {

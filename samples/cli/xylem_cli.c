@@ -68,7 +68,7 @@ static const char usage_text[] =
     "usage: xylem <command> [options]\n"
     "\n"
     "commands:\n"
-    "  presets                      list the built-in grammars\n"
+    "  presets                      list the built-in grammars and their leaf counts\n"
     "  preset NAME                  print a built-in grammar's text\n"
     "  derive   [source] [--seed N] [--depth N]\n"
     "                               print the derived module string\n"
@@ -385,16 +385,6 @@ static int derive_string(const options *o, const xyl_grammar *g, const char *sou
 
 /* ---- commands ------------------------------------------------------------------------------ */
 
-static int cmd_presets(void)
-{
-    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
-        const char *name = xyl_lsystem_preset_name(i);
-        bool def = strcmp(name, xyl_lsystem_default_preset()) == 0;
-        printf("%-22s %s%s\n", name, xyl_lsystem_preset_summary(i), def ? " (default)" : "");
-    }
-    return 0;
-}
-
 static int cmd_preset(int argc, char **argv)
 {
     if (argc != 3) return usage_error("%s", "'preset' takes one preset name");
@@ -517,6 +507,26 @@ static int load_skeleton(const options *o, xyl_skeleton **sk, const char **sourc
     xyl_lstring_destroy(s);
     xyl_grammar_destroy(g);
     return rc;
+}
+
+/* Grows every preset at its #depth to count its leaves, so the list says which ones have them.
+ * The name stays the first word of each line for scripts. */
+static int cmd_presets(void)
+{
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        options o;
+        memset(&o, 0, sizeof o);
+        o.preset = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = NULL;
+        const char *source = NULL;
+        int rc = load_skeleton(&o, &sk, &source);
+        if (rc) return rc;
+        bool def = strcmp(o.preset, xyl_lsystem_default_preset()) == 0;
+        printf("%-22s %5zu leaves  %s%s\n", o.preset, sk->leaf_count, xyl_lsystem_preset_summary(i),
+               def ? " (default)" : "");
+        xyl_skeleton_destroy(sk);
+    }
+    return 0;
 }
 
 static int write_mesh(const xyl_mesh *m, const char *path)
