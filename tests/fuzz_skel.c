@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "mesh_internal.h"
-#include "xylem/xyl_skeleton.h"
+#include "xylem/xyl_stems.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
