@@ -529,10 +529,12 @@ static xyl_result stems_checked(const xyl_allocator *a)
     return stems_build(a, in.crowded, 5, XYL_JOINTS_CHECKED, XYL_SUBDIVIDE_NONE);
 }
 
+#if defined(XYL_HAVE_OPENSUBDIV)
 static xyl_result stems_catmark(const xyl_allocator *a)
 {
     return stems_build(a, in.skeleton, 4, XYL_JOINTS_UNCHECKED, XYL_SUBDIVIDE_CATMARK);
 }
+#endif
 
 /* ---- meshes --------------------------------------------------------------------------------- */
 
@@ -593,6 +595,7 @@ static xyl_result mesh_split_seams(const xyl_allocator *a)
     return mesh_done(r, m);
 }
 
+#if defined(XYL_HAVE_OPENSUBDIV)
 static xyl_result mesh_subdivide(const xyl_allocator *a, xyl_subdivision scheme)
 {
     xyl_subdivide_desc d = {0};
@@ -613,6 +616,7 @@ static xyl_result mesh_subdivide_loop(const xyl_allocator *a)
 {
     return mesh_subdivide(a, XYL_SUBDIVIDE_LOOP);
 }
+#endif
 
 /* The count pass and the fill pass; a failed one leaves *needed and the buffer alone. */
 static xyl_result write_memory(const xyl_allocator *a, xyl_mesh_format format)
