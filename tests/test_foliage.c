@@ -1,0 +1,429 @@
+/* foliage/: leaves from skeletons and from the caller. */
+#include <float.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "xylem/xyl_foliage.h"
+#include "foliage_internal.h"
+#include "test_util.h"
+
+/* ---- helpers ------------------------------------------------------------------------------- */
+
+static double len3(xyl_vec3 v)
+{
+    return sqrt((double)v.x * v.x + (double)v.y * v.y + (double)v.z * v.z);
+}
+
+static double dot3(xyl_vec3 a, xyl_vec3 b)
+{
+    return (double)a.x * b.x + (double)a.y * b.y + (double)a.z * b.z;
+}
+
+static xyl_vec3 cross3(xyl_vec3 a, xyl_vec3 b)
+{
+    xyl_vec3 r = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+    return r;
+}
+
+static void assert_near(double got, double want, double tol)
+{
+    if (!(fabs(got - want) <= tol)) fail_msg("got %.9g, want %.9g (tolerance %g)", got, want, tol);
+}
+
+static void assert_vec_near(xyl_vec3 got, double x, double y, double z, double tol)
+{
+    assert_near(got.x, x, tol);
+    assert_near(got.y, y, tol);
+    assert_near(got.z, z, tol);
+}
+
+/* A leaf in the plane z = cz facing +z: axis along +y, side along +x. */
+static xyl_leaf flat_leaf(float x, float y, float cz, float half_length, float half_width)
+{
+    xyl_leaf l = {0};
+    l.center = (xyl_vec3){x, y, cz};
+    l.normal = (xyl_vec3){0, 0, 1};
+    l.axis = (xyl_vec3){0, half_length, 0};
+    l.side = (xyl_vec3){half_width, 0, 0};
+    l.node = -1;
+    return l;
+}
+
+static xyl_skel_leaf attachment(float x, float y, float z, float size, int32_t node)
+{
+    /* heading +y, left -x, up = heading x left = +z */
+    xyl_skel_leaf a = {{x, y, z}, {0, 1, 0}, {-1, 0, 0}, {0, 0, 1}, size, node};
+    return a;
+}
+
+/* A skeleton view built by hand: two nodes, the given attachments. */
+typedef struct view_skeleton {
+    xyl_skel_node nodes[2];
+    xyl_skeleton view;
+} view_skeleton;
+
+static void make_view(view_skeleton *v, const xyl_skel_leaf *leaves, size_t count)
+{
+    memset(v, 0, sizeof *v);
+    v->nodes[0] = (xyl_skel_node){{0, 0, 0}, 0.1f, -1, 0, 0};
+    v->nodes[1] = (xyl_skel_node){{0, 1, 0}, 0.1f, 0, 0, 0};
+    v->view.nodes = v->nodes;
+    v->view.node_count = 2;
+    v->view.leaves = leaves;
+    v->view.leaf_count = count;
+}
+
+static xyl_result from_view(const xyl_skel_leaf *att, size_t count, const xyl_foliage_leaves_desc *d,
+                            xyl_leaf *out, size_t *n, xyl_diag *diag)
+{
+    view_skeleton v;
+    make_view(&v, att, count);
+    return xyl_foliage_leaves_from_skeleton(&v.view, d, out, count, n, diag);
+}
+
+/* ---- leaves from a skeleton ------------------------------------------------------------------ */
+
+static void leaves_from_skeleton_put_the_blade_along_heading_facing_up(void **state)
+{
+    (void)state;
+    xyl_skel_leaf att[2] = {attachment(1, 2, 3, 0.4f, 1), attachment(0, 0, 0, 1.0f, -1)};
+    xyl_foliage_leaves_desc d = {0};
+    d.shape.aspect = 0.25f;
+    d.shape.stalk = 0.5f;
+    xyl_leaf out[2];
+    size_t n = 0;
+    xyl_diag diag = {0};
+    assert_int_equal(from_view(att, 2, &d, out, &n, &diag), XYL_OK);
+    assert_int_equal(n, 2);
+    /* base 0.5 * 0.4 past the attachment, centre half a length further */
+    assert_vec_near(out[0].center, 1, 2 + 0.2 + 0.2, 3, 1e-6);
+    assert_vec_near(out[0].axis, 0, 0.2, 0, 1e-7);
+    assert_vec_near(out[0].normal, 0, 0, 1, 1e-7);
+    assert_vec_near(out[0].side, 0.05, 0, 0, 1e-7); /* -left, a quarter of the length wide */
+    assert_int_equal(out[0].count, 1);
+    assert_int_equal(out[0].node, 1);
+    assert_int_equal(out[1].node, -1);
+    const float unit_rect[4] = {0, 0, 1, 1};
+    assert_memory_equal(out[0].uv, unit_rect, sizeof unit_rect);
+    xyl_vec3 c = cross3(out[0].side, out[0].axis);
+    assert_true(dot3(c, out[0].normal) > 0.0);
+    assert_int_equal(xyl_foliage_check_leaves(out, 2, NULL, &diag), XYL_OK);
+}
+
+static void leaves_from_skeleton_count_then_fill(void **state)
+{
+    (void)state;
+    xyl_skel_leaf att[3] = {attachment(0, 0, 0, 1, 0), attachment(1, 0, 0, 1, 0),
+                            attachment(2, 0, 0, 1, 1)};
+    view_skeleton v;
+    make_view(&v, att, 3);
+    size_t n = 0;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, NULL, NULL, 0, &n, NULL), XYL_OK);
+    assert_int_equal(n, 3);
+    xyl_leaf out[3];
+    memset(out, 0xab, sizeof out);
+    xyl_leaf before[3];
+    memcpy(before, out, sizeof out);
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, NULL, out, 2, &n, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_memory_equal(out, before, sizeof out);
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, NULL, out, 3, &n, &diag), XYL_OK);
+    assert_near(out[2].center.x, 2.0, 0.0);
+}
+
+static void leaves_from_a_skeleton_without_attachments_are_none(void **state)
+{
+    (void)state;
+    view_skeleton v; /* a real skeleton this time, made from the view's nodes */
+    make_view(&v, NULL, 0);
+    xyl_skeleton_desc sd = {0};
+    sd.nodes = v.nodes;
+    sd.node_count = v.view.node_count;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&sd, &sk, NULL), XYL_OK);
+    size_t n = 99;
+    xyl_leaf out[1];
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, NULL, 0, &n, &diag), XYL_OK);
+    assert_int_equal(n, 0);
+    n = 99;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, out, 1, &n, &diag), XYL_OK);
+    assert_int_equal(n, 0);
+    xyl_skeleton_destroy(sk);
+}
+
+static void leaves_from_skeleton_jitter_depends_on_seed_and_index_only(void **state)
+{
+    (void)state;
+    enum { N = 64 };
+    xyl_skel_leaf att[N];
+    for (int i = 0; i < N; ++i) att[i] = attachment((float)i, 0, 0, 1.0f, 0);
+    xyl_foliage_leaves_desc d = {0};
+    d.shape.size_jitter = 0.3f;
+    d.shape.roll_jitter = 1.0f;
+    d.shape.seed = 42;
+    xyl_leaf a[N], b[N], c[N], tail[N];
+    size_t n;
+    assert_int_equal(from_view(att, N, &d, a, &n, NULL), XYL_OK);
+    assert_int_equal(from_view(att, N, &d, b, &n, NULL), XYL_OK);
+    assert_memory_equal(a, b, sizeof a);
+    d.shape.seed = 43;
+    assert_int_equal(from_view(att, N, &d, c, &n, NULL), XYL_OK);
+    assert_true(memcmp(a, c, sizeof a) != 0);
+    d.shape.seed = 42; /* another first leaf changes nothing of the others' */
+    att[0] = attachment(-5, 1, 2, 3.0f, 1);
+    assert_int_equal(from_view(att, N, &d, tail, &n, NULL), XYL_OK);
+    assert_memory_equal(a + 1, tail + 1, (N - 1) * sizeof *a);
+    int rolled = 0, resized = 0;
+    for (int i = 0; i < N; ++i) {
+        double half = len3(a[i].axis);
+        assert_true(half >= 0.5 * 0.7 - 1e-6 && half <= 0.5 * 1.3 + 1e-6);
+        resized += fabs(half - 0.5) > 1e-3;
+        /* roll turns the normal about the axis, by at most 1 radian */
+        double cosine = dot3(a[i].normal, (xyl_vec3){0, 0, 1});
+        assert_true(cosine >= cos(1.0) - 1e-6);
+        rolled += cosine < 1.0 - 1e-6;
+        assert_near(dot3(a[i].normal, a[i].axis), 0.0, 1e-6);
+        assert_near(len3(a[i].side), 0.5 * half, 1e-6);
+    }
+    assert_true(rolled > N / 2 && resized > N / 2);
+    assert_int_equal(xyl_foliage_check_leaves(a, N, NULL, NULL), XYL_OK);
+}
+
+static void leaves_from_skeleton_reject_bad_shape_options(void **state)
+{
+    (void)state;
+    xyl_skel_leaf att[1] = {attachment(0, 0, 0, 1, 0)};
+    struct {
+        int field;
+        float value;
+        xyl_result code;
+    } cases[] = {
+        {0, -1.0f, XYL_ERR_INVALID_ARGUMENT}, {0, NAN, XYL_ERR_NON_FINITE},
+        {1, -0.1f, XYL_ERR_INVALID_ARGUMENT}, {1, INFINITY, XYL_ERR_NON_FINITE},
+        {2, 1.0f, XYL_ERR_INVALID_ARGUMENT},  {2, -0.5f, XYL_ERR_INVALID_ARGUMENT},
+        {3, 4.0f, XYL_ERR_INVALID_ARGUMENT},  {3, -1.0f, XYL_ERR_INVALID_ARGUMENT},
+        {4, 1.5f, XYL_ERR_INVALID_ARGUMENT},  {4, NAN, XYL_ERR_NON_FINITE},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        xyl_foliage_leaves_desc d = {0};
+        float *fields[5] = {&d.shape.aspect, &d.shape.stalk, &d.shape.size_jitter,
+                            &d.shape.roll_jitter, &d.shape.uv[2]};
+        *fields[cases[k].field] = cases[k].value;
+        xyl_leaf out[1];
+        size_t n = 7;
+        xyl_diag diag = {0};
+        xyl_result r = from_view(att, 1, &d, out, &n, &diag);
+        if (r != cases[k].code)
+            fail_msg("case %zu: got %s, want %s", k, xyl_result_string(r),
+                     xyl_result_string(cases[k].code));
+        assert_int_equal(n, 7);
+        assert_true(strlen(diag.message) > 0);
+    }
+}
+
+static void leaves_from_skeleton_reject_each_bad_attachment_with_its_code(void **state)
+{
+    (void)state;
+    xyl_skel_leaf good = attachment(0, 0, 0, 1, 0);
+    struct {
+        xyl_skel_leaf leaf;
+        xyl_result code;
+    } cases[] = {
+        {good, XYL_OK},
+        {good, XYL_ERR_NON_FINITE},
+        {good, XYL_ERR_NON_FINITE},
+        {good, XYL_ERR_INVALID_ARGUMENT},
+        {good, XYL_ERR_INVALID_ARGUMENT},
+        {good, XYL_ERR_INVALID_ARGUMENT},
+        {good, XYL_ERR_INVALID_ARGUMENT},
+        {good, XYL_ERR_LIMIT_EXCEEDED},
+        {good, XYL_ERR_LIMIT_EXCEEDED},
+    };
+    cases[1].leaf.pos.y = NAN;
+    cases[2].leaf.size = INFINITY;
+    cases[3].leaf.size = 0.0f;
+    cases[4].leaf.up = cases[4].leaf.heading; /* parallel: no plane */
+    cases[5].leaf.heading = (xyl_vec3){0, 0, 0};
+    cases[6].leaf.node = 2; /* the view has 2 nodes */
+    cases[7].leaf.pos.x = 2e6f;
+    cases[8].leaf.size = 3e6f;
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        xyl_skel_leaf att[3] = {good, cases[k].leaf, good};
+        xyl_leaf out[3];
+        memset(out, 0x5a, sizeof out);
+        xyl_leaf before[3];
+        memcpy(before, out, sizeof out);
+        size_t n = 0;
+        xyl_diag diag = {0};
+        xyl_result r = from_view(att, 3, NULL, out, &n, &diag);
+        if (r != cases[k].code)
+            fail_msg("case %zu: got %s (%s), want %s", k, xyl_result_string(r), diag.message,
+                     xyl_result_string(cases[k].code));
+        if (r == XYL_OK) continue;
+        assert_int_equal(diag.index, 1);
+        assert_memory_equal(out, before, sizeof out); /* nothing written */
+    }
+}
+
+static void leaves_from_skeleton_respect_the_leaf_limit(void **state)
+{
+    (void)state;
+    xyl_skel_leaf att[3] = {attachment(0, 0, 0, 1, 0), attachment(0, 0, 0, 1, 0),
+                            attachment(0, 0, 0, 1, 0)};
+    xyl_foliage_leaves_desc d = {0};
+    d.limits.max_leaves = 2;
+    size_t n = 0;
+    xyl_diag diag = {0};
+    view_skeleton v;
+    make_view(&v, att, 3);
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, &d, NULL, 0, &n, &diag),
+                     XYL_ERR_LIMIT_EXCEEDED);
+    d.limits.max_leaves = 3;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, &d, NULL, 0, &n, &diag), XYL_OK);
+    d.limits.max_leaves = ((uint64_t)1 << 30) + 1;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, &d, NULL, 0, &n, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(NULL, NULL, NULL, 0, &n, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&v.view, NULL, NULL, 0, NULL, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+}
+
+static void leaves_from_the_default_tree_pass_the_leaf_rules(void **state)
+{
+    (void)state;
+    xyl_grammar *g = tu_parse(xyl_lsystem_preset_source(xyl_lsystem_default_preset()));
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
+    assert_int_equal(xyl_lsystem_interpret(g, s, NULL, &sk, NULL), XYL_OK);
+    size_t n = 0;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, NULL, 0, &n, NULL), XYL_OK);
+    assert_int_equal(n, sk->leaf_count);
+    xyl_leaf *out = malloc((n ? n : 1) * sizeof *out);
+    assert_non_null(out);
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, out, n, &n, NULL), XYL_OK);
+    assert_int_equal(xyl_foliage_check_leaves(out, n, NULL, NULL), XYL_OK);
+    free(out);
+    xyl_skeleton_destroy(sk);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+}
+
+/* ---- the caller's leaves ------------------------------------------------------------------- */
+
+static void check_leaves_accepts_coincident_and_coplanar_leaves(void **state)
+{
+    (void)state;
+    xyl_leaf l[4] = {flat_leaf(0, 0, 0, 1, 0.5f), flat_leaf(0, 0, 0, 1, 0.5f),
+                     flat_leaf(3, 0, 0, 1, 0.5f), flat_leaf(0, 3, 0, 2, 0.1f)};
+    assert_int_equal(xyl_foliage_check_leaves(l, 4, NULL, NULL), XYL_OK);
+    assert_int_equal(xyl_foliage_check_leaves(NULL, 0, NULL, NULL), XYL_OK);
+}
+
+static void check_leaves_rejects_each_bad_leaf_with_its_code(void **state)
+{
+    (void)state;
+    xyl_leaf good = flat_leaf(1, 2, 3, 1, 0.5f);
+    enum { CASES = 15 };
+    xyl_leaf bad[CASES];
+    xyl_result code[CASES];
+    for (int k = 0; k < CASES; ++k) bad[k] = good;
+    int k = 0;
+    bad[k].center.x = NAN, code[k++] = XYL_ERR_NON_FINITE;
+    bad[k].axis.z = INFINITY, code[k++] = XYL_ERR_NON_FINITE;
+    bad[k].uv[1] = NAN, code[k++] = XYL_ERR_NON_FINITE;
+    bad[k].axis = (xyl_vec3){0, 0, 0}, code[k++] = XYL_ERR_INVALID_ARGUMENT;   /* size 0 */
+    bad[k].side = (xyl_vec3){0, 0, 0}, code[k++] = XYL_ERR_INVALID_ARGUMENT;   /* size 0 */
+    bad[k].normal = (xyl_vec3){0, 0, 0}, code[k++] = XYL_ERR_INVALID_ARGUMENT;
+    bad[k].side = (xyl_vec3){0.5f, 0.01f, 0}, code[k++] = XYL_ERR_INVALID_ARGUMENT; /* skew */
+    bad[k].normal = (xyl_vec3){0, 0.01f, 1}, code[k++] = XYL_ERR_INVALID_ARGUMENT;
+    bad[k].side.x = -0.5f, code[k++] = XYL_ERR_INVALID_ARGUMENT;               /* mirrored */
+    bad[k].uv[2] = 1.5f, code[k++] = XYL_ERR_INVALID_ARGUMENT;
+    bad[k].node = -2, code[k++] = XYL_ERR_INVALID_ARGUMENT;
+    bad[k].center.z = -1.5e6f, code[k++] = XYL_ERR_LIMIT_EXCEEDED;           /* huge */
+    bad[k].axis.y = 2e6f, code[k++] = XYL_ERR_LIMIT_EXCEEDED;
+    bad[k].center.y = 3e38f, code[k++] = XYL_ERR_LIMIT_EXCEEDED;
+    bad[k].normal = (xyl_vec3){0, 0, 5}, code[k++] = XYL_OK; /* any length: normalised */
+    assert_int_equal(k, CASES);
+    for (k = 0; k < CASES; ++k) {
+        xyl_leaf l[3] = {good, bad[k], good};
+        xyl_diag diag = {0};
+        xyl_result r = xyl_foliage_check_leaves(l, 3, NULL, &diag);
+        if (r != code[k])
+            fail_msg("case %d: got %s (%s), want %s", k, xyl_result_string(r), diag.message,
+                     xyl_result_string(code[k]));
+        if (r != XYL_OK) {
+            assert_int_equal(diag.index, 1);
+            assert_int_equal(diag.code, r);
+        }
+    }
+}
+
+static void check_leaves_tolerates_rounding_and_the_build_squares_it(void **state)
+{
+    (void)state;
+    xyl_leaf l = flat_leaf(0, 0, 0, 1, 0.5f);
+    l.side.y = 2e-4f; /* |cos| 4e-4: within 1e-3 */
+    l.normal.x = 3e-4f;
+    assert_int_equal(xyl_foliage_check_leaves(&l, 1, NULL, NULL), XYL_OK);
+    xyl_leaf t = xyl__leaf_tidy(&l);
+    assert_near(len3(t.normal), 1.0, 1e-7);
+    assert_near(dot3(t.normal, t.axis), 0.0, 1e-7);
+    assert_near(dot3(t.normal, t.side), 0.0, 1e-7);
+    assert_near(dot3(t.axis, t.side), 0.0, 1e-7);
+    assert_near(len3(t.axis), len3(l.axis), 1e-7);
+    assert_near(len3(t.side), len3(l.side), 1e-7);
+    assert_int_equal(t.count, 1);
+    assert_true(t.uv[2] == 1.0f && t.uv[3] == 1.0f);
+}
+
+static void check_leaves_limits_counts_and_their_sum(void **state)
+{
+    (void)state;
+    xyl_leaf l[3] = {flat_leaf(0, 0, 0, 1, 1), flat_leaf(0, 0, 0, 1, 1), flat_leaf(0, 0, 0, 1, 1)};
+    xyl_foliage_limits lim = {0};
+    lim.max_leaves = 2;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_check_leaves(l, 3, &lim, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    lim.max_leaves = 0;
+    lim.max_coordinate = 0.5f;
+    assert_int_equal(xyl_foliage_check_leaves(l, 3, &lim, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    lim.max_coordinate = -1.0f;
+    assert_int_equal(xyl_foliage_check_leaves(l, 3, &lim, &diag), XYL_ERR_INVALID_ARGUMENT);
+    l[0].count = UINT32_MAX - 1;
+    l[1].count = 1;
+    assert_int_equal(xyl_foliage_check_leaves(l, 2, NULL, &diag), XYL_OK);
+    assert_int_equal(xyl_foliage_check_leaves(l, 3, NULL, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    assert_int_equal(diag.index, 2);
+    assert_int_equal(xyl_foliage_check_leaves(NULL, 1, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(leaves_from_skeleton_put_the_blade_along_heading_facing_up),
+        cmocka_unit_test(leaves_from_skeleton_count_then_fill),
+        cmocka_unit_test(leaves_from_a_skeleton_without_attachments_are_none),
+        cmocka_unit_test(leaves_from_skeleton_jitter_depends_on_seed_and_index_only),
+        cmocka_unit_test(leaves_from_skeleton_reject_bad_shape_options),
+        cmocka_unit_test(leaves_from_skeleton_reject_each_bad_attachment_with_its_code),
+        cmocka_unit_test(leaves_from_skeleton_respect_the_leaf_limit),
+        cmocka_unit_test(leaves_from_the_default_tree_pass_the_leaf_rules),
+        cmocka_unit_test(check_leaves_accepts_coincident_and_coplanar_leaves),
+        cmocka_unit_test(check_leaves_rejects_each_bad_leaf_with_its_code),
+        cmocka_unit_test(check_leaves_tolerates_rounding_and_the_build_squares_it),
+        cmocka_unit_test(check_leaves_limits_counts_and_their_sum),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
