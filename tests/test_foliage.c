@@ -1,4 +1,4 @@
-/* foliage/: leaves from skeletons and from the caller. */
+/* foliage/: leaves from skeletons and from the caller, and their GPU record. */
 #include <float.h>
 #include <math.h>
 #include <setjmp.h>
@@ -409,6 +409,161 @@ static void check_leaves_limits_counts_and_their_sum(void **state)
     assert_int_equal(xyl_foliage_check_leaves(NULL, 1, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
 }
 
+/* ---- the GPU record ------------------------------------------------------------------------ */
+
+static uint64_t next_random(uint64_t *state)
+{
+    /* xorshift64*: deterministic, seeded by the caller */
+    *state ^= *state >> 12;
+    *state ^= *state << 25;
+    *state ^= *state >> 27;
+    return *state * UINT64_C(2685821657736338717);
+}
+
+static double uniform(uint64_t *state, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)(next_random(state) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static void half_floats_round_trip_every_finite_half_exactly(void **state)
+{
+    (void)state;
+    for (uint32_t h = 0; h < 0x10000u; ++h) {
+        if ((h & 0x7c00u) == 0x7c00u) continue; /* inf, NaN */
+        float f = xyl__float_from_half((uint16_t)h);
+        if (xyl__half_from_float(f) != h) fail_msg("half 0x%04x -> %g -> 0x%04x", h, (double)f,
+                                                   xyl__half_from_float(f));
+    }
+    /* ties go to the even neighbour; past 65504 it overflows */
+    assert_int_equal(xyl__half_from_float(1.0f + 1.0f / 2048.0f), 0x3c00); /* 1 + 2^-11: to 1 */
+    assert_int_equal(xyl__half_from_float(1.0f + 3.0f / 2048.0f), 0x3c02);
+    assert_int_equal(xyl__half_from_float(65519.0f), 0x7bff);
+    assert_int_equal(xyl__half_from_float(65520.0f), 0x7c00);
+    assert_int_equal(xyl__half_from_float(ldexpf(1.0f, -25)), 0x0000); /* tie to even 0 */
+    assert_int_equal(xyl__half_from_float(ldexpf(1.5f, -25)), 0x0001);
+    assert_int_equal(xyl__half_from_float(ldexpf(3.0f, -25)), 0x0002); /* 1.5 ulp: to even 2 */
+    assert_int_equal(xyl__half_from_float(-0.0f), 0x8000);
+}
+
+#if defined(__FLT16_MAX__)
+static void half_floats_match_the_compilers_conversion(void **state)
+{
+    (void)state;
+    uint64_t rng = 7;
+    for (int i = 0; i < (SANITIZED ? 200000 : 2000000); ++i) {
+        uint32_t bits = (uint32_t)(next_random(&rng) >> 32);
+        /* exponents around the half range, where the rounding happens */
+        bits = (bits & 0x807fffffu) | ((uint32_t)(96 + (bits >> 23) % 50) << 23);
+        float f;
+        memcpy(&f, &bits, sizeof f);
+        _Float16 h = (_Float16)f;
+        uint16_t want;
+        memcpy(&want, &h, sizeof want);
+        if (xyl__half_from_float(f) != want)
+            fail_msg("%a: 0x%04x, the compiler says 0x%04x", (double)f, xyl__half_from_float(f), want);
+    }
+}
+#endif
+
+static xyl_leaf random_leaf(uint64_t *rng)
+{
+    /* a frame from a random rotation, half-axes from 1e-6 to 1e4 */
+    xyl_leaf l = {0};
+    double a = uniform(rng, 0, 6.283185307179586), b = uniform(rng, -1, 1);
+    double c = uniform(rng, 0, 6.283185307179586);
+    double r = sqrt(1 - b * b);
+    xyl_vec3 n = {(float)(r * cos(a)), (float)b, (float)(r * sin(a))};
+    xyl_vec3 t = fabs(n.x) < 0.9f ? (xyl_vec3){1, 0, 0} : (xyl_vec3){0, 1, 0};
+    xyl_vec3 u = cross3(n, t);
+    double lu = len3(u);
+    u = (xyl_vec3){(float)(u.x / lu), (float)(u.y / lu), (float)(u.z / lu)};
+    xyl_vec3 v = cross3(n, u);
+    xyl_vec3 ax = {(float)(cos(c) * u.x + sin(c) * v.x), (float)(cos(c) * u.y + sin(c) * v.y),
+                   (float)(cos(c) * u.z + sin(c) * v.z)};
+    xyl_vec3 sd = cross3(ax, n);
+    double la = pow(10.0, uniform(rng, -6, 4)), ls = la * uniform(rng, 0.05, 2);
+    l.center = (xyl_vec3){(float)uniform(rng, -1e5, 1e5), (float)uniform(rng, -10, 10),
+                          (float)uniform(rng, -1e-3, 1e-3)};
+    l.normal = n;
+    l.axis = (xyl_vec3){(float)(ax.x * la), (float)(ax.y * la), (float)(ax.z * la)};
+    l.side = (xyl_vec3){(float)(sd.x * ls), (float)(sd.y * ls), (float)(sd.z * ls)};
+    for (int k = 0; k < 4; ++k) l.uv[k] = (float)uniform(rng, 0, 1);
+    l.count = 1;
+    l.node = -1;
+    return l;
+}
+
+/* The stated bounds: relative 2^-11 from 2^-14 up, absolute 2^-25 below. */
+static void assert_half_close(float got, float want)
+{
+    double err = fabs((double)got - (double)want), a = fabs((double)want);
+    double bound = a >= ldexp(1.0, -14) ? ldexp(a, -11) : ldexp(1.0, -25);
+    if (!(err <= bound)) fail_msg("%.9g came back as %.9g (error %g > %g)", (double)want, (double)got, err, bound);
+}
+
+static void pack_gpu_round_trip_keeps_the_stated_precision(void **state)
+{
+    (void)state;
+    enum { N = 4096 };
+    xyl_leaf *in = malloc(N * sizeof *in);
+    xyl_foliage_gpu_leaf *gpu = malloc(N * sizeof *gpu);
+    assert_true(in && gpu);
+    uint64_t rng = 99;
+    for (int i = 0; i < N; ++i) in[i] = random_leaf(&rng);
+    in[0].uv[0] = 0.0f, in[0].uv[3] = 1.0f;
+    assert_int_equal(xyl_foliage_check_leaves(in, N, NULL, NULL), XYL_OK);
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_pack_gpu(in, N, gpu, &diag), XYL_OK);
+    double worst_normal = 0.0;
+    for (int i = 0; i < N; ++i) {
+        xyl_leaf o = xyl__foliage_unpack_gpu(&gpu[i]);
+        assert_memory_equal(&o.center, &in[i].center, sizeof o.center); /* exact */
+        const float *g = &o.axis.x, *w = &in[i].axis.x;
+        for (int k = 0; k < 3; ++k) assert_half_close(g[k], w[k]);
+        g = &o.side.x, w = &in[i].side.x;
+        for (int k = 0; k < 3; ++k) assert_half_close(g[k], w[k]);
+        for (int k = 0; k < 4; ++k) assert_true(fabs((double)o.uv[k] - in[i].uv[k]) <= 0.5 / 65535.0 + 1e-9);
+        double cosine = dot3(o.normal, in[i].normal);
+        if (len3(in[i].side) >= ldexp(1.0, -14) && len3(in[i].axis) >= ldexp(1.0, -14))
+            worst_normal = fmax(worst_normal, acos(fmin(1.0, cosine)));
+    }
+    assert_true(gpu[0].uv[0] == 0 && gpu[0].uv[3] == 65535);
+    /* the normal the shader computes is the leaf's within a few half ulps, for half-axes of
+       2^-14 and more */
+    if (!(worst_normal < 4.0 * ldexp(1.0, -11))) fail_msg("normals turned by up to %g", worst_normal);
+    free(in);
+    free(gpu);
+}
+
+static void pack_gpu_rejects_what_the_record_cannot_hold(void **state)
+{
+    (void)state;
+    xyl_leaf good = flat_leaf(1, 2, 3, 1, 0.5f);
+    good.uv[2] = good.uv[3] = 1.0f;
+    xyl_leaf l[2] = {good, good};
+    xyl_foliage_gpu_leaf out[2];
+    memset(out, 0x77, sizeof out);
+    xyl_foliage_gpu_leaf before[2];
+    memcpy(before, out, sizeof out);
+    xyl_diag diag = {0};
+    l[1].axis.y = 65505.0f;
+    assert_int_equal(xyl_foliage_pack_gpu(l, 2, out, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    assert_int_equal(diag.index, 1);
+    l[1] = good, l[1].side.x = -70000.0f;
+    assert_int_equal(xyl_foliage_pack_gpu(l, 2, out, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    l[1] = good, l[1].center.z = NAN;
+    assert_int_equal(xyl_foliage_pack_gpu(l, 2, out, &diag), XYL_ERR_NON_FINITE);
+    l[1] = good, l[1].uv[1] = -0.01f;
+    assert_int_equal(xyl_foliage_pack_gpu(l, 2, out, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_memory_equal(out, before, sizeof out);
+    assert_int_equal(xyl_foliage_pack_gpu(NULL, 1, out, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_pack_gpu(l, 1, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_pack_gpu(NULL, 0, NULL, &diag), XYL_OK);
+    l[1] = good, l[1].axis.y = 65504.0f; /* the largest half fits */
+    assert_int_equal(xyl_foliage_pack_gpu(l, 2, out, &diag), XYL_OK);
+    assert_int_equal(out[1].axis[1], 0x7bff);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -424,6 +579,12 @@ int main(void)
         cmocka_unit_test(check_leaves_rejects_each_bad_leaf_with_its_code),
         cmocka_unit_test(check_leaves_tolerates_rounding_and_the_build_squares_it),
         cmocka_unit_test(check_leaves_limits_counts_and_their_sum),
+        cmocka_unit_test(half_floats_round_trip_every_finite_half_exactly),
+#if defined(__FLT16_MAX__)
+        cmocka_unit_test(half_floats_match_the_compilers_conversion),
+#endif
+        cmocka_unit_test(pack_gpu_round_trip_keeps_the_stated_precision),
+        cmocka_unit_test(pack_gpu_rejects_what_the_record_cannot_hold),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

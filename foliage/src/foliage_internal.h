@@ -28,4 +28,13 @@ xyl_result xyl__leaf_check(const xyl_leaf *leaf, size_t i, const xyl__foliage_li
  * side = |side| unit(axis x normal). */
 xyl_leaf xyl__leaf_tidy(const xyl_leaf *leaf);
 
+/* ---- the GPU record (pack.c) ---- */
+
+/* binary16 bits of f, to nearest with ties to even; beyond 65504 (after rounding) infinity. */
+uint16_t xyl__half_from_float(float f);
+float xyl__float_from_half(uint16_t h);
+/* What a shader reads from a record: centre, half-axes, normalize(cross(side, axis)), texture
+ * rectangle; count 1 and node -1, which the record does not hold. For tests. */
+xyl_leaf xyl__foliage_unpack_gpu(const xyl_foliage_gpu_leaf *g);
+
 #endif

@@ -1,4 +1,4 @@
-/* xyl_foliage.h: leaves as quads (docs/foliage.md).
+/* xyl_foliage.h: leaves as quads and their 32-byte GPU record (docs/foliage.md).
  *
  * How to use
  *     xyl_diag diag = {0};
@@ -13,6 +13,10 @@
  *     if (xyl_foliage_check_leaves(mine, count, NULL, &diag)) printf("leaf %lld: %s\n",
  *                                                  (long long)diag.index, diag.message);
  *
+ *     // 32 bytes a leaf for a GPU buffer (shaders/xyl_foliage_shared.h reads them in GLSL)
+ *     xyl_foliage_gpu_leaf *gpu = malloc((n ? n : 1) * sizeof *gpu);
+ *     xyl_foliage_pack_gpu(leaves, n, gpu, &diag);
+ *
  * Every call is reentrant and allocates nothing here; the same input (seed included) gives
  * bit-identical leaves.
  *
@@ -21,11 +25,26 @@
 #ifndef XYL_FOLIAGE_H
 #define XYL_FOLIAGE_H
 
+#include <stddef.h>
+
 #include <xylem/xyl_core.h>
 #include <xylem/xyl_skeleton.h>
+#include "xyl_foliage_shared.h" /* shaders/ in the source tree, next to this file once installed */
 
 #ifdef __cplusplus
 extern "C" {
+#endif
+
+/* The C view of the GPU leaf record; std430 in GLSL (xyl_foliage_shared.h says what precision
+ * each field keeps). */
+#if !defined(__cplusplus)
+_Static_assert(sizeof(xyl_foliage_gpu_leaf) == XYL_FOLIAGE_GPU_LEAF_SIZE, "one leaf in 32 bytes");
+_Static_assert(offsetof(xyl_foliage_gpu_leaf, axis) == 12, "halves follow the vec3 centre");
+_Static_assert(offsetof(xyl_foliage_gpu_leaf, side) == 18, "side halves follow axis halves");
+_Static_assert(offsetof(xyl_foliage_gpu_leaf, uv) == 24, "unorm16 rectangle in the last 8");
+#endif
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "xyl_foliage_gpu_leaf pairs 16-bit fields into little-endian GLSL words"
 #endif
 
 /* ---- leaves -----------------------------------------------------------------------------------
@@ -101,6 +120,17 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
                                                     const xyl_foliage_leaves_desc *desc,
                                                     xyl_leaf *leaves, size_t capacity,
                                                     size_t *count, xyl_diag *diag);
+
+/* ---- the GPU record ------------------------------------------------------------------------ */
+
+/* Packs count leaves into out[0 .. count), one 32-byte xyl_foliage_gpu_leaf each (layout and
+ * precision in xyl_foliage_shared.h): the centre as is, each half-axis component rounded to the
+ * nearest half float (ties to even), each texture coordinate to the nearest unorm16. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL arrays with a count, a texture coordinate outside [0, 1]),
+ * XYL_ERR_NON_FINITE, XYL_ERR_LIMIT_EXCEEDED (a half-axis component beyond 65504, the largest
+ * half); diag.index names the leaf, and out is untouched. Allocates nothing. */
+XYL_API xyl_result xyl_foliage_pack_gpu(const xyl_leaf *leaves, size_t count,
+                                        xyl_foliage_gpu_leaf *out, xyl_diag *diag);
 
 #ifdef __cplusplus
 }
