@@ -465,31 +465,38 @@ static void half_floats_match_the_compilers_conversion(void **state)
 }
 #endif
 
-static xyl_leaf random_leaf(uint64_t *rng)
+/* A leaf at c facing n (unit), its axis turned by roll about n. */
+static xyl_leaf oriented_leaf(xyl_vec3 c, xyl_vec3 n, double roll, double half_length, double half_width)
 {
-    /* a frame from a random rotation, half-axes from 1e-6 to 1e4 */
-    xyl_leaf l = {0};
-    double a = uniform(rng, 0, 6.283185307179586), b = uniform(rng, -1, 1);
-    double c = uniform(rng, 0, 6.283185307179586);
-    double r = sqrt(1 - b * b);
-    xyl_vec3 n = {(float)(r * cos(a)), (float)b, (float)(r * sin(a))};
-    xyl_vec3 t = fabs(n.x) < 0.9f ? (xyl_vec3){1, 0, 0} : (xyl_vec3){0, 1, 0};
+    xyl_vec3 t = fabsf(n.x) < 0.9f ? (xyl_vec3){1, 0, 0} : (xyl_vec3){0, 1, 0};
     xyl_vec3 u = cross3(n, t);
     double lu = len3(u);
     u = (xyl_vec3){(float)(u.x / lu), (float)(u.y / lu), (float)(u.z / lu)};
     xyl_vec3 v = cross3(n, u);
-    xyl_vec3 ax = {(float)(cos(c) * u.x + sin(c) * v.x), (float)(cos(c) * u.y + sin(c) * v.y),
-                   (float)(cos(c) * u.z + sin(c) * v.z)};
-    xyl_vec3 sd = cross3(ax, n);
-    double la = pow(10.0, uniform(rng, -6, 4)), ls = la * uniform(rng, 0.05, 2);
-    l.center = (xyl_vec3){(float)uniform(rng, -1e5, 1e5), (float)uniform(rng, -10, 10),
-                          (float)uniform(rng, -1e-3, 1e-3)};
+    xyl_vec3 a = {(float)(cos(roll) * u.x + sin(roll) * v.x), (float)(cos(roll) * u.y + sin(roll) * v.y),
+                  (float)(cos(roll) * u.z + sin(roll) * v.z)};
+    xyl_vec3 s = cross3(a, n);
+    xyl_leaf l = {0};
+    l.center = c;
     l.normal = n;
-    l.axis = (xyl_vec3){(float)(ax.x * la), (float)(ax.y * la), (float)(ax.z * la)};
-    l.side = (xyl_vec3){(float)(sd.x * ls), (float)(sd.y * ls), (float)(sd.z * ls)};
-    for (int k = 0; k < 4; ++k) l.uv[k] = (float)uniform(rng, 0, 1);
-    l.count = 1;
+    l.axis = (xyl_vec3){(float)(a.x * half_length), (float)(a.y * half_length), (float)(a.z * half_length)};
+    l.side = (xyl_vec3){(float)(s.x * half_width), (float)(s.y * half_width), (float)(s.z * half_width)};
     l.node = -1;
+    return xyl__leaf_tidy(&l);
+}
+
+static xyl_leaf random_leaf(uint64_t *rng)
+{
+    /* a frame from a random rotation, half-axes from 1e-6 to 1e4 */
+    double a = uniform(rng, 0, 6.283185307179586), b = uniform(rng, -1, 1);
+    double roll = uniform(rng, 0, 6.283185307179586);
+    double r = sqrt(1 - b * b);
+    xyl_vec3 n = {(float)(r * cos(a)), (float)b, (float)(r * sin(a))};
+    double la = pow(10.0, uniform(rng, -6, 4)), ls = la * uniform(rng, 0.05, 2);
+    xyl_vec3 c = {(float)uniform(rng, -1e5, 1e5), (float)uniform(rng, -10, 10),
+                  (float)uniform(rng, -1e-3, 1e-3)};
+    xyl_leaf l = oriented_leaf(c, n, roll, la, ls);
+    for (int k = 0; k < 4; ++k) l.uv[k] = (float)uniform(rng, 0, 1);
     return l;
 }
 
@@ -564,6 +571,395 @@ static void pack_gpu_rejects_what_the_record_cannot_hold(void **state)
     assert_int_equal(out[1].axis[1], 0x7bff);
 }
 
+/* ---- leaf collapse ----------------------------------------------------------------------- */
+
+typedef enum leaf_set { SET_CROWN, SET_COINCIDENT, SET_COPLANAR, SET_CLUMPS } leaf_set;
+
+/* Test leaf sets: a crown (uniform in an ellipsoid, normals biased up, sizes 0.05..0.15,
+ * textures and nodes varied), n copies of one leaf, leaves all in the plane z = 0, and tight
+ * clumps of coincident leaves. */
+static void make_leaves(xyl_leaf *out, uint32_t n, leaf_set set, uint64_t seed)
+{
+    uint64_t rng = seed * 2654435761u + 1;
+    for (uint32_t i = 0; i < n; ++i) {
+        xyl_vec3 c, nrm = {0, 0, 1};
+        double roll = uniform(&rng, 0, 6.283185307179586), hl = uniform(&rng, 0.025, 0.075);
+        double hw = hl * uniform(&rng, 0.3, 0.8);
+        if (set == SET_COINCIDENT) {
+            c = (xyl_vec3){1, 2, 3};
+            roll = 0.3, hl = 0.05, hw = 0.02;
+        } else if (set == SET_COPLANAR) {
+            c = (xyl_vec3){(float)uniform(&rng, -2, 2), (float)uniform(&rng, -1, 1), 0};
+        } else if (set == SET_CLUMPS) {
+            uint32_t clump = (uint32_t)(next_random(&rng) % 7);
+            c = (xyl_vec3){(float)clump, (float)(clump % 3), 0.5f};
+            nrm = (xyl_vec3){0, 1, 0};
+        } else {
+            double x, y, z;
+            do {
+                x = uniform(&rng, -1, 1), y = uniform(&rng, -1, 1), z = uniform(&rng, -1, 1);
+            } while (x * x + y * y + z * z > 1.0);
+            c = (xyl_vec3){(float)(3 * x), (float)(4 + 2 * y), (float)(3 * z)};
+            double a = uniform(&rng, 0, 6.283185307179586), b = uniform(&rng, -0.3, 1);
+            double r = sqrt(1 - b * b);
+            nrm = (xyl_vec3){(float)(r * cos(a)), (float)b, (float)(r * sin(a))};
+        }
+        out[i] = oriented_leaf(c, nrm, roll, hl, hw);
+        out[i].node = (int32_t)(i % 17) - 1;
+        float u0 = (float)(i % 4) * 0.25f;
+        out[i].uv[0] = u0, out[i].uv[1] = 0, out[i].uv[2] = u0 + 0.25f, out[i].uv[3] = 1;
+    }
+}
+
+typedef struct chain {
+    xyl_leaf *leaves;
+    float *error;
+    uint32_t *children;
+    uint32_t n, m;
+    xyl__collapse_stats stats;
+} chain;
+
+static chain run_collapse(const xyl_leaf *in, uint32_t n, const xyl__collapse_options *options)
+{
+    chain c = {0};
+    size_t cap = n ? 2 * (size_t)n - 1 : 1;
+    c.leaves = malloc(cap * sizeof *c.leaves);
+    c.error = malloc(cap * sizeof *c.error);
+    c.children = malloc((cap + 1) * sizeof *c.children);
+    assert_true(c.leaves && c.error && c.children);
+    if (n) memcpy(c.leaves, in, n * sizeof *in);
+    xyl__collapse_options o;
+    if (options) o = *options;
+    else xyl__collapse_defaults(in, n, &o);
+    c.n = n;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl__collapse(c.leaves, c.error, c.children, n, &o, NULL, &c.m, &c.stats, &diag), XYL_OK);
+    return c;
+}
+
+static void free_chain(chain *c)
+{
+    free(c->leaves);
+    free(c->error);
+    free(c->children);
+}
+
+/* Replays the greedy chain: every merge joins two live, distinct leaves and removes one leaf. */
+static void assert_chain_replays(const chain *c)
+{
+    uint8_t *alive = calloc(c->n + c->m + 1, 1);
+    assert_non_null(alive);
+    memset(alive, 1, c->n);
+    uint64_t live = c->n;
+    for (uint32_t k = 0; k < c->m; ++k) {
+        uint32_t p = c->children[2 * k], q = c->children[2 * k + 1];
+        assert_true(p < q && q < c->n + k);
+        assert_true(alive[p] && alive[q]);
+        alive[p] = alive[q] = 0;
+        alive[c->n + k] = 1;
+        assert_int_equal(c->leaves[c->n + k].count, c->leaves[p].count + c->leaves[q].count);
+        --live;
+    }
+    assert_int_equal(live, c->n - c->m);
+    uint64_t originals = 0, left = 0; /* the leaves left stand for all the originals */
+    for (uint32_t k = 0; k < c->n + c->m; ++k) {
+        if (k < c->n) originals += c->leaves[k].count;
+        if (alive[k]) left += c->leaves[k].count;
+    }
+    assert_int_equal(left, originals);
+    free(alive);
+}
+
+static void collapse_runs_to_one_leaf_standing_for_all(void **state)
+{
+    (void)state;
+    const leaf_set sets[4] = {SET_CROWN, SET_COINCIDENT, SET_COPLANAR, SET_CLUMPS};
+    for (int s = 0; s < 4; ++s) {
+        uint32_t n = SANITIZED ? 300 : 3000;
+        xyl_leaf *in = malloc(n * sizeof *in);
+        assert_non_null(in);
+        make_leaves(in, n, sets[s], 5);
+        chain c = run_collapse(in, n, NULL);
+        assert_int_equal(c.m, n - 1);
+        assert_int_equal(c.leaves[2 * n - 2].count, n);
+        assert_chain_replays(&c);
+        assert_int_equal(xyl_foliage_check_leaves(c.leaves, 2 * n - 1, NULL, NULL), XYL_OK);
+        free_chain(&c);
+        free(in);
+    }
+}
+
+/* With at most K + 1 leaves every leaf sees every other, so the chain is the exact greedy one:
+ * a brute-force search for the cheapest pair (ties: lower indices) at each step. */
+static void collapse_of_few_leaves_is_the_exact_greedy_chain(void **state)
+{
+    (void)state;
+    for (uint64_t seed = 1; seed <= 40; ++seed) {
+        uint32_t n = 2 + (uint32_t)(seed % 8);
+        xyl_leaf in[9], ref[17];
+        float err[17] = {0};
+        uint8_t alive[17] = {0};
+        make_leaves(in, n, seed % 3 ? SET_CROWN : SET_COPLANAR, seed);
+        chain c = run_collapse(in, n, NULL);
+        xyl__collapse_options o;
+        xyl__collapse_defaults(in, n, &o);
+        memcpy(ref, in, n * sizeof *in);
+        memset(alive, 1, n);
+        assert_int_equal(c.m, n - 1);
+        for (uint32_t k = 0; k + 1 < n; ++k) {
+            float best = INFINITY;
+            uint32_t bp = 0, bq = 0;
+            for (uint32_t p = 0; p < n + k; ++p)
+                for (uint32_t q = p + 1; q < n + k; ++q) {
+                    if (!alive[p] || !alive[q]) continue;
+                    float cost = xyl__collapse_cost(&ref[p], &ref[q], &o);
+                    if (cost < best) best = cost, bp = p, bq = q;
+                }
+            if (c.children[2 * k] != bp || c.children[2 * k + 1] != bq)
+                fail_msg("seed %llu, merge %u: chain joined %u and %u, greedy %u and %u",
+                         (unsigned long long)seed, k, c.children[2 * k], c.children[2 * k + 1], bp, bq);
+            ref[n + k] = xyl__leaf_merge(&ref[bp], &ref[bq], err[bp], err[bq], &err[n + k]);
+            alive[bp] = alive[bq] = 0;
+            alive[n + k] = 1;
+        }
+        assert_memory_equal(ref, c.leaves, (2 * n - 1) * sizeof *ref);
+        assert_memory_equal(err, c.error, (2 * n - 1) * sizeof *err);
+        free_chain(&c);
+    }
+}
+
+static void merged_leaf_is_the_weighted_bounding_rectangle(void **state)
+{
+    (void)state;
+    /* two leaves in the plane z = 0 facing +z, side by side along x: the merged leaf's axis
+       runs through both centres, so its length spans both and its width is scaled */
+    xyl_leaf p = flat_leaf(0, 0, 0, 1.0f, 0.5f), q = flat_leaf(3, 0, 0, 1.0f, 0.25f);
+    p.count = 3, q.count = 1; /* the centre is at x = 0.75, the rectangle's at 1.375 */
+    p.uv[2] = p.uv[3] = 0.5f;
+    q.uv[2] = q.uv[3] = 1.0f;
+    p.node = 4, q.node = 9;
+    float err = -1;
+    xyl_leaf m = xyl__leaf_merge(&p, &q, 0.0f, 0.0f, &err);
+    assert_int_equal(m.count, 4);
+    assert_int_equal(m.node, 4); /* the larger leaf's node and texture */
+    assert_memory_equal(m.uv, p.uv, sizeof m.uv);
+    assert_vec_near(m.normal, 0, 0, 1, 1e-7);
+    /* projected corners span x in [-0.5, 3.25] and y in [-1, 1]; the main axis is x */
+    assert_near(fabs(m.axis.x), (3.25 + 0.5) / 2, 1e-6);
+    assert_vec_near(m.center, (3.25 - 0.5) / 2, 0, 0, 1e-6);
+    double areas = 4 * 1.0 * 0.5 + 4 * 1.0 * 0.25, box = 3.75 * 2.0;
+    double area = 4.0 * len3(m.axis) * len3(m.side);
+    assert_near(area, 0.5 * (areas + box), 1e-5);
+    assert_true(m.axis.x > 0.0f); /* turned to agree with p's and q's axes? both are +y: dot 0 */
+    assert_near(dot3(m.axis, m.side), 0.0, 1e-6);
+    xyl_vec3 c = cross3(m.side, m.axis);
+    assert_true(dot3(c, m.normal) > 0.0);
+    /* the width shrank from 2 to area / 3.75: the corners at y = +-1 lie outside */
+    assert_near(err, 1.0 - 0.5 * area / 3.75, 1e-5);
+}
+
+static void merged_leaf_of_coincident_leaves_covers_them_with_no_error(void **state)
+{
+    (void)state;
+    xyl_leaf p = flat_leaf(1, 2, 3, 1.0f, 0.5f);
+    p = xyl__leaf_tidy(&p);
+    float err = -1;
+    xyl_leaf m = xyl__leaf_merge(&p, &p, 0.0f, 0.0f, &err);
+    assert_memory_equal(&m.center, &p.center, sizeof m.center);
+    assert_near(len3(m.axis), 1.0, 1e-7);     /* the length stays; the mean of 2A and A */
+    assert_near(len3(m.side), 0.75, 1e-7);    /* widens 1.5 times */
+    assert_true(m.axis.y > 0.0f);             /* the fallback axis: the leaves' own */
+    assert_true(err == 0.0f);
+    /* opposite normals of equal weight: the plane of the larger (here the first) leaf */
+    xyl_leaf back = p;
+    back.normal.z = -1, back.side.x = -back.side.x;
+    m = xyl__leaf_merge(&p, &back, 0.0f, 0.0f, &err);
+    assert_vec_near(m.normal, 0, 0, 1, 0);
+}
+
+static void collapse_keeps_coplanar_leaves_in_their_plane(void **state)
+{
+    (void)state;
+    uint32_t n = 500;
+    xyl_leaf *in = malloc(n * sizeof *in);
+    assert_non_null(in);
+    make_leaves(in, n, SET_COPLANAR, 11);
+    chain c = run_collapse(in, n, NULL);
+    assert_int_equal(c.m, n - 1);
+    for (uint32_t k = n; k < n + c.m; ++k) {
+        assert_vec_near(c.leaves[k].normal, 0, 0, 1, 1e-6);
+        assert_near(c.leaves[k].center.z, 0.0, 1e-6);
+    }
+    free_chain(&c);
+    free(in);
+}
+
+/* Every point of the originals a merged leaf stands for lies within its error of its quad. */
+static void assert_error_bounds_hold(const chain *c)
+{
+    uint32_t total = c->n + c->m;
+    uint32_t *stack = malloc((total + 1) * sizeof *stack);
+    assert_non_null(stack);
+    double scale = 0.0;
+    for (uint32_t k = 0; k < total; ++k) scale = fmax(scale, len3(c->leaves[k].center));
+    for (uint32_t k = c->n; k < total; ++k) {
+        const xyl_leaf *m = &c->leaves[k];
+        double worst = 0.0;
+        uint32_t top = 0;
+        stack[top++] = k;
+        while (top) {
+            uint32_t j = stack[--top];
+            if (j >= c->n) {
+                stack[top++] = c->children[2 * (j - c->n)];
+                stack[top++] = c->children[2 * (j - c->n) + 1];
+                continue;
+            }
+            const xyl_leaf *o = &c->leaves[j];
+            for (int s = -2; s <= 2; ++s)
+                for (int t = -2; t <= 2; ++t) {
+                    xyl__dvec3 x = {o->center.x + 0.5 * s * o->side.x + 0.5 * t * o->axis.x,
+                                    o->center.y + 0.5 * s * o->side.y + 0.5 * t * o->axis.y,
+                                    o->center.z + 0.5 * s * o->side.z + 0.5 * t * o->axis.z};
+                    worst = fmax(worst, xyl__leaf_quad_distance(x, m));
+                }
+        }
+        if (!(worst <= c->error[k] + 1e-6 * (scale + 1.0)))
+            fail_msg("leaf %u: an original point is %g from it, its bound is %g", k, worst, (double)c->error[k]);
+    }
+    free(stack);
+}
+
+static void collapse_error_bounds_every_original_point(void **state)
+{
+    (void)state;
+    const leaf_set sets[3] = {SET_CROWN, SET_COPLANAR, SET_CLUMPS};
+    for (int s = 0; s < 3; ++s) {
+        uint32_t n = SANITIZED ? 200 : 1000;
+        xyl_leaf *in = malloc(n * sizeof *in);
+        assert_non_null(in);
+        make_leaves(in, n, sets[s], 21);
+        chain c = run_collapse(in, n, NULL);
+        assert_error_bounds_hold(&c);
+        free_chain(&c);
+        free(in);
+    }
+}
+
+static void collapse_stops_at_the_thresholds(void **state)
+{
+    (void)state;
+    enum { N = 200 };
+    xyl_leaf in[N];
+    make_leaves(in, N, SET_CROWN, 3);
+    for (int i = N / 2; i < N; ++i) in[i].center.x += 100.0f; /* a second crown far away */
+    xyl__collapse_options o;
+    xyl__collapse_defaults(in, N, &o);
+    o.max_distance = 20.0;
+    chain c = run_collapse(in, N, &o);
+    assert_int_equal(c.m, N - 2); /* one leaf per crown */
+    assert_chain_replays(&c);
+    free_chain(&c);
+    /* leaves facing up and down never meet under a 90 degree threshold */
+    for (int i = 0; i < N; ++i) in[i] = oriented_leaf((xyl_vec3){(float)(i % 20), (float)(i / 20), 0},
+                                                       (xyl_vec3){0, 0, i % 2 ? 1.0f : -1.0f}, 0.2, 0.3, 0.1);
+    xyl__collapse_defaults(in, N, &o);
+    o.max_angle = 1.5;
+    c = run_collapse(in, N, &o);
+    assert_int_equal(c.m, N - 2);
+    assert_chain_replays(&c);
+    free_chain(&c);
+}
+
+static void collapse_is_deterministic_and_never_searches_all_pairs(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 5000 : 50000;
+    xyl_leaf *in = malloc(n * sizeof *in);
+    assert_non_null(in);
+    make_leaves(in, n, SET_CROWN, 8);
+    chain a = run_collapse(in, n, NULL), b = run_collapse(in, n, NULL);
+    assert_int_equal(a.m, n - 1);
+    assert_memory_equal(a.leaves, b.leaves, (2 * (size_t)n - 1) * sizeof *a.leaves);
+    assert_memory_equal(a.error, b.error, (2 * (size_t)n - 1) * sizeof *a.error);
+    assert_memory_equal(a.children, b.children, 2 * (size_t)a.m * sizeof *a.children);
+    /* a bounded number of candidates per merge, whatever n is */
+    print_message("%u leaves: %.1f cost evaluations and %.1f cells a merge, %llu grids, %zu bytes a leaf\n", n,
+                  (double)a.stats.cost_evaluations / n, (double)a.stats.cells_scanned / n,
+                  (unsigned long long)a.stats.grid_builds, a.stats.bytes / n);
+    assert_true(a.stats.cost_evaluations < 60ull * n);
+    assert_true(a.stats.cells_scanned < 400ull * n);
+    free_chain(&a);
+    free_chain(&b);
+    /* a million-fold stack of one leaf costs the same per merge */
+    make_leaves(in, n, SET_COINCIDENT, 1);
+    a = run_collapse(in, n, NULL);
+    assert_int_equal(a.m, n - 1);
+    print_message("coincident: %.1f cost evaluations and %.1f cells a merge, %llu grids\n",
+                  (double)a.stats.cost_evaluations / n, (double)a.stats.cells_scanned / n,
+                  (unsigned long long)a.stats.grid_builds);
+    assert_true(a.stats.cost_evaluations < 60ull * n);
+    free_chain(&a);
+    free(in);
+}
+
+/* Counts and optionally fails allocations, so tests can prove nothing leaks. */
+typedef struct counter {
+    size_t attempts, allocs, frees, bytes, peak, live_bytes;
+    size_t fail_at; /* 1-based attempt that returns NULL; 0 = never */
+} counter;
+
+static void *count_alloc(size_t size, void *user)
+{
+    counter *c = user;
+    if (++c->attempts == c->fail_at) return NULL;
+    size_t *p = malloc(size + sizeof(size_t) * 2);
+    if (!p) return NULL;
+    c->allocs++;
+    p[0] = size;
+    c->live_bytes += size;
+    if (c->live_bytes > c->peak) c->peak = c->live_bytes;
+    return p + 2;
+}
+
+static void count_free(void *ptr, void *user)
+{
+    counter *c = user;
+    if (!ptr) return;
+    size_t *p = (size_t *)ptr - 2;
+    c->frees++;
+    c->live_bytes -= p[0];
+    free(p);
+}
+
+static void collapse_survives_every_allocation_failure(void **state)
+{
+    (void)state;
+    enum { N = 300 };
+    xyl_leaf in[N], work[2 * N];
+    float err[2 * N];
+    uint32_t children[2 * N];
+    make_leaves(in, N, SET_CROWN, 4);
+    xyl__collapse_options o;
+    xyl__collapse_defaults(in, N, &o);
+    for (size_t fail = 1;; ++fail) {
+        counter c = {0};
+        c.fail_at = fail;
+        xyl_allocator a = {count_alloc, count_free, &c};
+        memcpy(work, in, sizeof in);
+        uint32_t m = 12345;
+        xyl_diag diag = {0};
+        xyl_result r = xyl__collapse(work, err, children, N, &o, &a, &m, NULL, &diag);
+        assert_int_equal(c.allocs, c.frees);
+        if (c.attempts < fail) { /* no failure left to inject */
+            assert_int_equal(r, XYL_OK);
+            assert_int_equal(m, N - 1);
+            break;
+        }
+        assert_int_equal(r, XYL_ERR_OUT_OF_MEMORY);
+        assert_int_equal(m, 12345);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -585,6 +981,15 @@ int main(void)
 #endif
         cmocka_unit_test(pack_gpu_round_trip_keeps_the_stated_precision),
         cmocka_unit_test(pack_gpu_rejects_what_the_record_cannot_hold),
+        cmocka_unit_test(collapse_runs_to_one_leaf_standing_for_all),
+        cmocka_unit_test(collapse_of_few_leaves_is_the_exact_greedy_chain),
+        cmocka_unit_test(merged_leaf_is_the_weighted_bounding_rectangle),
+        cmocka_unit_test(merged_leaf_of_coincident_leaves_covers_them_with_no_error),
+        cmocka_unit_test(collapse_keeps_coplanar_leaves_in_their_plane),
+        cmocka_unit_test(collapse_error_bounds_every_original_point),
+        cmocka_unit_test(collapse_stops_at_the_thresholds),
+        cmocka_unit_test(collapse_is_deterministic_and_never_searches_all_pairs),
+        cmocka_unit_test(collapse_survives_every_allocation_failure),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

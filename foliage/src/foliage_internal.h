@@ -37,4 +37,104 @@ float xyl__float_from_half(uint16_t h);
  * rectangle; count 1 and node -1, which the record does not hold. For tests. */
 xyl_leaf xyl__foliage_unpack_gpu(const xyl_foliage_gpu_leaf *g);
 
+/* ---- the grid of live leaf centres (leaf_grid.c) ---- */
+
+#define XYL__GRID_K 8          /* candidate partners a query finds */
+#define XYL__GRID_SCAN_CAP 64  /* live leaves one query looks at, at most */
+
+typedef struct xyl__grid_item {
+    float p[3];    /* the leaf's centre */
+    uint32_t leaf; /* an extra item's is UINT32_MAX once the leaf is dead */
+} xyl__grid_item;
+
+typedef struct xyl__cell_range {
+    uint32_t start, end;
+} xyl__cell_range;
+
+typedef struct xyl__grid {
+    double min[3], h, inv_h; /* cubes of side h from min */
+    int32_t dim[3];
+    size_t cells, cell_cap, item_cap, extra_cap, bytes;
+    xyl__cell_range *range;  /* cell c's items are items[range[c].start .. range[c].end) */
+    xyl__grid_item *items;   /* the live leaves of the last build, by cell */
+    int32_t *extra_head;     /* per cell: the first extra item, -1 if none */
+    int32_t *extra_next, *extra_prev;
+    xyl__grid_item *extra;   /* leaves made since the last build */
+    uint32_t *slot;          /* per leaf: its item, or its extra item | 1 << 31 */
+    uint32_t *sort, *live;   /* build scratch */
+    uint32_t item_count, extra_count, built_live;
+} xyl__grid;
+
+typedef struct xyl__nearby {
+    uint32_t count, scanned;
+    uint32_t idx[XYL__GRID_K]; /* nearest first; ties: lower index */
+    double d2[XYL__GRID_K];    /* squared distances */
+} xyl__nearby;
+
+typedef bool (*xyl__accept_fn)(void *ctx, uint32_t leaf);
+
+/* Room for the leaves of a collapse of n: at most n live, 2n - 1 in all. */
+xyl_result xyl__grid_init(xyl__grid *g, uint32_t n, const xyl_allocator *a);
+void xyl__grid_free(xyl__grid *g, const xyl_allocator *a);
+/* Builds from leaves 0 .. count - 1, all live. */
+void xyl__grid_build(xyl__grid *g, const xyl_leaf *leaves, uint32_t count);
+/* Builds again from the grid's own live leaves. */
+void xyl__grid_rebuild(xyl__grid *g, const xyl_leaf *leaves);
+/* True when a rebuild is due: a quarter of the leaves live at the last build are new. */
+bool xyl__grid_full(const xyl__grid *g);
+void xyl__grid_insert(xyl__grid *g, const xyl_leaf *leaves, uint32_t leaf);
+void xyl__grid_remove(xyl__grid *g, uint32_t leaf);
+/* The XYL__GRID_K live leaves nearest to centre other than self, within squared distance
+ * max_d2 and accepted by accept (NULL: all), among at most XYL__GRID_SCAN_CAP looked at.
+ * Returns the cells it scanned. */
+uint64_t xyl__grid_nearest(const xyl__grid *g, uint32_t self, xyl_vec3 centre, double max_d2,
+                           xyl__accept_fn accept, void *ctx, xyl__nearby *out);
+
+/* ---- leaf collapse (collapse.c) ---- */
+
+/* The terms of a pair's cost, each in [0, 1]: centre distance / scale, angle between normals
+ * / pi, |count difference| / count sum, |area difference| / area sum, distance of the pair's
+ * midpoint from the trunk axis / radius. */
+#define XYL__COLLAPSE_TERMS 5
+/* This library's default weights of the five terms (docs/foliage.md says how they were
+ * chosen). */
+#define XYL__COLLAPSE_WEIGHTS {1.0, 0.25, 0.05, 0.05, 0.05}
+
+typedef struct xyl__collapse_options {
+    double weights[XYL__COLLAPSE_TERMS];
+    double max_distance;      /* between centres, world units; INFINITY: no threshold */
+    double max_angle;         /* between normals, radians; INFINITY: no threshold */
+    xyl__dvec3 axis_origin;   /* the trunk axis */
+    xyl__dvec3 axis_direction; /* unit */
+    double scale;             /* the distance term's unit: the foliage's size */
+    double radius;            /* the interiority term's unit: the farthest centre from the axis */
+} xyl__collapse_options;
+
+typedef struct xyl__collapse_stats {
+    uint64_t queries, cost_evaluations, cells_scanned, leaves_scanned, grid_builds, heap_compactions;
+    size_t bytes; /* scratch memory of the collapse */
+} xyl__collapse_stats;
+
+/* Default weights, no thresholds, the vertical (+Y) axis through the count-weighted centroid,
+ * and the units of xyl__collapse_units. */
+void xyl__collapse_defaults(const xyl_leaf *leaves, uint32_t n, xyl__collapse_options *o);
+/* o->scale: the larger of the centres' bounding-box diagonal and the largest leaf's length or
+ * width (never 0); o->radius: the farthest centre from o's axis (o->scale if all are on it). */
+void xyl__collapse_units(const xyl_leaf *leaves, uint32_t n, xyl__collapse_options *o);
+/* The cost of merging p and q (p the one of lower index), rounded to float as the chain
+ * orders pairs. */
+float xyl__collapse_cost(const xyl_leaf *p, const xyl_leaf *q, const xyl__collapse_options *o);
+/* The leaf that replaces p and q (p the one of lower index) and, in *err, the bound of the
+ * distance from the originals it stands for to it, given theirs. */
+xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, float err_q, float *err);
+double xyl__leaf_quad_distance(xyl__dvec3 x, const xyl_leaf *l);
+/* Runs the chain on leaves[0 .. n) (checked and tidy), greedily in cost order. On success
+ * leaves[n .. n + *merges) are the merged leaves in the order they were made, merge k joined
+ * children[2k] < children[2k + 1], error[i] bounds leaf i's distance from the originals it
+ * stands for (0 for these). leaves and error hold 2n - 1, children 2n - 2 (at least 1 each).
+ * Errors: XYL_ERR_OUT_OF_MEMORY only. */
+xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
+                         const xyl__collapse_options *o, const xyl_allocator *a, uint32_t *merges,
+                         xyl__collapse_stats *stats, xyl_diag *diag);
+
 #endif
