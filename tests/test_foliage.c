@@ -960,6 +960,244 @@ static void collapse_survives_every_allocation_failure(void **state)
     }
 }
 
+/* ---- the linear LOD array ---------------------------------------------------------------- */
+
+static xyl_foliage *build_ok(const xyl_leaf *leaves, size_t n, const xyl_foliage_desc *options)
+{
+    xyl_foliage_desc d = {0};
+    if (options) d = *options;
+    d.leaves = leaves;
+    d.leaf_count = n;
+    xyl_foliage *f = NULL;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_foliage_build(&d, &f, &diag);
+    if (r != XYL_OK) fail_msg("build: %s (%s)", xyl_result_string(r), diag.message);
+    assert_non_null(f);
+    return f;
+}
+
+/* The property the layout exists for, checked against a direct simulation of the stored chain:
+ * for EVERY i the leaves in the two ranges of LOD i are exactly those alive after the chain's
+ * first i merges, a + c = n - i, and every merge joins two leaves alive when it happens. Also
+ * the links agree with each other and the originals are the desc's leaves. */
+static void assert_lods_draw_the_live_leaves(const xyl_foliage *f, const xyl_foliage_sector *s,
+                                             bool every_step_in_full)
+{
+    uint32_t n = s->original_count, m = s->merged_count, base = s->base;
+    uint8_t *alive = calloc(n + m + 1, 1), *drawn = calloc(n + m + 1, 1);
+    assert_true(alive && drawn);
+    memset(alive, 1, n);
+    for (uint32_t i = 0; i <= m; ++i) {
+        if (i > 0) { /* merge i - 1 makes leaf n + i - 1 */
+            const xyl_leaf_link *l = &f->links[base + n + i - 1];
+            uint32_t p = (uint32_t)l->children[0] - base, q = (uint32_t)l->children[1] - base;
+            assert_true(p < n + i - 1 && q < n + i - 1 && p != q);
+            assert_true(alive[p] && alive[q]);
+            alive[p] = alive[q] = 0;
+            alive[n + i - 1] = 1;
+        }
+        const xyl_foliage_lod *lod = &s->lods[i];
+        assert_int_equal(lod->a + lod->c, n - i);
+        assert_true(lod->a <= n && lod->b >= n && lod->b + lod->c <= n + m && lod->b + lod->c == n + i);
+        if (i > 0) assert_true(lod->error >= s->lods[i - 1].error);
+        if (!every_step_in_full && i % 97 != 0 && i != m) continue;
+        memset(drawn, 0, n + m);
+        for (uint32_t k = 0; k < lod->a; ++k) drawn[k] = 1;
+        for (uint32_t k = lod->b; k < lod->b + lod->c; ++k) drawn[k] = 1;
+        if (memcmp(drawn, alive, n + m) != 0) fail_msg("LOD %u draws other leaves than are alive", i);
+    }
+    assert_true(s->lods[0].error == 0.0f && s->lods[0].a == n && s->lods[0].c == 0);
+    free(alive);
+    free(drawn);
+}
+
+static void assert_links_agree(const xyl_foliage *f, const xyl_leaf *desc_leaves)
+{
+    uint8_t *seen = calloc(f->original_count + 1, 1);
+    assert_non_null(seen);
+    size_t roots = 0;
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        const xyl_leaf_link *l = &f->links[k];
+        if (l->source != UINT32_MAX) {
+            assert_true(l->source < f->original_count && !seen[l->source]);
+            seen[l->source] = 1;
+            assert_int_equal(l->children[0], -1);
+            assert_true(l->error == 0.0f);
+            xyl_leaf t = xyl__leaf_tidy(&desc_leaves[l->source]);
+            assert_memory_equal(&f->leaves[k], &t, sizeof t);
+        } else {
+            for (int c = 0; c < 2; ++c) {
+                int32_t ch = l->children[c];
+                assert_true(ch >= 0 && (size_t)ch < k);
+                assert_int_equal(f->links[ch].parent, (int32_t)k);
+                assert_true(l->error >= f->links[ch].error);
+            }
+            assert_int_equal(f->leaves[k].count, f->leaves[l->children[0]].count + f->leaves[l->children[1]].count);
+        }
+        if (l->parent < 0) ++roots;
+        else assert_true((size_t)l->parent > k);
+    }
+    assert_int_equal(roots, f->coarsest_count);
+    free(seen);
+}
+
+static void lods_draw_the_live_leaves_of_random_sets_at_every_step(void **state)
+{
+    (void)state;
+    const leaf_set sets[4] = {SET_CROWN, SET_COINCIDENT, SET_COPLANAR, SET_CLUMPS};
+    const uint32_t sizes[4] = {1, 2, 37, SANITIZED ? 300 : 1200};
+    for (int set = 0; set < 4; ++set)
+        for (int size = 0; size < 4; ++size)
+            for (uint64_t seed = 1; seed <= 3; ++seed) {
+                uint32_t n = sizes[size];
+                xyl_leaf *in = malloc(n * sizeof *in);
+                assert_non_null(in);
+                make_leaves(in, n, sets[set], seed * 7 + (uint64_t)size);
+                xyl_foliage *f = build_ok(in, n, NULL);
+                assert_int_equal(f->sector_count, 1);
+                assert_int_equal(f->sectors[0].merged_count, n - 1);
+                assert_int_equal(f->leaf_count, 2 * n - 1);
+                assert_lods_draw_the_live_leaves(f, &f->sectors[0], true);
+                assert_links_agree(f, in);
+                xyl_foliage_destroy(f);
+                free(in);
+            }
+}
+
+static void lods_of_a_large_crown_and_a_stopped_chain_draw_the_live_leaves(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 4000 : 40000;
+    xyl_leaf *in = malloc(n * sizeof *in);
+    assert_non_null(in);
+    make_leaves(in, n, SET_CROWN, 77);
+    xyl_foliage *f = build_ok(in, n, NULL);
+    assert_lods_draw_the_live_leaves(f, &f->sectors[0], false);
+    assert_links_agree(f, in);
+    xyl_foliage_destroy(f);
+    /* thresholds: the chain stops with several leaves, and says how many */
+    xyl_foliage_desc d = {0};
+    d.max_distance = 0.2f;
+    d.max_angle = 0.5f;
+    f = build_ok(in, n, &d);
+    const xyl_foliage_sector *s = &f->sectors[0];
+    assert_true(s->merged_count < n - 1);
+    assert_int_equal(f->coarsest_count, n - s->merged_count);
+    assert_int_equal(s->lods[s->merged_count].a + s->lods[s->merged_count].c, f->coarsest_count);
+    assert_lods_draw_the_live_leaves(f, s, false);
+    assert_links_agree(f, in);
+    xyl_foliage_destroy(f);
+    free(in);
+}
+
+static void build_of_no_leaves_is_an_empty_foliage(void **state)
+{
+    (void)state;
+    xyl_foliage *f = build_ok(NULL, 0, NULL);
+    assert_int_equal(f->leaf_count, 0);
+    assert_int_equal(f->original_count, 0);
+    assert_int_equal(f->coarsest_count, 0);
+    assert_int_equal(f->sector_count, 1);
+    assert_int_equal(f->sectors[0].merged_count, 0);
+    const xyl_foliage_lod *l = &f->sectors[0].lods[0];
+    assert_true(l->a == 0 && l->c == 0 && l->error == 0.0f);
+    xyl_foliage_destroy(f);
+    xyl_foliage_destroy(NULL);
+}
+
+static void build_is_deterministic(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 2000 : 20000;
+    xyl_leaf *in = malloc(n * sizeof *in);
+    assert_non_null(in);
+    make_leaves(in, n, SET_CROWN, 5);
+    xyl_foliage *a = build_ok(in, n, NULL), *b = build_ok(in, n, NULL);
+    assert_int_equal(a->leaf_count, b->leaf_count);
+    assert_memory_equal(a->leaves, b->leaves, a->leaf_count * sizeof *a->leaves);
+    assert_memory_equal(a->links, b->links, a->leaf_count * sizeof *a->links);
+    assert_memory_equal(a->sectors[0].lods, b->sectors[0].lods,
+                        (a->sectors[0].merged_count + 1) * sizeof *a->sectors[0].lods);
+    xyl_foliage_destroy(a);
+    xyl_foliage_destroy(b);
+    free(in);
+}
+
+static void build_rejects_bad_leaves_and_options_with_their_codes(void **state)
+{
+    (void)state;
+    xyl_leaf in[3];
+    make_leaves(in, 3, SET_CROWN, 1);
+    struct {
+        int what;
+        xyl_result code;
+    } cases[] = {
+        {0, XYL_ERR_NON_FINITE}, {1, XYL_ERR_INVALID_ARGUMENT}, {2, XYL_ERR_LIMIT_EXCEEDED},
+        {3, XYL_ERR_INVALID_ARGUMENT}, {4, XYL_ERR_NON_FINITE}, {5, XYL_ERR_INVALID_ARGUMENT},
+        {6, XYL_ERR_NON_FINITE}, {7, XYL_ERR_INVALID_ARGUMENT}, {8, XYL_ERR_LIMIT_EXCEEDED},
+        {9, XYL_ERR_INVALID_ARGUMENT},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        xyl_leaf l[3];
+        memcpy(l, in, sizeof l);
+        xyl_foliage_desc d = {0};
+        d.leaves = l;
+        d.leaf_count = 3;
+        switch (cases[k].what) {
+        case 0: l[1].center.y = NAN; break;
+        case 1: l[2].axis = (xyl_vec3){0, 0, 0}; break; /* size 0 */
+        case 2: l[0].center.x = 1e7f; break;            /* huge */
+        case 3: d.weights.angle = -1.0f; break;
+        case 4: d.weights.area = INFINITY; break;
+        case 5: d.max_distance = -2.0f; break;
+        case 6: d.max_angle = NAN; break;
+        case 7: d.limits.max_coordinate = -1.0f; break;
+        case 8: d.limits.max_leaves = 2; break;
+        case 9: d.leaves = NULL; break;
+        }
+        xyl_foliage *f = (xyl_foliage *)(uintptr_t)1;
+        xyl_diag diag = {0};
+        xyl_result r = xyl_foliage_build(&d, &f, &diag);
+        if (r != cases[k].code)
+            fail_msg("case %zu: got %s (%s), want %s", k, xyl_result_string(r), diag.message,
+                     xyl_result_string(cases[k].code));
+        assert_ptr_equal(f, (xyl_foliage *)(uintptr_t)1);
+        assert_true(strlen(diag.message) > 0);
+    }
+    xyl_foliage *f = NULL;
+    assert_int_equal(xyl_foliage_build(NULL, &f, NULL), XYL_ERR_INVALID_ARGUMENT);
+    xyl_foliage_desc d = {0};
+    assert_int_equal(xyl_foliage_build(&d, NULL, NULL), XYL_ERR_INVALID_ARGUMENT);
+}
+
+static void build_survives_every_allocation_failure(void **state)
+{
+    (void)state;
+    enum { N = 200 };
+    xyl_leaf in[N];
+    make_leaves(in, N, SET_CROWN, 9);
+    for (size_t fail = 1;; ++fail) {
+        counter c = {0};
+        c.fail_at = fail;
+        xyl_foliage_desc d = {0};
+        d.leaves = in;
+        d.leaf_count = N;
+        d.alloc = (xyl_allocator){count_alloc, count_free, &c};
+        xyl_foliage *f = (xyl_foliage *)(uintptr_t)1;
+        xyl_result r = xyl_foliage_build(&d, &f, NULL);
+        if (c.attempts < fail) {
+            assert_int_equal(r, XYL_OK);
+            assert_true(c.allocs > c.frees); /* the foliage's arrays */
+            xyl_foliage_destroy(f);
+            assert_int_equal(c.allocs, c.frees);
+            break;
+        }
+        assert_int_equal(r, XYL_ERR_OUT_OF_MEMORY);
+        assert_ptr_equal(f, (xyl_foliage *)(uintptr_t)1);
+        assert_int_equal(c.allocs, c.frees);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -990,6 +1228,12 @@ int main(void)
         cmocka_unit_test(collapse_stops_at_the_thresholds),
         cmocka_unit_test(collapse_is_deterministic_and_never_searches_all_pairs),
         cmocka_unit_test(collapse_survives_every_allocation_failure),
+        cmocka_unit_test(lods_draw_the_live_leaves_of_random_sets_at_every_step),
+        cmocka_unit_test(lods_of_a_large_crown_and_a_stopped_chain_draw_the_live_leaves),
+        cmocka_unit_test(build_of_no_leaves_is_an_empty_foliage),
+        cmocka_unit_test(build_is_deterministic),
+        cmocka_unit_test(build_rejects_bad_leaves_and_options_with_their_codes),
+        cmocka_unit_test(build_survives_every_allocation_failure),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

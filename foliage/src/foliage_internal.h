@@ -137,4 +137,16 @@ xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uin
                          const xyl__collapse_options *o, const xyl_allocator *a, uint32_t *merges,
                          xyl__collapse_stats *stats, xyl_diag *diag);
 
+/* ---- the linear LOD array (linearize.c) ---- */
+
+/* Reorders a chain made by xyl__collapse (leaves[0 .. n + m) in cost order, children, error)
+ * in place into the linear array: the originals by decreasing LOD of death, then the merged
+ * leaves in the reverse breadth-first order of the merge forest. Writes each leaf's link
+ * (array indices offset by base; source[x] the desc index of original x) and lods[0 .. m].
+ * Errors: XYL_ERR_OUT_OF_MEMORY only. */
+xyl_result xyl__linearize(xyl_leaf *leaves, const float *error, const uint32_t *children,
+                          uint32_t n, uint32_t m, uint32_t base, const uint32_t *source,
+                          xyl_leaf_link *links, xyl_foliage_lod *lods, const xyl_allocator *a,
+                          xyl_diag *diag);
+
 #endif

@@ -1,4 +1,5 @@
-/* xyl_foliage.h: leaves as quads and their 32-byte GPU record (docs/foliage.md).
+/* xyl_foliage.h: leaves as quads, leaf-collapse levels of detail that draw as two ranges of one
+ * array, and the 32-byte GPU leaf record (docs/foliage.md).
  *
  * How to use
  *     xyl_diag diag = {0};
@@ -13,12 +14,25 @@
  *     if (xyl_foliage_check_leaves(mine, count, NULL, &diag)) printf("leaf %lld: %s\n",
  *                                                  (long long)diag.index, diag.message);
  *
- *     // 32 bytes a leaf for a GPU buffer (shaders/xyl_foliage_shared.h reads them in GLSL)
- *     xyl_foliage_gpu_leaf *gpu = malloc((n ? n : 1) * sizeof *gpu);
- *     xyl_foliage_pack_gpu(leaves, n, gpu, &diag);
+ *     // the collapse chain, its linear array and LOD table
+ *     xyl_foliage_desc fd = {0};                 // zero = library weights, no thresholds
+ *     fd.leaves = leaves; fd.leaf_count = n;
+ *     xyl_foliage *f = NULL;
+ *     if (xyl_foliage_build(&fd, &f, &diag)) puts(diag.message);
  *
- * Every call is reentrant and allocates nothing here; the same input (seed included) gives
- * bit-identical leaves.
+ *     // 32 bytes a leaf for a GPU buffer (shaders/xyl_foliage_shared.h reads them in GLSL),
+ *     // once per species
+ *     xyl_foliage_gpu_leaf *gpu = malloc((f->leaf_count ? f->leaf_count : 1) * sizeof *gpu);
+ *     xyl_foliage_pack_gpu(f->leaves, f->leaf_count, gpu, &diag);
+ *
+ *     // LOD i of sector s: two draws of the one array
+ *     const xyl_foliage_sector *s = &f->sectors[0];
+ *     const xyl_foliage_lod *l = &s->lods[i];       // i in 0 .. s->merged_count
+ *     draw(s->base, l->a); draw(s->base + l->b, l->c);
+ *     xyl_foliage_destroy(f);
+ *
+ * Every call is reentrant; a foliage is immutable once built, so threads may read it at once.
+ * The same input (seed included) gives bit-identical leaves, arrays and tables.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
  */
@@ -120,6 +134,102 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
                                                     const xyl_foliage_leaves_desc *desc,
                                                     xyl_leaf *leaves, size_t capacity,
                                                     size_t *count, xyl_diag *diag);
+
+/* ---- levels of detail ------------------------------------------------------------------------
+ *
+ * Leaf collapse (Hidalgo, Abad, Camahort): the pair of live leaves with the smallest weighted
+ * cost is merged into one leaf, again and again, until one leaf is left or no pair passes the
+ * thresholds. Each merge removes exactly one leaf; LOD i is the foliage after i merges. The
+ * merged leaf: the plane through the count-weighted centre with the count-weighted normal, both
+ * leaves projected on it, the main axis through the projected centres, the quad the bounding
+ * rectangle of both projections along that axis with its width scaled so that its area is the
+ * mean of the two leaves' areas and the rectangle's; count the sum, texture rectangle and node
+ * those of the larger leaf.
+ *
+ * All the leaves, n originals and m merged, lie in ONE array, and LOD i draws as two ranges of
+ * it, [0, a) and [b, b + c) with a + c = n - i: two draws, no index buffer, one array for all
+ * the instances of a species; an instance keeps only its LOD. */
+
+/* The weights of the five terms of a pair's cost, each term in [0, 1]. All 0: this library's
+ * defaults, 1, 0.25, 0.05, 0.05, 0.05 (docs/foliage.md: the paper's values were not at hand). */
+typedef struct xyl_collapse_weights {
+    float distance;    /* |centre difference| / the foliage's size (the diagonal of the centres'
+                          bounding box, at least the largest leaf's length) */
+    float angle;       /* the angle between the normals / pi */
+    float count;       /* |difference of represented leaf counts| / their sum */
+    float area;        /* |area difference| / area sum */
+    float interiority; /* the distance of the pair's midpoint from the trunk axis / the largest
+                          such distance of a leaf centre: inner pairs merge first */
+} xyl_collapse_weights;
+
+typedef struct xyl_foliage_desc {
+    const xyl_leaf *leaves;   /* checked as xyl_foliage_check_leaves does */
+    size_t leaf_count;        /* 0 is fine: an empty foliage */
+    xyl_collapse_weights weights;
+    float max_distance;       /* pairs whose centres lie farther apart never merge; world units;
+                                 default (0): no threshold */
+    float max_angle;          /* pairs whose normals differ by more never merge; radians;
+                                 default (0): no threshold */
+    xyl_vec3 axis_origin;     /* the trunk axis, of the interiority term: a point on it */
+    xyl_vec3 axis_direction;  /* default (all 0): the vertical (+Y) line through the leaves'
+                                 count-weighted centroid (axis_origin ignored) */
+    xyl_foliage_limits limits;
+    xyl_allocator alloc;      /* every allocation of the build and of the foliage it makes */
+} xyl_foliage_desc;
+
+/* LOD i of a sector: its two ranges (relative to the sector's base) and its error. */
+typedef struct xyl_foliage_lod {
+    uint32_t a;   /* draw [0, a) of the sector: the originals still live */
+    uint32_t b;   /* and [b, b + c): the merged leaves still live */
+    uint32_t c;   /* a + c = n - i for LOD i of a sector of n originals */
+    float error;  /* world units: no point of an original leaf lies farther than this from the
+                     leaf that stands for it in this LOD; 0 for LOD 0, never decreasing */
+} xyl_foliage_lod;
+
+/* Where a leaf of the array comes from and goes to; array indices are the whole array's. */
+typedef struct xyl_leaf_link {
+    int32_t children[2]; /* the two leaves this one replaced (lower first); -1 for an original */
+    int32_t parent;      /* the leaf that replaced this one; -1 if none (a leaf of the coarsest
+                            LOD) */
+    float error;         /* world units: the farthest any point of the originals it stands for
+                            lies from its quad (an upper bound); 0 for an original */
+    uint32_t source;     /* an original's index in desc->leaves; UINT32_MAX for a merged leaf */
+} xyl_leaf_link;
+
+/* The sector's leaves are [base, base + original_count + merged_count) of the array:
+ * originals first, stored by decreasing LOD of death, so the live ones are a prefix; then
+ * merged leaves in the order the chain makes them, which is also the order they die in. */
+typedef struct xyl_foliage_sector {
+    uint32_t base;
+    uint32_t original_count; /* n */
+    uint32_t merged_count;   /* m: merges, so LODs 0 .. m; m = n - 1 unless thresholds stop the
+                                chain (or n = 0) */
+    const xyl_foliage_lod *lods; /* m + 1: lods[i] after i merges, ranges relative to base */
+} xyl_foliage_sector;
+
+/* Read-only view; the arrays belong to the foliage. */
+typedef struct xyl_foliage {
+    const xyl_leaf *leaves;       /* leaf_count: sector after sector */
+    const xyl_leaf_link *links;   /* leaf_count */
+    size_t leaf_count;            /* originals and merged leaves */
+    size_t original_count;
+    size_t coarsest_count;        /* leaves of the coarsest LODs together: one per sector, more
+                                     where the thresholds stopped the chain */
+    const xyl_foliage_sector *sectors;
+    uint32_t sector_count;
+    xyl_vec3 axis_origin, axis_direction; /* the trunk axis used (direction unit) */
+} xyl_foliage;
+
+/* Checks the leaves and options, runs the collapse chain and lays out the array and the LOD
+ * table. Zero leaves give an empty foliage (one sector, one LOD of nothing) and XYL_OK.
+ * Deterministic: the same desc gives the same bits (ties between pairs of equal cost go to the
+ * lower leaf indices). Expected time O(n log n), memory O(n). Errors: those of
+ * xyl_foliage_check_leaves (diag.index = the leaf), XYL_ERR_INVALID_ARGUMENT (NULL desc or
+ * out, a negative weight or threshold), XYL_ERR_NON_FINITE (an option), XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched and nothing is left allocated. */
+XYL_API xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out,
+                                     xyl_diag *diag);
+/* NULL is fine. */
+XYL_API void xyl_foliage_destroy(xyl_foliage *foliage);
 
 /* ---- the GPU record ------------------------------------------------------------------------ */
 
