@@ -611,6 +611,15 @@ static void make_leaves(xyl_leaf *out, uint32_t n, leaf_set set, uint64_t seed)
     }
 }
 
+/* make_leaves into a new array (free it). */
+static xyl_leaf *new_leaves(uint32_t n, leaf_set set, uint64_t seed)
+{
+    xyl_leaf *in = malloc((n ? n : 1) * sizeof *in);
+    assert_non_null(in);
+    make_leaves(in, n, set, seed);
+    return in;
+}
+
 typedef struct chain {
     xyl_leaf *leaves;
     float *error;
@@ -676,9 +685,7 @@ static void collapse_runs_to_one_leaf_standing_for_all(void **state)
     const leaf_set sets[4] = {SET_CROWN, SET_COINCIDENT, SET_COPLANAR, SET_CLUMPS};
     for (int s = 0; s < 4; ++s) {
         uint32_t n = SANITIZED ? 300 : 3000;
-        xyl_leaf *in = malloc(n * sizeof *in);
-        assert_non_null(in);
-        make_leaves(in, n, sets[s], 5);
+        xyl_leaf *in = new_leaves(n, sets[s], 5);
         chain c = run_collapse(in, n, NULL);
         assert_int_equal(c.m, n - 1);
         assert_int_equal(c.leaves[2 * n - 2].count, n);
@@ -781,9 +788,7 @@ static void collapse_keeps_coplanar_leaves_in_their_plane(void **state)
 {
     (void)state;
     uint32_t n = 500;
-    xyl_leaf *in = malloc(n * sizeof *in);
-    assert_non_null(in);
-    make_leaves(in, n, SET_COPLANAR, 11);
+    xyl_leaf *in = new_leaves(n, SET_COPLANAR, 11);
     chain c = run_collapse(in, n, NULL);
     assert_int_equal(c.m, n - 1);
     for (uint32_t k = n; k < n + c.m; ++k) {
@@ -792,6 +797,20 @@ static void collapse_keeps_coplanar_leaves_in_their_plane(void **state)
     }
     free_chain(&c);
     free(in);
+}
+
+/* The largest distance from a 5 x 5 lattice of points of leaf o (corners included) to quad q. */
+static double sampled_distance(const xyl_leaf *o, const xyl_leaf *q)
+{
+    double worst = 0.0;
+    for (int s = -2; s <= 2; ++s)
+        for (int t = -2; t <= 2; ++t) {
+            xyl__dvec3 x = {o->center.x + 0.5 * s * o->side.x + 0.5 * t * o->axis.x,
+                            o->center.y + 0.5 * s * o->side.y + 0.5 * t * o->axis.y,
+                            o->center.z + 0.5 * s * o->side.z + 0.5 * t * o->axis.z};
+            worst = fmax(worst, xyl__leaf_quad_distance(x, q));
+        }
+    return worst;
 }
 
 /* Every point of the originals a merged leaf stands for lies within its error of its quad. */
@@ -814,14 +833,7 @@ static void assert_error_bounds_hold(const chain *c)
                 stack[top++] = c->children[2 * (j - c->n) + 1];
                 continue;
             }
-            const xyl_leaf *o = &c->leaves[j];
-            for (int s = -2; s <= 2; ++s)
-                for (int t = -2; t <= 2; ++t) {
-                    xyl__dvec3 x = {o->center.x + 0.5 * s * o->side.x + 0.5 * t * o->axis.x,
-                                    o->center.y + 0.5 * s * o->side.y + 0.5 * t * o->axis.y,
-                                    o->center.z + 0.5 * s * o->side.z + 0.5 * t * o->axis.z};
-                    worst = fmax(worst, xyl__leaf_quad_distance(x, m));
-                }
+            worst = fmax(worst, sampled_distance(&c->leaves[j], m));
         }
         if (!(worst <= c->error[k] + 1e-6 * (scale + 1.0)))
             fail_msg("leaf %u: an original point is %g from it, its bound is %g", k, worst, (double)c->error[k]);
@@ -835,9 +847,7 @@ static void collapse_error_bounds_every_original_point(void **state)
     const leaf_set sets[3] = {SET_CROWN, SET_COPLANAR, SET_CLUMPS};
     for (int s = 0; s < 3; ++s) {
         uint32_t n = SANITIZED ? 200 : 1000;
-        xyl_leaf *in = malloc(n * sizeof *in);
-        assert_non_null(in);
-        make_leaves(in, n, sets[s], 21);
+        xyl_leaf *in = new_leaves(n, sets[s], 21);
         chain c = run_collapse(in, n, NULL);
         assert_error_bounds_hold(&c);
         free_chain(&c);
@@ -874,9 +884,7 @@ static void collapse_is_deterministic_and_never_searches_all_pairs(void **state)
 {
     (void)state;
     uint32_t n = SANITIZED ? 5000 : 50000;
-    xyl_leaf *in = malloc(n * sizeof *in);
-    assert_non_null(in);
-    make_leaves(in, n, SET_CROWN, 8);
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 8);
     chain a = run_collapse(in, n, NULL), b = run_collapse(in, n, NULL);
     assert_int_equal(a.m, n - 1);
     assert_memory_equal(a.leaves, b.leaves, (2 * (size_t)n - 1) * sizeof *a.leaves);
@@ -1050,9 +1058,7 @@ static void lods_draw_the_live_leaves_of_random_sets_at_every_step(void **state)
         for (int size = 0; size < 4; ++size)
             for (uint64_t seed = 1; seed <= 3; ++seed) {
                 uint32_t n = sizes[size];
-                xyl_leaf *in = malloc(n * sizeof *in);
-                assert_non_null(in);
-                make_leaves(in, n, sets[set], seed * 7 + (uint64_t)size);
+                xyl_leaf *in = new_leaves(n, sets[set], seed * 7 + (uint64_t)size);
                 xyl_foliage *f = build_ok(in, n, NULL);
                 assert_int_equal(f->sector_count, 1);
                 assert_int_equal(f->sectors[0].merged_count, n - 1);
@@ -1068,9 +1074,7 @@ static void lods_of_a_large_crown_and_a_stopped_chain_draw_the_live_leaves(void 
 {
     (void)state;
     uint32_t n = SANITIZED ? 4000 : 40000;
-    xyl_leaf *in = malloc(n * sizeof *in);
-    assert_non_null(in);
-    make_leaves(in, n, SET_CROWN, 77);
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 77);
     xyl_foliage *f = build_ok(in, n, NULL);
     assert_lods_draw_the_live_leaves(f, &f->sectors[0], false);
     assert_links_agree(f, in);
@@ -1109,9 +1113,7 @@ static void build_is_deterministic(void **state)
 {
     (void)state;
     uint32_t n = SANITIZED ? 2000 : 20000;
-    xyl_leaf *in = malloc(n * sizeof *in);
-    assert_non_null(in);
-    make_leaves(in, n, SET_CROWN, 5);
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 5);
     xyl_foliage *a = build_ok(in, n, NULL), *b = build_ok(in, n, NULL);
     assert_int_equal(a->leaf_count, b->leaf_count);
     assert_memory_equal(a->leaves, b->leaves, a->leaf_count * sizeof *a->leaves);
@@ -1198,6 +1200,151 @@ static void build_survives_every_allocation_failure(void **state)
     }
 }
 
+/* ---- LOD errors and the LOD pick ------------------------------------------------------------ */
+
+/* Largest distance from sampled points of the originals under array leaf k to the quad q. */
+static double worst_original_distance(const xyl_foliage *f, uint32_t k, const xyl_leaf *q, uint32_t *stack)
+{
+    double worst = 0.0;
+    uint32_t top = 0;
+    stack[top++] = k;
+    while (top) {
+        uint32_t j = stack[--top];
+        const xyl_leaf_link *l = &f->links[j];
+        if (l->children[0] >= 0) {
+            stack[top++] = (uint32_t)l->children[0];
+            stack[top++] = (uint32_t)l->children[1];
+            continue;
+        }
+        worst = fmax(worst, sampled_distance(&f->leaves[j], q));
+    }
+    return worst;
+}
+
+static void lod_errors_bound_every_original_point(void **state)
+{
+    (void)state;
+    const leaf_set sets[3] = {SET_CROWN, SET_COPLANAR, SET_CLUMPS};
+    for (int set = 0; set < 3; ++set) {
+        uint32_t n = SANITIZED ? 150 : 600;
+        xyl_leaf *in = malloc(n * sizeof *in);
+        uint32_t *stack = malloc(2 * n * sizeof *stack);
+        assert_true(in && stack);
+        make_leaves(in, n, sets[set], 31);
+        xyl_foliage *f = build_ok(in, n, NULL);
+        const xyl_foliage_sector *s = &f->sectors[0];
+        for (uint32_t step = 0;; ++step) { /* every 40th LOD and the coarsest */
+            uint32_t i = 40 * step < s->merged_count ? 40 * step : s->merged_count;
+            const xyl_foliage_lod *lod = &s->lods[i];
+            for (uint32_t k = 0; k < f->leaf_count; ++k) {
+                bool drawn = k < lod->a || (k >= lod->b && k < lod->b + lod->c);
+                if (!drawn) continue;
+                double worst = worst_original_distance(f, k, &f->leaves[k], stack);
+                double tol = 1e-6 * (1.0 + len3(f->leaves[k].center));
+                if (!(worst <= f->links[k].error + tol && f->links[k].error <= lod->error))
+                    fail_msg("LOD %u, leaf %u: originals %g away, its bound %g, the LOD's %g", i, k,
+                             worst, (double)f->links[k].error, (double)lod->error);
+            }
+            if (i == s->merged_count) break;
+        }
+        xyl_foliage_destroy(f);
+        free(in);
+        free(stack);
+    }
+}
+
+static void bounding_spheres_hold_every_leaf(void **state)
+{
+    (void)state;
+    enum { N = 300 };
+    xyl_leaf in[N];
+    make_leaves(in, N, SET_CROWN, 12);
+    xyl_foliage *f = build_ok(in, N, NULL);
+    const xyl_foliage_sector *s = &f->sectors[0];
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        xyl__dvec3 c[4];
+        xyl__leaf_corners(&f->leaves[k], c);
+        for (int j = 0; j < 4; ++j) {
+            assert_true(xyl__d3_len(xyl__d3_sub(c[j], xyl__from_f3(s->center))) <= s->radius);
+            assert_true(xyl__d3_len(xyl__d3_sub(c[j], xyl__from_f3(f->center))) <= f->radius);
+        }
+    }
+    xyl_foliage_destroy(f);
+}
+
+static void pick_is_finest_inside_coarsest_far_and_monotone_in_distance(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 500 : 5000;
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 44);
+    xyl_foliage *f = build_ok(in, n, NULL);
+    const xyl_foliage_sector *s = &f->sectors[0];
+    xyl_foliage_view v = {0};
+    v.eye[0] = s->center.x, v.eye[1] = s->center.y, v.eye[2] = s->center.z;
+    uint32_t lod = 99;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, NULL), XYL_OK);
+    assert_int_equal(lod, 0); /* inside */
+    uint32_t last = 0;
+    double per_distance = 0.5 * 2.0 * tan(0.4) / 1080.0; /* the defaults */
+    for (double d = 0.25 * s->radius; d < 1e7; d *= 1.3) {
+        v.eye[0] = (float)(s->center.x + s->radius + d);
+        assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, NULL), XYL_OK);
+        assert_true(lod >= last);
+        last = lod;
+        /* the coarsest within the budget */
+        double dist = len3((xyl_vec3){v.eye[0] - s->center.x, 0, 0}) - s->radius;
+        double allowed = dist * per_distance;
+        assert_true(s->lods[lod].error <= allowed);
+        if (lod < s->merged_count) assert_true(s->lods[lod + 1].error > allowed);
+    }
+    v.eye[0] = 1e30f;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, NULL), XYL_OK);
+    assert_int_equal(lod, s->merged_count); /* far enough: one leaf */
+    assert_true(last > 0);
+    /* a finer budget never gives a coarser LOD */
+    v.eye[0] = (float)(s->center.x + 3.0 * s->radius);
+    v.error_px = 4.0f;
+    uint32_t coarse, fine;
+    xyl_foliage_pick(f, &v, &coarse, 1, NULL);
+    v.error_px = 0.1f;
+    xyl_foliage_pick(f, &v, &fine, 1, NULL);
+    assert_true(fine <= coarse);
+    xyl_foliage_destroy(f);
+    free(in);
+}
+
+static void pick_rejects_bad_views_and_leaves_lods_untouched(void **state)
+{
+    (void)state;
+    xyl_leaf in[4];
+    make_leaves(in, 4, SET_CROWN, 2);
+    xyl_foliage *f = build_ok(in, 4, NULL);
+    uint32_t lod = 77;
+    xyl_diag diag = {0};
+    xyl_foliage_view v = {0};
+    v.eye[1] = NAN;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, &diag), XYL_ERR_NON_FINITE);
+    v.eye[1] = 0, v.fovy = 3.5f;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, &diag), XYL_ERR_INVALID_ARGUMENT);
+    v.fovy = 0, v.error_px = -1.0f;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, &diag), XYL_ERR_INVALID_ARGUMENT);
+    v.error_px = INFINITY;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, &diag), XYL_ERR_NON_FINITE);
+    v.error_px = 0;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 0, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_pick(f, &v, NULL, 1, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_pick(NULL, &v, &lod, 1, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(lod, 77);
+    assert_int_equal(xyl_foliage_pick(f, NULL, &lod, 1, &diag), XYL_OK);
+    xyl_foliage_destroy(f);
+    f = build_ok(NULL, 0, NULL); /* an empty foliage has LOD 0 only */
+    lod = 5;
+    v.eye[0] = 1e20f;
+    assert_int_equal(xyl_foliage_pick(f, &v, &lod, 1, &diag), XYL_OK);
+    assert_int_equal(lod, 0);
+    xyl_foliage_destroy(f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1234,6 +1381,10 @@ int main(void)
         cmocka_unit_test(build_is_deterministic),
         cmocka_unit_test(build_rejects_bad_leaves_and_options_with_their_codes),
         cmocka_unit_test(build_survives_every_allocation_failure),
+        cmocka_unit_test(lod_errors_bound_every_original_point),
+        cmocka_unit_test(bounding_spheres_hold_every_leaf),
+        cmocka_unit_test(pick_is_finest_inside_coarsest_far_and_monotone_in_distance),
+        cmocka_unit_test(pick_rejects_bad_views_and_leaves_lods_untouched),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -115,15 +115,6 @@ static xyl__dvec3 project(xyl__dvec3 x, xyl__dvec3 c, xyl__dvec3 n)
     return xyl__d3_sub(x, xyl__d3_scale(n, xyl__d3_dot(xyl__d3_sub(x, c), n)));
 }
 
-static void corners(const xyl_leaf *l, xyl__dvec3 out[4])
-{
-    xyl__dvec3 c = xyl__from_f3(l->center), a = xyl__from_f3(l->axis), s = xyl__from_f3(l->side);
-    for (int k = 0; k < 4; ++k) {
-        double ss = (k & 1) ? 1.0 : -1.0, tt = (k & 2) ? 1.0 : -1.0;
-        out[k] = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(s, ss), xyl__d3_scale(a, tt)));
-    }
-}
-
 /* The main axis of the merged leaf in its plane (unit n through c): through the two projected
  * centres, turned to agree with the count-weighted axis; where the centres coincide, the
  * count-weighted axis itself (then the larger leaf's, then any). */
@@ -166,13 +157,6 @@ double xyl__leaf_quad_distance(xyl__dvec3 x, const xyl_leaf *l)
     return quad_distance(x, l);
 }
 
-static float round_up(double e)
-{
-    float f = (float)e;
-    if ((double)f < e) f = nextafterf(f, INFINITY);
-    return f;
-}
-
 xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, float err_q,
                          float *err)
 {
@@ -190,8 +174,8 @@ xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, floa
     xyl__dvec3 s = xyl__d3_cross(a, n);
     /* the bounding rectangle of both projected quads along (a, s) */
     xyl__dvec3 pts[8];
-    corners(p, pts);
-    corners(q, pts + 4);
+    xyl__leaf_corners(p, pts);
+    xyl__leaf_corners(q, pts + 4);
     double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
     for (int k = 0; k < 8; ++k) {
         xyl__dvec3 d = xyl__d3_sub(project(pts[k], c, n), c);
@@ -224,11 +208,11 @@ xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, floa
     const float child_err[2] = {err_p, err_q};
     for (int k = 0; k < 2; ++k) {
         double worst = 0.0;
-        corners(child[k], pts);
+        xyl__leaf_corners(child[k], pts);
         for (int j = 0; j < 4; ++j) worst = fmax(worst, quad_distance(pts[j], &m));
         e = fmax(e, (double)child_err[k] + worst);
     }
-    *err = round_up(e);
+    *err = xyl__round_up(e);
     return m;
 }
 

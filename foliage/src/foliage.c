@@ -67,6 +67,33 @@ static void resolve_options(const xyl_foliage_desc *d, const xyl_leaf *leaves, u
     }
 }
 
+/* A sphere around the corners of leaves[0 .. count): the box's centre, the farthest corner. */
+static void bounding_sphere(const xyl_leaf *leaves, size_t count, xyl_vec3 *center, float *radius)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    xyl__dvec3 c[4];
+    for (size_t i = 0; i < count; ++i) {
+        xyl__leaf_corners(&leaves[i], c);
+        for (int k = 0; k < 4; ++k) {
+            const double v[3] = {c[k].x, c[k].y, c[k].z};
+            for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], v[d]), hi[d] = fmax(hi[d], v[d]);
+        }
+    }
+    if (!count) {
+        *center = (xyl_vec3){0, 0, 0};
+        *radius = 0.0f;
+        return;
+    }
+    *center = xyl__to_f3(xyl__d3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])));
+    xyl__dvec3 m = xyl__from_f3(*center);
+    double r = 0.0;
+    for (size_t i = 0; i < count; ++i) {
+        xyl__leaf_corners(&leaves[i], c);
+        for (int k = 0; k < 4; ++k) r = fmax(r, xyl__d3_len(xyl__d3_sub(c[k], m)));
+    }
+    *radius = xyl__round_up(r);
+}
+
 /* The arrays a build fills and hands over, and its scratch. */
 typedef struct build {
     xyl__foliage *f;
@@ -115,6 +142,7 @@ static xyl_result build_sector(build *b, xyl_foliage_sector *s, xyl_foliage_lod 
                            b->f->links + s->base, lods, a, diag);
     s->merged_count = m;
     s->lods = lods;
+    if (r == XYL_OK) bounding_sphere(leaves, (size_t)n + m, &s->center, &s->radius);
     return r;
 }
 
@@ -156,8 +184,52 @@ xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out, xy
     f->pub.sector_count = 1;
     f->pub.axis_origin = xyl__to_f3(o.axis_origin);
     f->pub.axis_direction = xyl__to_f3(o.axis_direction);
+    bounding_sphere(f->leaves, f->pub.leaf_count, &f->pub.center, &f->pub.radius);
     free_build(&b, a, true);
     *out = &f->pub;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+/* ---- the LOD pick ---------------------------------------------------------------------------- */
+
+/* The coarsest LOD of s whose error is at most allowed (the errors never decrease). */
+static uint32_t coarsest_within(const xyl_foliage_sector *s, double allowed)
+{
+    uint32_t lo = 0, hi = s->merged_count; /* lods[lo] is within; find the last one that is */
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo + 1) / 2;
+        if ((double)s->lods[mid].error <= allowed) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
+xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
+                            uint32_t *lods, size_t capacity, xyl_diag *diag)
+{
+    if (!foliage || !lods || capacity < foliage->sector_count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "foliage and lods must not be NULL, and lods must hold one LOD a sector");
+    xyl_foliage_view zero = {{0, 0, 0}, 0, 0, 0};
+    const xyl_foliage_view *v = view ? view : &zero;
+    if (!isfinite(v->eye[0]) || !isfinite(v->eye[1]) || !isfinite(v->eye[2]) ||
+        !isfinite(v->fovy) || !isfinite(v->error_px))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the view has a NaN or infinity");
+    if (v->fovy < 0.0f || v->fovy >= (float)XYL__PI || v->error_px < 0.0f)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "view: fovy must be in [0, pi) (0: 0.8) and error_px >= 0 (0: 0.5)");
+    double fovy = v->fovy > 0.0f ? v->fovy : 0.8;
+    double height = v->viewport_height ? v->viewport_height : 1080;
+    double budget = v->error_px > 0.0f ? v->error_px : 0.5;
+    /* world error per unit of distance that the budget allows */
+    double per_distance = budget * 2.0 * tan(0.5 * fovy) / height;
+    xyl__dvec3 eye = xyl__d3(v->eye[0], v->eye[1], v->eye[2]);
+    for (uint32_t k = 0; k < foliage->sector_count; ++k) {
+        const xyl_foliage_sector *s = &foliage->sectors[k];
+        double d = xyl__d3_len(xyl__d3_sub(eye, xyl__from_f3(s->center))) - (double)s->radius;
+        lods[k] = d > 0.0 ? coarsest_within(s, d * per_distance) : 0;
+    }
     xyl__diag_ok(diag);
     return XYL_OK;
 }

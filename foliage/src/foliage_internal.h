@@ -28,6 +28,11 @@ xyl_result xyl__leaf_check(const xyl_leaf *leaf, size_t i, const xyl__foliage_li
  * side = |side| unit(axis x normal). */
 xyl_leaf xyl__leaf_tidy(const xyl_leaf *leaf);
 
+/* Corner k of a leaf: centre + (k & 1 ? 1 : -1) side + (k & 2 ? 1 : -1) axis. */
+void xyl__leaf_corners(const xyl_leaf *leaf, xyl__dvec3 out[4]);
+/* The least float >= v: a bound computed in double stays a bound. */
+float xyl__round_up(double v);
+
 /* ---- the GPU record (pack.c) ---- */
 
 /* binary16 bits of f, to nearest with ties to even; beyond 65504 (after rounding) infinity. */

@@ -127,6 +127,20 @@ xyl_leaf xyl__leaf_tidy(const xyl_leaf *l)
     return t;
 }
 
+void xyl__leaf_corners(const xyl_leaf *l, xyl__dvec3 out[4])
+{
+    xyl__dvec3 c = xyl__from_f3(l->center), a = xyl__from_f3(l->axis), s = xyl__from_f3(l->side);
+    for (int k = 0; k < 4; ++k)
+        out[k] = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(s, k & 1 ? 1.0 : -1.0),
+                                            xyl__d3_scale(a, k & 2 ? 1.0 : -1.0)));
+}
+
+float xyl__round_up(double v)
+{
+    float f = (float)v;
+    return (double)f < v ? nextafterf(f, INFINITY) : f;
+}
+
 /* ---- leaves from leaf attachments -------------------------------------------------------- */
 
 typedef struct shape {

@@ -25,9 +25,13 @@
  *     xyl_foliage_gpu_leaf *gpu = malloc((f->leaf_count ? f->leaf_count : 1) * sizeof *gpu);
  *     xyl_foliage_pack_gpu(f->leaves, f->leaf_count, gpu, &diag);
  *
- *     // LOD i of sector s: two draws of the one array
+ *     // each frame, per tree: the LOD of each sector from the view, two draws of the one array
+ *     xyl_foliage_view v = {0};                  // zero = 0.8 rad, 1080 px, 0.5 px budget
+ *     v.eye[0] = ex; v.eye[1] = ey; v.eye[2] = ez;   // in the tree's coordinates
+ *     uint32_t lod[1];                           // one per sector (f->sector_count)
+ *     xyl_foliage_pick(f, &v, lod, 1, &diag);
  *     const xyl_foliage_sector *s = &f->sectors[0];
- *     const xyl_foliage_lod *l = &s->lods[i];       // i in 0 .. s->merged_count
+ *     const xyl_foliage_lod *l = &s->lods[lod[0]];
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
  *     xyl_foliage_destroy(f);
  *
@@ -205,6 +209,8 @@ typedef struct xyl_foliage_sector {
     uint32_t merged_count;   /* m: merges, so LODs 0 .. m; m = n - 1 unless thresholds stop the
                                 chain (or n = 0) */
     const xyl_foliage_lod *lods; /* m + 1: lods[i] after i merges, ranges relative to base */
+    xyl_vec3 center;             /* a sphere around all its leaves (corners of the originals and */
+    float radius;                /* of the merged leaves); radius 0 for an empty sector */
 } xyl_foliage_sector;
 
 /* Read-only view; the arrays belong to the foliage. */
@@ -218,6 +224,8 @@ typedef struct xyl_foliage {
     const xyl_foliage_sector *sectors;
     uint32_t sector_count;
     xyl_vec3 axis_origin, axis_direction; /* the trunk axis used (direction unit) */
+    xyl_vec3 center;                      /* a sphere around all the leaves */
+    float radius;
 } xyl_foliage;
 
 /* Checks the leaves and options, runs the collapse chain and lays out the array and the LOD
@@ -230,6 +238,31 @@ XYL_API xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage *
                                      xyl_diag *diag);
 /* NULL is fine. */
 XYL_API void xyl_foliage_destroy(xyl_foliage *foliage);
+
+/* ---- choosing a LOD ------------------------------------------------------------------------
+ *
+ * The coarsest LOD whose error, seen from the eye at the distance of the sector's bounding
+ * sphere, stays under a pixel budget: LOD i is allowed when
+ *     lods[i].error <= error_px * 2 d tan(fovy / 2) / viewport_height,
+ * d = |eye - center| - radius. The same four fields and defaults as xyl_tess_view's (tessellate
+ * has more, for its levels), repeated here rather than shared through core, which knows no
+ * cameras, so that neither module depends on the other: copy them over. */
+typedef struct xyl_foliage_view {
+    float eye[3];             /* camera position in the foliage's coordinates (an instance's
+                                 transform applied inversely) */
+    float fovy;               /* vertical field of view, radians, in (0, pi); default (0): 0.8 */
+    uint32_t viewport_height; /* pixels; default (0): 1080 */
+    float error_px;           /* screen-space budget, pixels; default (0): 0.5 */
+} xyl_foliage_view;
+
+/* One LOD per sector into lods[0 .. sector_count): the coarsest within the budget; the finest
+ * (0) when the eye is inside the sector's sphere, the coarsest (merged_count) far enough away.
+ * Never coarser as the eye comes nearer. view may be NULL (the defaults with the eye at the
+ * origin). Errors: XYL_ERR_INVALID_ARGUMENT (NULL foliage or lods, capacity < sector_count,
+ * fovy outside [0, pi), a negative budget), XYL_ERR_NON_FINITE (a view field); lods is then
+ * untouched. Allocates nothing. */
+XYL_API xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
+                                    uint32_t *lods, size_t capacity, xyl_diag *diag);
 
 /* ---- the GPU record ------------------------------------------------------------------------ */
 
