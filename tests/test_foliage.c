@@ -1184,6 +1184,7 @@ static void build_survives_every_allocation_failure(void **state)
         xyl_foliage_desc d = {0};
         d.leaves = in;
         d.leaf_count = N;
+        d.sectors = 3;
         d.alloc = (xyl_allocator){count_alloc, count_free, &c};
         xyl_foliage *f = (xyl_foliage *)(uintptr_t)1;
         xyl_result r = xyl_foliage_build(&d, &f, NULL);
@@ -1345,6 +1346,144 @@ static void pick_rejects_bad_views_and_leaves_lods_untouched(void **state)
     xyl_foliage_destroy(f);
 }
 
+/* ---- sectors ------------------------------------------------------------------------------- */
+
+static double azimuth_about(const xyl_foliage *f, xyl_vec3 c)
+{
+    xyl_vec3 d = {c.x - f->axis_origin.x, c.y - f->axis_origin.y, c.z - f->axis_origin.z};
+    xyl_vec3 quarter = cross3(f->axis_direction, f->azimuth_zero);
+    double a = atan2(dot3(d, quarter), dot3(d, f->azimuth_zero));
+    return a < 0 ? a + 2 * 3.14159265358979323846 : a;
+}
+
+static void sectors_split_the_crown_by_azimuth_and_each_draws_its_live_leaves(void **state)
+{
+    (void)state;
+    const leaf_set sets[3] = {SET_CROWN, SET_COPLANAR, SET_CLUMPS};
+    const uint32_t counts[3] = {2, 4, 7};
+    for (int set = 0; set < 3; ++set)
+        for (int k = 0; k < 3; ++k) {
+            uint32_t n = SANITIZED ? 300 : 1500, S = counts[k];
+            xyl_leaf *in = new_leaves(n, sets[set], 100 + (uint64_t)k);
+            xyl_foliage_desc d = {0};
+            d.sectors = S;
+            if (sets[set] == SET_COPLANAR) d.axis_direction = (xyl_vec3){0, 0, 1}; /* across the plane */
+            xyl_foliage *f = build_ok(in, n, &d);
+            assert_int_equal(f->sector_count, S);
+            uint32_t base = 0, originals = 0;
+            for (uint32_t si = 0; si < S; ++si) {
+                const xyl_foliage_sector *sec = &f->sectors[si];
+                assert_int_equal(sec->base, base);
+                if (sec->original_count) assert_int_equal(sec->merged_count, sec->original_count - 1);
+                for (uint32_t j = 0; j < sec->original_count; ++j) {
+                    double a = azimuth_about(f, f->leaves[base + j].center) * S / (2 * 3.14159265358979323846);
+                    assert_true(a >= si - 1e-6 && a <= si + 1 + 1e-6);
+                }
+                assert_lods_draw_the_live_leaves(f, sec, sec->original_count < 800);
+                base += sec->original_count + sec->merged_count;
+                originals += sec->original_count;
+            }
+            assert_int_equal(base, f->leaf_count);
+            assert_int_equal(originals, n);
+            uint32_t nonempty = 0;
+            for (uint32_t si = 0; si < S; ++si) nonempty += f->sectors[si].original_count > 0;
+            assert_int_equal(f->coarsest_count, nonempty);
+            assert_links_agree(f, in);
+            xyl_foliage_destroy(f);
+            free(in);
+        }
+}
+
+static void sectors_without_leaves_have_one_empty_lod(void **state)
+{
+    (void)state;
+    enum { N = 50 };
+    xyl_leaf in[N];
+    for (int i = 0; i < N; ++i) /* all at x > 0, z <= 0: azimuths in [0, pi / 2] about +Y */
+        in[i] = oriented_leaf((xyl_vec3){1.0f + (float)(i % 5), (float)(i / 5), -0.5f * (float)(i % 3)},
+                              (xyl_vec3){0, 1, 0}, 0.1 * i, 0.2, 0.1);
+    xyl_foliage_desc d = {0};
+    d.sectors = 4;
+    d.axis_direction = (xyl_vec3){0, 2, 0};
+    xyl_foliage *f = build_ok(in, N, &d);
+    assert_vec_near(f->azimuth_zero, 1, 0, 0, 0);
+    assert_vec_near(f->axis_direction, 0, 1, 0, 0);
+    assert_int_equal(f->sectors[0].original_count, N);
+    assert_int_equal(f->coarsest_count, 1);
+    for (int s = 1; s < 4; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        assert_int_equal(sec->original_count, 0);
+        assert_int_equal(sec->merged_count, 0);
+        assert_int_equal(sec->base, 2 * N - 1);
+        assert_true(sec->lods[0].a == 0 && sec->lods[0].c == 0 && sec->radius == 0.0f);
+    }
+    uint32_t lods[4] = {9, 9, 9, 9};
+    xyl_foliage_view v = {0};
+    v.eye[0] = 1e6f;
+    assert_int_equal(xyl_foliage_pick(f, &v, lods, 4, NULL), XYL_OK);
+    assert_int_equal(lods[0], N - 1);
+    assert_int_equal(lods[1] + lods[2] + lods[3], 0);
+    assert_int_equal(xyl_foliage_pick(f, &v, lods, 3, NULL), XYL_ERR_INVALID_ARGUMENT);
+    xyl_foliage_destroy(f);
+    /* more sectors than leaves */
+    d.sectors = XYL_FOLIAGE_MAX_SECTORS;
+    f = build_ok(in, 1, &d);
+    assert_int_equal(f->leaf_count, 1);
+    xyl_foliage_destroy(f);
+    d.sectors = XYL_FOLIAGE_MAX_SECTORS + 1;
+    d.leaves = in, d.leaf_count = 1;
+    assert_int_equal(xyl_foliage_build(&d, &f, NULL), XYL_ERR_INVALID_ARGUMENT);
+}
+
+static void one_sector_is_the_default(void **state)
+{
+    (void)state;
+    uint32_t n = 2000;
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 3);
+    xyl_foliage_desc d = {0};
+    d.sectors = 1;
+    xyl_foliage *a = build_ok(in, n, NULL), *b = build_ok(in, n, &d);
+    assert_memory_equal(a->leaves, b->leaves, a->leaf_count * sizeof *a->leaves);
+    assert_memory_equal(a->links, b->links, a->leaf_count * sizeof *a->links);
+    xyl_foliage_destroy(a);
+    xyl_foliage_destroy(b);
+    free(in);
+}
+
+static void pick_gives_each_sector_its_own_lod(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 800 : 4000;
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 8);
+    xyl_foliage_desc d = {0};
+    d.sectors = 4;
+    xyl_foliage *f = build_ok(in, n, &d);
+    /* an eye out along the azimuth of sector 0's middle: sector 0 nearest, sector 2 farthest */
+    xyl_vec3 z = f->azimuth_zero, q = cross3(f->axis_direction, z);
+    double c = cos(3.14159265358979323846 / 4), s = sin(3.14159265358979323846 / 4);
+    xyl_vec3 dir = {(float)(c * z.x + s * q.x), (float)(c * z.y + s * q.y), (float)(c * z.z + s * q.z)};
+    int finer = 0;
+    for (double dist = 4; dist < 400; dist *= 1.5) {
+        xyl_foliage_view v = {0};
+        v.eye[0] = f->axis_origin.x + (float)dist * dir.x;
+        v.eye[1] = f->axis_origin.y + (float)dist * dir.y;
+        v.eye[2] = f->axis_origin.z + (float)dist * dir.z;
+        uint32_t lods[4];
+        assert_int_equal(xyl_foliage_pick(f, &v, lods, 4, NULL), XYL_OK);
+        for (int k = 0; k < 4; ++k) {
+            const xyl_foliage_sector *sec = &f->sectors[k];
+            double e = len3((xyl_vec3){v.eye[0] - sec->center.x, v.eye[1] - sec->center.y,
+                                       v.eye[2] - sec->center.z}) - sec->radius;
+            double allowed = e * 0.5 * 2.0 * tan(0.4) / 1080.0;
+            assert_true(e <= 0 ? lods[k] == 0 : sec->lods[lods[k]].error <= allowed);
+        }
+        finer += lods[0] < lods[2];
+    }
+    assert_true(finer > 0); /* the near sector is drawn finer than the far one */
+    xyl_foliage_destroy(f);
+    free(in);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1385,6 +1524,10 @@ int main(void)
         cmocka_unit_test(bounding_spheres_hold_every_leaf),
         cmocka_unit_test(pick_is_finest_inside_coarsest_far_and_monotone_in_distance),
         cmocka_unit_test(pick_rejects_bad_views_and_leaves_lods_untouched),
+        cmocka_unit_test(sectors_split_the_crown_by_azimuth_and_each_draws_its_live_leaves),
+        cmocka_unit_test(sectors_without_leaves_have_one_empty_lod),
+        cmocka_unit_test(one_sector_is_the_default),
+        cmocka_unit_test(pick_gives_each_sector_its_own_lod),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

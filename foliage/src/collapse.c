@@ -507,8 +507,9 @@ void xyl__collapse_defaults(const xyl_leaf *leaves, uint32_t n, xyl__collapse_op
     double total = 0.0;
     xyl__dvec3 sum = xyl__d3(0, 0, 0);
     for (uint32_t i = 0; i < n; ++i) {
-        total += leaves[i].count;
-        sum = xyl__d3_add(sum, xyl__d3_scale(xyl__from_f3(leaves[i].center), leaves[i].count));
+        double count = leaves[i].count ? leaves[i].count : 1; /* 0: the default, 1 */
+        total += count;
+        sum = xyl__d3_add(sum, xyl__d3_scale(xyl__from_f3(leaves[i].center), count));
     }
     o->axis_origin = total > 0.0 ? xyl__d3_scale(sum, 1.0 / total) : xyl__d3(0, 0, 0);
     o->axis_direction = xyl__d3(0, 1, 0);

@@ -45,10 +45,13 @@ static xyl_result check_options(const xyl_foliage_desc *d, xyl_diag *diag)
         return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "a threshold or the axis is NaN or infinite");
     if (d->max_distance < 0.0f || d->max_angle < 0.0f)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "thresholds must be >= 0 (0: none)");
+    if (d->sectors > XYL_FOLIAGE_MAX_SECTORS)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "%u sectors; at most %u",
+                         d->sectors, XYL_FOLIAGE_MAX_SECTORS);
     return XYL_OK;
 }
 
-/* The options as the collapse takes them, for the n checked and tidy leaves. */
+/* The options as the collapse takes them, for the n checked leaves. */
 static void resolve_options(const xyl_foliage_desc *d, const xyl_leaf *leaves, uint32_t n,
                             xyl__collapse_options *o)
 {
@@ -122,28 +125,101 @@ static bool alloc_build(build *b, const xyl_allocator *a, size_t n, uint32_t sec
     b->f->lods = xyl__alloc_array(a, n + sectors, sizeof *b->f->lods);
     b->f->sectors = xyl__calloc(a, sectors, sizeof *b->f->sectors);
     b->error = xyl__alloc_array(a, cap, sizeof *b->error);
-    b->children = xyl__alloc_array(a, cap, sizeof *b->children);
+    b->children = xyl__alloc_array(a, cap > sectors ? cap : sectors, sizeof *b->children);
     b->source = xyl__alloc_array(a, n ? n : 1, sizeof *b->source);
     return b->f->leaves && b->f->links && b->f->lods && b->f->sectors && b->error &&
            b->children && b->source;
 }
 
 /* Collapses one sector whose originals are already at leaves[base ..] (their indices in the
- * desc in source[0 ..]) and lays it out there. */
-static xyl_result build_sector(build *b, xyl_foliage_sector *s, xyl_foliage_lod *lods,
-                               const xyl__collapse_options *o, const xyl_allocator *a,
-                               xyl_diag *diag)
+ * desc in source[]) and lays it out there. */
+static xyl_result build_sector(build *b, xyl_foliage_sector *s, const uint32_t *source,
+                               xyl_foliage_lod *lods, const xyl__collapse_options *o,
+                               const xyl_allocator *a, xyl_diag *diag)
 {
     xyl_leaf *leaves = b->f->leaves + s->base;
     uint32_t n = s->original_count, m = 0;
     xyl_result r = xyl__collapse(leaves, b->error, b->children, n, o, a, &m, NULL, diag);
     if (r == XYL_OK)
-        r = xyl__linearize(leaves, b->error, b->children, n, m, s->base, b->source,
+        r = xyl__linearize(leaves, b->error, b->children, n, m, s->base, source,
                            b->f->links + s->base, lods, a, diag);
     s->merged_count = m;
     s->lods = lods;
     if (r == XYL_OK) bounding_sphere(leaves, (size_t)n + m, &s->center, &s->radius);
     return r;
+}
+
+/* Where the sectors' azimuths start: the world axis least aligned with the trunk axis (X
+ * first on ties), made orthogonal to it. */
+static xyl__dvec3 azimuth_zero(xyl__dvec3 axis)
+{
+    const double c[3] = {fabs(axis.x), fabs(axis.y), fabs(axis.z)};
+    int k = c[0] <= c[1] && c[0] <= c[2] ? 0 : c[1] <= c[2] ? 1 : 2;
+    xyl__dvec3 w = xyl__d3(k == 0, k == 1, k == 2);
+    return xyl__d3_normalize_or(xyl__d3_sub(w, xyl__d3_scale(axis, xyl__d3_dot(w, axis))),
+                                xyl__d3_any_orthogonal(axis));
+}
+
+typedef struct sectors {
+    uint32_t count;
+    xyl__dvec3 origin, axis, zero, quarter; /* quarter = axis x zero: azimuth pi / 2 */
+} sectors;
+
+/* The sector of a centre: its azimuth about the axis from zero towards quarter, in S equal
+ * parts; a centre on the axis is in sector 0. */
+static uint32_t sector_of(const sectors *sc, xyl_vec3 centre)
+{
+    if (sc->count == 1) return 0;
+    xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(centre), sc->origin);
+    double azimuth = atan2(xyl__d3_dot(d, sc->quarter), xyl__d3_dot(d, sc->zero));
+    if (azimuth < 0.0) azimuth += 2.0 * XYL__PI;
+    uint32_t s = (uint32_t)(azimuth * sc->count / (2.0 * XYL__PI));
+    return s < sc->count ? s : sc->count - 1;
+}
+
+static xyl_leaf *originals_end(xyl__foliage *f, size_t n)
+{
+    return f->leaves + (n ? n - 1 : 0);
+}
+
+/* Puts the tidy originals at the end of the leaf array, sector after sector, where each
+ * sector's collapse finds them before it moves them to its base (the end is never reached
+ * before: a sector's chain takes at most twice its leaves), and their desc indices in
+ * b->source likewise. */
+static void place_originals(build *b, const xyl_foliage_desc *d, const sectors *sc)
+{
+    xyl__foliage *f = b->f;
+    uint32_t n = (uint32_t)d->leaf_count;
+    for (uint32_t i = 0; i < n; ++i) f->sectors[sector_of(sc, d->leaves[i].center)].original_count++;
+    uint32_t *next = b->children; /* borrowed (it has room for a count per sector): the next
+                                     free place of each sector */
+    for (uint32_t s = 0, at = 0; s < sc->count; ++s) {
+        next[s] = at;
+        at += f->sectors[s].original_count;
+    }
+    xyl_leaf *end = originals_end(f, n);
+    for (uint32_t i = 0; i < n; ++i) {
+        uint32_t at = next[sector_of(sc, d->leaves[i].center)]++;
+        end[at] = xyl__leaf_tidy(&d->leaves[i]);
+        b->source[at] = i;
+    }
+}
+
+static void publish(xyl__foliage *f, size_t n, const sectors *sc)
+{
+    f->pub.leaves = f->leaves;
+    f->pub.links = f->links;
+    f->pub.original_count = n;
+    f->pub.sectors = f->sectors;
+    f->pub.sector_count = sc->count;
+    for (uint32_t s = 0; s < sc->count; ++s) {
+        f->pub.leaf_count += (size_t)f->sectors[s].original_count + f->sectors[s].merged_count;
+        f->pub.coarsest_count += (size_t)f->sectors[s].original_count - f->sectors[s].merged_count;
+    }
+    f->pub.axis_origin = xyl__to_f3(sc->origin);
+    f->pub.axis_direction = xyl__to_f3(sc->axis);
+    f->pub.azimuth_zero = xyl__to_f3(sc->zero);
+    bounding_sphere(f->leaves, f->pub.leaf_count, &f->pub.center, &f->pub.radius);
 }
 
 xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out, xyl_diag *diag)
@@ -155,36 +231,34 @@ xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out, xy
     if (r != XYL_OK) return r;
     const xyl_allocator *a = &desc->alloc;
     size_t n = desc->leaf_count;
+    xyl__collapse_options o;
+    resolve_options(desc, desc->leaves, (uint32_t)n, &o);
+    sectors sc = {desc->sectors ? desc->sectors : 1, o.axis_origin, o.axis_direction,
+                  azimuth_zero(o.axis_direction), xyl__d3(0, 0, 0)};
+    sc.quarter = xyl__d3_cross(sc.axis, sc.zero);
     build b;
-    if (!alloc_build(&b, a, n, 1)) {
+    if (!alloc_build(&b, a, n, sc.count)) {
         free_build(&b, a, false);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the foliage of %zu leaves", n);
     }
     xyl__foliage *f = b.f;
-    for (size_t i = 0; i < n; ++i) {
-        f->leaves[i] = xyl__leaf_tidy(&desc->leaves[i]);
-        b.source[i] = (uint32_t)i;
+    place_originals(&b, desc, &sc);
+    uint32_t base = 0, first = 0, lods = 0;
+    for (uint32_t s = 0; s < sc.count && r == XYL_OK; ++s) {
+        xyl_foliage_sector *sector = &f->sectors[s];
+        sector->base = base;
+        memmove(f->leaves + base, originals_end(f, n) + first,
+                sector->original_count * sizeof *f->leaves);
+        r = build_sector(&b, sector, b.source + first, f->lods + lods, &o, a, diag);
+        base += sector->original_count + sector->merged_count;
+        first += sector->original_count;
+        lods += sector->merged_count + 1;
     }
-    xyl__collapse_options o;
-    resolve_options(desc, f->leaves, (uint32_t)n, &o);
-    xyl_foliage_sector *s = &f->sectors[0];
-    s->base = 0;
-    s->original_count = (uint32_t)n;
-    r = build_sector(&b, s, f->lods, &o, a, diag);
     if (r != XYL_OK) {
         free_build(&b, a, false);
         return r;
     }
-    f->pub.leaves = f->leaves;
-    f->pub.links = f->links;
-    f->pub.leaf_count = n + s->merged_count;
-    f->pub.original_count = n;
-    f->pub.coarsest_count = n - s->merged_count;
-    f->pub.sectors = f->sectors;
-    f->pub.sector_count = 1;
-    f->pub.axis_origin = xyl__to_f3(o.axis_origin);
-    f->pub.axis_direction = xyl__to_f3(o.axis_direction);
-    bounding_sphere(f->leaves, f->pub.leaf_count, &f->pub.center, &f->pub.radius);
+    publish(f, n, &sc);
     free_build(&b, a, true);
     *out = &f->pub;
     xyl__diag_ok(diag);

@@ -120,8 +120,8 @@ typedef struct xyl__collapse_stats {
     size_t bytes; /* scratch memory of the collapse */
 } xyl__collapse_stats;
 
-/* Default weights, no thresholds, the vertical (+Y) axis through the count-weighted centroid,
- * and the units of xyl__collapse_units. */
+/* Default weights, no thresholds, the vertical (+Y) axis through the count-weighted centroid
+ * (a count of 0 counts 1), and the units of xyl__collapse_units. */
 void xyl__collapse_defaults(const xyl_leaf *leaves, uint32_t n, xyl__collapse_options *o);
 /* o->scale: the larger of the centres' bounding-box diagonal and the largest leaf's length or
  * width (never 0); o->radius: the farthest centre from o's axis (o->scale if all are on it). */

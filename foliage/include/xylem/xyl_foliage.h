@@ -139,6 +139,8 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
                                                     xyl_leaf *leaves, size_t capacity,
                                                     size_t *count, xyl_diag *diag);
 
+#define XYL_FOLIAGE_MAX_SECTORS 256
+
 /* ---- levels of detail ------------------------------------------------------------------------
  *
  * Leaf collapse (Hidalgo, Abad, Camahort): the pair of live leaves with the smallest weighted
@@ -152,7 +154,8 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
  *
  * All the leaves, n originals and m merged, lie in ONE array, and LOD i draws as two ranges of
  * it, [0, a) and [b, b + c) with a + c = n - i: two draws, no index buffer, one array for all
- * the instances of a species; an instance keeps only its LOD. */
+ * the instances of a species; an instance keeps only its LOD. With sectors, each sector is
+ * such an array of its own, one after another in the one array, with its own LODs. */
 
 /* The weights of the five terms of a pair's cost, each term in [0, 1]. All 0: this library's
  * defaults, 1, 0.25, 0.05, 0.05, 0.05 (docs/foliage.md: the paper's values were not at hand). */
@@ -174,9 +177,12 @@ typedef struct xyl_foliage_desc {
                                  default (0): no threshold */
     float max_angle;          /* pairs whose normals differ by more never merge; radians;
                                  default (0): no threshold */
-    xyl_vec3 axis_origin;     /* the trunk axis, of the interiority term: a point on it */
+    xyl_vec3 axis_origin;     /* the trunk axis, of the interiority term and the sectors: a point */
     xyl_vec3 axis_direction;  /* default (all 0): the vertical (+Y) line through the leaves'
                                  count-weighted centroid (axis_origin ignored) */
+    uint32_t sectors;         /* the crown split by azimuth about the trunk axis into this many
+                                 equal sectors, each collapsed on its own with its own LODs
+                                 (ERA); default (0): 1, at most XYL_FOLIAGE_MAX_SECTORS */
     xyl_foliage_limits limits;
     xyl_allocator alloc;      /* every allocation of the build and of the foliage it makes */
 } xyl_foliage_desc;
@@ -224,16 +230,23 @@ typedef struct xyl_foliage {
     const xyl_foliage_sector *sectors;
     uint32_t sector_count;
     xyl_vec3 axis_origin, axis_direction; /* the trunk axis used (direction unit) */
+    xyl_vec3 azimuth_zero;                /* unit, across the axis: sector s holds the leaves
+                                             whose centres lie at azimuths [s, s + 1) 2 pi / S
+                                             from it towards axis_direction x azimuth_zero
+                                             (the world axis least aligned with the trunk's:
+                                             +X for the default axis); on the axis: sector 0 */
     xyl_vec3 center;                      /* a sphere around all the leaves */
     float radius;
 } xyl_foliage;
 
-/* Checks the leaves and options, runs the collapse chain and lays out the array and the LOD
- * table. Zero leaves give an empty foliage (one sector, one LOD of nothing) and XYL_OK.
+/* Checks the leaves and options, runs the collapse chain of each sector and lays out the array
+ * and the LOD tables. Zero leaves give an empty foliage (each sector one LOD of nothing) and
+ * XYL_OK, as does a sector without leaves.
  * Deterministic: the same desc gives the same bits (ties between pairs of equal cost go to the
  * lower leaf indices). Expected time O(n log n), memory O(n). Errors: those of
  * xyl_foliage_check_leaves (diag.index = the leaf), XYL_ERR_INVALID_ARGUMENT (NULL desc or
- * out, a negative weight or threshold), XYL_ERR_NON_FINITE (an option), XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched and nothing is left allocated. */
+ * out, a negative weight or threshold, too many sectors), XYL_ERR_NON_FINITE (an option),
+ * XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched and nothing is left allocated. */
 XYL_API xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out,
                                      xyl_diag *diag);
 /* NULL is fine. */
