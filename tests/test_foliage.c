@@ -1254,7 +1254,7 @@ static void lod_errors_bound_every_original_point(void **state)
     }
 }
 
-static void bounding_spheres_hold_every_leaf(void **state)
+static void bounding_spheres_hold_every_original_leaf(void **state)
 {
     (void)state;
     enum { N = 300 };
@@ -1262,7 +1262,7 @@ static void bounding_spheres_hold_every_leaf(void **state)
     make_leaves(in, N, SET_CROWN, 12);
     xyl_foliage *f = build_ok(in, N, NULL);
     const xyl_foliage_sector *s = &f->sectors[0];
-    for (size_t k = 0; k < f->leaf_count; ++k) {
+    for (size_t k = 0; k < f->original_count; ++k) {
         xyl__dvec3 c[4];
         xyl__leaf_corners(&f->leaves[k], c);
         for (int j = 0; j < 4; ++j) {
@@ -1458,29 +1458,72 @@ static void pick_gives_each_sector_its_own_lod(void **state)
     xyl_foliage_desc d = {0};
     d.sectors = 4;
     xyl_foliage *f = build_ok(in, n, &d);
-    /* an eye out along the azimuth of sector 0's middle: sector 0 nearest, sector 2 farthest */
+    /* eyes out along the middle of sector 0 and of sector 2, at the same distances: each
+       sector is drawn finer from its own side, and each LOD is the coarsest its own budget
+       allows */
     xyl_vec3 z = f->azimuth_zero, q = cross3(f->axis_direction, z);
     double c = cos(3.14159265358979323846 / 4), s = sin(3.14159265358979323846 / 4);
     xyl_vec3 dir = {(float)(c * z.x + s * q.x), (float)(c * z.y + s * q.y), (float)(c * z.z + s * q.z)};
     int finer = 0;
-    for (double dist = 4; dist < 400; dist *= 1.5) {
-        xyl_foliage_view v = {0};
-        v.eye[0] = f->axis_origin.x + (float)dist * dir.x;
-        v.eye[1] = f->axis_origin.y + (float)dist * dir.y;
-        v.eye[2] = f->axis_origin.z + (float)dist * dir.z;
-        uint32_t lods[4];
-        assert_int_equal(xyl_foliage_pick(f, &v, lods, 4, NULL), XYL_OK);
-        for (int k = 0; k < 4; ++k) {
-            const xyl_foliage_sector *sec = &f->sectors[k];
-            double e = len3((xyl_vec3){v.eye[0] - sec->center.x, v.eye[1] - sec->center.y,
-                                       v.eye[2] - sec->center.z}) - sec->radius;
-            double allowed = e * 0.5 * 2.0 * tan(0.4) / 1080.0;
-            assert_true(e <= 0 ? lods[k] == 0 : sec->lods[lods[k]].error <= allowed);
+    for (double dist = 1; dist < 3000; dist *= 1.02) {
+        uint32_t lods[2][4];
+        for (int side = 0; side < 2; ++side) {
+            double t = side ? -dist : dist;
+            xyl_foliage_view v = {0};
+            v.eye[0] = f->axis_origin.x + (float)t * dir.x;
+            v.eye[1] = f->axis_origin.y + (float)t * dir.y;
+            v.eye[2] = f->axis_origin.z + (float)t * dir.z;
+            assert_int_equal(xyl_foliage_pick(f, &v, lods[side], 4, NULL), XYL_OK);
+            for (int k = 0; k < 4; ++k) {
+                const xyl_foliage_sector *sec = &f->sectors[k];
+                double e = len3((xyl_vec3){v.eye[0] - sec->center.x, v.eye[1] - sec->center.y,
+                                           v.eye[2] - sec->center.z}) - sec->radius;
+                double allowed = e * 0.5 * 2.0 * tan(0.4) / 1080.0;
+                uint32_t l = lods[side][k];
+                if (e <= 0) assert_int_equal(l, 0);
+                else assert_true(sec->lods[l].error <= allowed &&
+                                 (l == sec->merged_count || sec->lods[l + 1].error > allowed));
+            }
         }
-        finer += lods[0] < lods[2];
+        assert_true(lods[0][0] <= lods[1][0] && lods[1][2] <= lods[0][2]);
+        finer += lods[0][0] < lods[1][0];
     }
-    assert_true(finer > 0); /* the near sector is drawn finer than the far one */
+    assert_true(finer > 0);
     xyl_foliage_destroy(f);
+    free(in);
+}
+static void build_returns_every_block_of_the_default_allocator(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 3000 : 30000;
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 6);
+    size_t before = xyl__alloc_blocks_in_use();
+    xyl_foliage_desc d = {0};
+    d.sectors = 2;
+    xyl_foliage *f = build_ok(in, n, &d);
+    xyl_foliage_destroy(f);
+    assert_int_equal(xyl__alloc_blocks_in_use(), before);
+    free(in);
+}
+
+static void build_refuses_a_million_leaves_over_the_limit_before_allocating(void **state)
+{
+    (void)state;
+    uint32_t n = 1000000;
+    xyl_leaf *in = calloc(n, sizeof *in); /* not even checked: the count comes first */
+    assert_non_null(in);
+    counter c = {0};
+    xyl_foliage_desc d = {0};
+    d.leaves = in;
+    d.leaf_count = n;
+    d.limits.max_leaves = n - 1;
+    d.alloc = (xyl_allocator){count_alloc, count_free, &c};
+    xyl_foliage *f = NULL;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_build(&d, &f, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    assert_null(f);
+    assert_int_equal(c.attempts, 0);
+    assert_non_null(strstr(diag.message, "1000000"));
     free(in);
 }
 
@@ -1520,8 +1563,10 @@ int main(void)
         cmocka_unit_test(build_is_deterministic),
         cmocka_unit_test(build_rejects_bad_leaves_and_options_with_their_codes),
         cmocka_unit_test(build_survives_every_allocation_failure),
+        cmocka_unit_test(build_returns_every_block_of_the_default_allocator),
+        cmocka_unit_test(build_refuses_a_million_leaves_over_the_limit_before_allocating),
         cmocka_unit_test(lod_errors_bound_every_original_point),
-        cmocka_unit_test(bounding_spheres_hold_every_leaf),
+        cmocka_unit_test(bounding_spheres_hold_every_original_leaf),
         cmocka_unit_test(pick_is_finest_inside_coarsest_far_and_monotone_in_distance),
         cmocka_unit_test(pick_rejects_bad_views_and_leaves_lods_untouched),
         cmocka_unit_test(sectors_split_the_crown_by_azimuth_and_each_draws_its_live_leaves),

@@ -70,19 +70,25 @@ static void resolve_options(const xyl_foliage_desc *d, const xyl_leaf *leaves, u
     }
 }
 
-/* A sphere around the corners of leaves[0 .. count): the box's centre, the farthest corner. */
-static void bounding_sphere(const xyl_leaf *leaves, size_t count, xyl_vec3 *center, float *radius)
+/* A sphere around the corners of the original leaves of sectors[0 .. count): the box's
+ * centre, the farthest corner. The merged leaves of coarse LODs may reach out of it (their
+ * error bounds say how far their originals lie from them): it bounds what they stand for,
+ * tightly enough that sectors facing the eye are nearer to it than the others. */
+static void originals_sphere(const xyl_leaf *leaves, const xyl_foliage_sector *sectors,
+                             uint32_t count, xyl_vec3 *center, float *radius)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     xyl__dvec3 c[4];
-    for (size_t i = 0; i < count; ++i) {
-        xyl__leaf_corners(&leaves[i], c);
-        for (int k = 0; k < 4; ++k) {
-            const double v[3] = {c[k].x, c[k].y, c[k].z};
-            for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], v[d]), hi[d] = fmax(hi[d], v[d]);
+    size_t total = 0;
+    for (uint32_t s = 0; s < count; ++s)
+        for (uint32_t i = 0; i < sectors[s].original_count; ++i, ++total) {
+            xyl__leaf_corners(&leaves[sectors[s].base + i], c);
+            for (int k = 0; k < 4; ++k) {
+                const double v[3] = {c[k].x, c[k].y, c[k].z};
+                for (int d = 0; d < 3; ++d) lo[d] = fmin(lo[d], v[d]), hi[d] = fmax(hi[d], v[d]);
+            }
         }
-    }
-    if (!count) {
+    if (!total) {
         *center = (xyl_vec3){0, 0, 0};
         *radius = 0.0f;
         return;
@@ -90,10 +96,11 @@ static void bounding_sphere(const xyl_leaf *leaves, size_t count, xyl_vec3 *cent
     *center = xyl__to_f3(xyl__d3(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])));
     xyl__dvec3 m = xyl__from_f3(*center);
     double r = 0.0;
-    for (size_t i = 0; i < count; ++i) {
-        xyl__leaf_corners(&leaves[i], c);
-        for (int k = 0; k < 4; ++k) r = fmax(r, xyl__d3_len(xyl__d3_sub(c[k], m)));
-    }
+    for (uint32_t s = 0; s < count; ++s)
+        for (uint32_t i = 0; i < sectors[s].original_count; ++i) {
+            xyl__leaf_corners(&leaves[sectors[s].base + i], c);
+            for (int k = 0; k < 4; ++k) r = fmax(r, xyl__d3_len(xyl__d3_sub(c[k], m)));
+        }
     *radius = xyl__round_up(r);
 }
 
@@ -145,7 +152,7 @@ static xyl_result build_sector(build *b, xyl_foliage_sector *s, const uint32_t *
                            b->f->links + s->base, lods, a, diag);
     s->merged_count = m;
     s->lods = lods;
-    if (r == XYL_OK) bounding_sphere(leaves, (size_t)n + m, &s->center, &s->radius);
+    if (r == XYL_OK) originals_sphere(b->f->leaves, s, 1, &s->center, &s->radius);
     return r;
 }
 
@@ -219,7 +226,7 @@ static void publish(xyl__foliage *f, size_t n, const sectors *sc)
     f->pub.axis_origin = xyl__to_f3(sc->origin);
     f->pub.axis_direction = xyl__to_f3(sc->axis);
     f->pub.azimuth_zero = xyl__to_f3(sc->zero);
-    bounding_sphere(f->leaves, f->pub.leaf_count, &f->pub.center, &f->pub.radius);
+    originals_sphere(f->leaves, f->sectors, sc->count, &f->pub.center, &f->pub.radius);
 }
 
 xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out, xyl_diag *diag)

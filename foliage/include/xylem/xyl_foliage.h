@@ -215,8 +215,8 @@ typedef struct xyl_foliage_sector {
     uint32_t merged_count;   /* m: merges, so LODs 0 .. m; m = n - 1 unless thresholds stop the
                                 chain (or n = 0) */
     const xyl_foliage_lod *lods; /* m + 1: lods[i] after i merges, ranges relative to base */
-    xyl_vec3 center;             /* a sphere around all its leaves (corners of the originals and */
-    float radius;                /* of the merged leaves); radius 0 for an empty sector */
+    xyl_vec3 center;             /* a sphere around its original leaves (merged leaves of coarse */
+    float radius;                /* LODs may reach out of it); radius 0 for an empty sector */
 } xyl_foliage_sector;
 
 /* Read-only view; the arrays belong to the foliage. */
@@ -235,7 +235,7 @@ typedef struct xyl_foliage {
                                              from it towards axis_direction x azimuth_zero
                                              (the world axis least aligned with the trunk's:
                                              +X for the default axis); on the axis: sector 0 */
-    xyl_vec3 center;                      /* a sphere around all the leaves */
+    xyl_vec3 center;                      /* a sphere around all the original leaves */
     float radius;
 } xyl_foliage;
 
