@@ -44,6 +44,13 @@ xyl_leaf xyl__foliage_unpack_gpu(const xyl_foliage_gpu_leaf *g);
 
 /* ---- the grid of live leaf centres (leaf_grid.c) ---- */
 
+/* A hint to start loading the line at p: the search is bound by memory latency. */
+#if defined(__GNUC__)
+#define XYL__PREFETCH(p) __builtin_prefetch(p)
+#else
+#define XYL__PREFETCH(p) ((void)(p))
+#endif
+
 #define XYL__GRID_K 8          /* candidate partners a query finds */
 #define XYL__GRID_SCAN_CAP 64  /* live leaves one query looks at, at most */
 
@@ -101,9 +108,10 @@ uint64_t xyl__grid_nearest(const xyl__grid *g, uint32_t self, xyl_vec3 centre, d
  * / pi, |count difference| / count sum, |area difference| / area sum, distance of the pair's
  * midpoint from the trunk axis / radius. */
 #define XYL__COLLAPSE_TERMS 5
-/* This library's default weights of the five terms (docs/foliage.md says how they were
- * chosen). */
-#define XYL__COLLAPSE_WEIGHTS {1.0, 0.25, 0.05, 0.05, 0.05}
+/* This library's default weights of the five terms: balanced merges (count and area) keep the
+ * merge forest shallow, which the linear array's breadth-first order needs for small errors;
+ * docs/foliage.md has the comparison they were chosen by. */
+#define XYL__COLLAPSE_WEIGHTS {1.0, 0.05, 2.0, 2.0, 0.05}
 
 typedef struct xyl__collapse_options {
     double weights[XYL__COLLAPSE_TERMS];

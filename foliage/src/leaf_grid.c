@@ -303,20 +303,32 @@ static const int8_t ring1[26][3] = {
     {-1, 1, 1},  {1, 1, 1},
 };
 
+/* Ring 1 in two passes: first the cells worth a look, with their ranges and first items
+ * asked for ahead (their cache misses then overlap), then the scan, which drops the cells the
+ * leaves found meanwhile put out of reach. */
 static bool scan_ring1(query *q, const int32_t c0[3])
 {
-    const int32_t *dim = q->g->dim;
+    const xyl__grid *g = q->g;
+    uint32_t cells[26];
+    double dist2[26];
+    int count = 0;
     for (int n = 0; n < 26; ++n) {
         int32_t cc[3];
         double d2 = 0.0;
         bool inside = true;
         for (int k = 0; k < 3; ++k) {
             cc[k] = c0[k] + ring1[n][k];
-            inside = inside && cc[k] >= 0 && cc[k] < dim[k];
+            inside = inside && cc[k] >= 0 && cc[k] < g->dim[k];
             d2 += gap2(q, k, cc[k], c0[k]);
         }
-        if (inside && worth(q, d2) && !scan_cell(q, cell_index(q->g, cc))) return false;
+        if (!inside || !worth(q, d2)) continue;
+        cells[count] = cell_index(g, cc);
+        dist2[count++] = d2;
+        XYL__PREFETCH(&g->range[cells[count - 1]]);
     }
+    for (int n = 0; n < count; ++n) XYL__PREFETCH(&g->items[g->range[cells[n]].start]);
+    for (int n = 0; n < count; ++n)
+        if (worth(q, dist2[n]) && !scan_cell(q, cells[n])) return false;
     return true;
 }
 
