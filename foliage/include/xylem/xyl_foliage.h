@@ -35,7 +35,8 @@
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
  *     xyl_foliage_destroy(f);
  *
- * Every call is reentrant; a foliage is immutable once built, so threads may read it at once.
+ * Every call is reentrant; only xyl_foliage_build allocates (through its desc's allocator). A
+ * foliage is immutable once built, so threads may read it at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
@@ -103,7 +104,8 @@ typedef struct xyl_foliage_limits {
  *   - |centre coordinates|, |axis| and |side| <= limits.max_coordinate, the count of leaves
  *     <= limits.max_leaves, and the counts' sum below 2^32 (else XYL_ERR_LIMIT_EXCEEDED).
  * diag.index names the first bad leaf. Zero leaves are fine (leaves may then be NULL).
- * limits may be NULL (defaults). Coincident leaves and leaves all in one plane are valid. */
+ * limits may be NULL (defaults). Coincident leaves and leaves all in one plane are valid.
+ * Allocates nothing. */
 XYL_API xyl_result xyl_foliage_check_leaves(const xyl_leaf *leaves, size_t count,
                                             const xyl_foliage_limits *limits, xyl_diag *diag);
 
@@ -133,7 +135,8 @@ typedef struct xyl_foliage_leaves_desc {
  * (NULL skeleton or count, a shape option out of range, an attachment of size <= 0 or whose
  * heading or up has no direction or which are parallel), XYL_ERR_NON_FINITE (an option or an
  * attachment that is NaN / inf), XYL_ERR_LIMIT_EXCEEDED (too many leaves, a huge coordinate).
- * diag.index names the attachment. Nothing is written unless every leaf is good. */
+ * diag.index names the attachment. Nothing is written unless every leaf is good. Allocates
+ * nothing, so its desc has no allocator. */
 XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton,
                                                     const xyl_foliage_leaves_desc *desc,
                                                     xyl_leaf *leaves, size_t capacity,
