@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Benchmarks: installs the peers (npm packages lindenmayer and @dgreenheck/ez-tree, pinned in
-# samples/bench/), builds bench_lsystem, bench_stems and bench_tess in Release and runs them one
-# after the other; the figures go to the terminal and to $BUILD_DIR/<name>.txt, bench_tess's
-# rows also to $BUILD_DIR/bench_tess.dat (+ .front), plotted by gnuplot into
-# $BUILD_DIR/bench_tess.png. docs/BENCHMARKS.md explains the tables.
+# samples/bench/), builds bench_lsystem, bench_stems, bench_tess and bench_foliage in Release
+# and runs them one after the other; the figures go to the terminal and to
+# $BUILD_DIR/<name>.txt, bench_tess's rows also to $BUILD_DIR/bench_tess.dat (+ .front), plotted
+# by gnuplot into $BUILD_DIR/bench_tess.png. docs/BENCHMARKS.md explains the tables.
 #
 #   scripts/bench.sh                 # full sizes (a few minutes)
 #   scripts/bench.sh --quick         # smoke sizes; options are passed to both benchmarks
@@ -11,7 +11,7 @@
 #
 # bench_lsystem and bench_stems take --quick, --no-peer, --repeats N and --node PATH
 # (--peer-script would name one script for both: run the binaries directly for that);
-# bench_tess gets --quick only (it has no peer; its own options: bench_tess --help).
+# bench_tess and bench_foliage get --quick only (they have no peer; bench_tess --help).
 #
 # Without node/npm it tries apt-get (Debian/Ubuntu); if that is not possible the benchmark still
 # runs and reports the peer as not available.
@@ -63,7 +63,7 @@ if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; the
     generator=(-G Ninja)
 fi
 cmake -S . -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess
+cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess bench_foliage
 
 if commit="$(git rev-parse --short HEAD 2>/dev/null)"; then
     git diff --quiet HEAD || commit="$commit (with local changes)"
@@ -110,4 +110,8 @@ if run_bench bench_tess "${tess_args[@]}"; then
 else
     status=$?
 fi
+echo
+foliage_args=()
+for a in "$@"; do [ "$a" = --quick ] && foliage_args+=(--quick); done
+run_bench bench_foliage "${foliage_args[@]}" || status=$?
 exit "$status"

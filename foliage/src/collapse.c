@@ -1,0 +1,535 @@
+/* Leaf collapse (Hidalgo, Abad, Camahort): repeatedly merge the pair of live leaves with the
+ * smallest weighted cost, until one leaf is left or no pair passes the thresholds.
+ *
+ * No all-pairs search: each live leaf keeps its best partner among its K nearest live leaves,
+ * found in a uniform grid by rings of cells around its own (leaf_grid.c); the pairs wait in a
+ * heap (4-ary) whose entries carry their owner's version stamp, so an entry that a newer one
+ * replaced, or whose leaves died, is dropped when it comes out (lazy invalidation). A merge
+ * kills two leaves and makes one: the new leaf finds its K nearest, and each of them that
+ * prefers it gets a new entry. A query stops after a fixed number of leaves, so even a million
+ * coincident leaves cost O(1) each. Expected O(n log n) time, O(n) memory. Ties are broken by
+ * leaf index: the same input gives the same chain, bit for bit. */
+#include <string.h>
+
+#include "foliage_internal.h"
+
+/* ---- cost and merge ------------------------------------------------------------------------ */
+
+static double leaf_area(const xyl_leaf *l)
+{
+    return 4.0 * xyl__d3_len(xyl__from_f3(l->axis)) * xyl__d3_len(xyl__from_f3(l->side));
+}
+
+/* What a pair's cost reads of a leaf, in 40 bytes (the search is bound by memory latency, and
+ * a leaf is 72): centre, normal, area, count, and where the centre lies across the trunk axis
+ * (its offset from the axis in a frame of two unit vectors orthogonal to it). */
+typedef struct cost_leaf {
+    float center[3], normal[3];
+    float area;
+    uint32_t count;
+    float radial[2];
+} cost_leaf;
+
+/* The cost's units and weights folded into one factor per term, and the frame across the
+ * trunk axis. */
+typedef struct cost_terms {
+    double factor[XYL__COLLAPSE_TERMS];
+    xyl__dvec3 origin, e1, e2;
+} cost_terms;
+
+static cost_terms cost_terms_of(const xyl__collapse_options *o)
+{
+    const double unit[XYL__COLLAPSE_TERMS] = {o->scale, XYL__PI, 1.0, 1.0, 2.0 * o->radius};
+    cost_terms t;
+    for (int k = 0; k < XYL__COLLAPSE_TERMS; ++k) t.factor[k] = o->weights[k] / unit[k];
+    t.origin = o->axis_origin;
+    t.e1 = xyl__d3_any_orthogonal(o->axis_direction);
+    t.e2 = xyl__d3_cross(o->axis_direction, t.e1);
+    return t;
+}
+
+static cost_leaf cost_leaf_of(const xyl_leaf *l, const cost_terms *t)
+{
+    xyl__dvec3 d = xyl__d3_sub(xyl__from_f3(l->center), t->origin);
+    cost_leaf c = {{l->center.x, l->center.y, l->center.z},
+                   {l->normal.x, l->normal.y, l->normal.z},
+                   (float)leaf_area(l),
+                   l->count,
+                   {(float)xyl__d3_dot(d, t->e1), (float)xyl__d3_dot(d, t->e2)}};
+    return c;
+}
+
+static xyl__dvec3 d3_of(const float v[3])
+{
+    return xyl__d3(v[0], v[1], v[2]);
+}
+
+static double normals_angle(const cost_leaf *p, const cost_leaf *q)
+{
+    xyl__dvec3 a = d3_of(p->normal), b = d3_of(q->normal);
+    return atan2(xyl__d3_len(xyl__d3_cross(a, b)), xyl__d3_dot(a, b));
+}
+
+static double axis_distance(xyl__dvec3 x, const xyl__collapse_options *o)
+{
+    xyl__dvec3 d = xyl__d3_sub(x, o->axis_origin);
+    return xyl__d3_len(xyl__d3_sub(d, xyl__d3_scale(o->axis_direction, xyl__d3_dot(d, o->axis_direction))));
+}
+
+/* The weighted sum of the five terms (a term of weight 0 is not computed). Symmetric to the
+ * bit: callers pass the leaf of lower index first. */
+static double pair_cost(const cost_leaf *p, const cost_leaf *q, const cost_terms *t)
+{
+    const double *f = t->factor;
+    double dx = (double)p->center[0] - q->center[0], dy = (double)p->center[1] - q->center[1];
+    double dz = (double)p->center[2] - q->center[2];
+    double cost = f[0] * sqrt(dx * dx + dy * dy + dz * dz);
+    if (f[1] != 0.0) cost += f[1] * normals_angle(p, q);
+    double kp = p->count, kq = q->count;
+    if (f[2] != 0.0) cost += f[2] * (fabs(kp - kq) / (kp + kq));
+    double ap = p->area, aq = q->area;
+    if (f[3] != 0.0) cost += f[3] * (fabs(ap - aq) / (ap + aq));
+    /* the midpoint's distance from the axis, times 2 (folded into f[4]) */
+    double r0 = (double)p->radial[0] + q->radial[0], r1 = (double)p->radial[1] + q->radial[1];
+    if (f[4] != 0.0) cost += f[4] * sqrt(r0 * r0 + r1 * r1);
+    return cost;
+}
+
+float xyl__collapse_cost(const xyl_leaf *p, const xyl_leaf *q, const xyl__collapse_options *o)
+{
+    cost_terms t = cost_terms_of(o);
+    cost_leaf cp = cost_leaf_of(p, &t), cq = cost_leaf_of(q, &t);
+    return (float)pair_cost(&cp, &cq, &t);
+}
+
+/* The leaf whose texture and node the merged leaf takes: the larger area, then the larger
+ * count, then the lower index (p is the lower). */
+static bool q_is_larger(const xyl_leaf *p, double ap, const xyl_leaf *q, double aq)
+{
+    if (aq != ap) return aq > ap;
+    return q->count > p->count;
+}
+
+static xyl__dvec3 project(xyl__dvec3 x, xyl__dvec3 c, xyl__dvec3 n)
+{
+    return xyl__d3_sub(x, xyl__d3_scale(n, xyl__d3_dot(xyl__d3_sub(x, c), n)));
+}
+
+/* The main axis of the merged leaf in its plane (unit n through c): through the two projected
+ * centres, turned to agree with the count-weighted axis; where the centres coincide, the
+ * count-weighted axis itself (then the larger leaf's, then any). */
+static xyl__dvec3 main_axis(const xyl_leaf *p, const xyl_leaf *q, double wp, double wq,
+                            bool q_larger, xyl__dvec3 c, xyl__dvec3 n, double size)
+{
+    xyl__dvec3 ap = xyl__d3_normalize_or(xyl__from_f3(p->axis), xyl__d3(0, 1, 0));
+    xyl__dvec3 aq = xyl__d3_normalize_or(xyl__from_f3(q->axis), xyl__d3(0, 1, 0));
+    xyl__dvec3 weighted = xyl__d3_add(xyl__d3_scale(ap, wp), xyl__d3_scale(aq, wq));
+    xyl__dvec3 d = xyl__d3_sub(project(xyl__from_f3(q->center), c, n),
+                               project(xyl__from_f3(p->center), c, n));
+    xyl__dvec3 a;
+    if (xyl__d3_len(d) > 1e-9 * size && xyl__d3_normalize_ok(d, &a)) {
+        if (xyl__d3_dot(a, weighted) < 0.0) a = xyl__d3_scale(a, -1.0);
+        return a;
+    }
+    xyl__dvec3 in_plane = xyl__d3_sub(weighted, xyl__d3_scale(n, xyl__d3_dot(weighted, n)));
+    if (xyl__d3_normalize_ok(in_plane, &a)) return a;
+    xyl__dvec3 larger = q_larger ? aq : ap;
+    if (xyl__d3_normalize_ok(xyl__d3_sub(larger, xyl__d3_scale(n, xyl__d3_dot(larger, n))), &a)) return a;
+    return xyl__d3_any_orthogonal(n);
+}
+
+/* Distance from x to the quad of l: the plane distance and how far x lies outside the
+ * rectangle along each half-axis. */
+static double quad_distance(xyl__dvec3 x, const xyl_leaf *l)
+{
+    xyl__dvec3 a = xyl__from_f3(l->axis), s = xyl__from_f3(l->side);
+    double la = xyl__d3_len(a), ls = xyl__d3_len(s);
+    xyl__dvec3 ua = xyl__d3_scale(a, 1.0 / la), us = xyl__d3_scale(s, 1.0 / ls);
+    xyl__dvec3 n = xyl__d3_normalize_or(xyl__d3_cross(us, ua), xyl__from_f3(l->normal));
+    xyl__dvec3 d = xyl__d3_sub(x, xyl__from_f3(l->center));
+    double h = xyl__d3_dot(d, n);
+    double du = fmax(0.0, fabs(xyl__d3_dot(d, ua)) - la), dv = fmax(0.0, fabs(xyl__d3_dot(d, us)) - ls);
+    return sqrt(h * h + du * du + dv * dv);
+}
+
+double xyl__leaf_quad_distance(xyl__dvec3 x, const xyl_leaf *l)
+{
+    return quad_distance(x, l);
+}
+
+xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, float err_q,
+                         float *err)
+{
+    double ap = leaf_area(p), aq = leaf_area(q);
+    double kp = p->count, kq = q->count;
+    double wp = kp / (kp + kq), wq = kq / (kp + kq);
+    bool q_larger = q_is_larger(p, ap, q, aq);
+    xyl__dvec3 c = xyl__d3_add(xyl__d3_scale(xyl__from_f3(p->center), wp),
+                               xyl__d3_scale(xyl__from_f3(q->center), wq));
+    xyl__dvec3 np = xyl__from_f3(p->normal), nq = xyl__from_f3(q->normal);
+    xyl__dvec3 n = xyl__d3_normalize_or(xyl__d3_add(xyl__d3_scale(np, wp), xyl__d3_scale(nq, wq)),
+                                        q_larger ? nq : np);
+    double size = sqrt(ap + aq);
+    xyl__dvec3 a = main_axis(p, q, wp, wq, q_larger, c, n, size);
+    xyl__dvec3 s = xyl__d3_cross(a, n);
+    /* the bounding rectangle of both projected quads along (a, s) */
+    xyl__dvec3 pts[8];
+    xyl__leaf_corners(p, pts);
+    xyl__leaf_corners(q, pts + 4);
+    double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+        xyl__dvec3 d = xyl__d3_sub(project(pts[k], c, n), c);
+        double u = xyl__d3_dot(d, a), v = xyl__d3_dot(d, s);
+        umin = fmin(umin, u), umax = fmax(umax, u), vmin = fmin(vmin, v), vmax = fmax(vmax, v);
+    }
+    /* area: the mean of the two areas' sum and the rectangle's, by scaling the width; a
+       rectangle with (almost) no length (both leaves seen edge-on) scales its length instead */
+    double hl = 0.5 * (umax - umin), hw = 0.5 * (vmax - vmin);
+    double target = 0.25 * 0.5 * (ap + aq + 4.0 * hl * hw); /* hl hw of the new leaf */
+    double floor_len = 1e-2 * sqrt(target);
+    if (hl >= floor_len) hw = target / hl;
+    else if (hw >= floor_len) hl = target / hw;
+    else hl = hw = sqrt(target);
+    xyl__dvec3 centre = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(a, 0.5 * (umin + umax)),
+                                                   xyl__d3_scale(s, 0.5 * (vmin + vmax))));
+    const xyl_leaf *larger = q_larger ? q : p;
+    xyl_leaf m = {0};
+    m.center = xyl__to_f3(centre);
+    m.normal = xyl__to_f3(n);
+    m.axis = xyl__to_f3(xyl__d3_scale(a, hl));
+    m.side = xyl__to_f3(xyl__d3_scale(s, hw));
+    memcpy(m.uv, larger->uv, sizeof m.uv);
+    m.count = p->count + q->count;
+    m.node = larger->node;
+    /* every point a child stands for is within its error of its quad, whose points are within
+       the corners' largest distance of the new quad (distance to a convex set is convex) */
+    double e = 0.0;
+    const xyl_leaf *child[2] = {p, q};
+    const float child_err[2] = {err_p, err_q};
+    for (int k = 0; k < 2; ++k) {
+        double worst = 0.0;
+        xyl__leaf_corners(child[k], pts);
+        for (int j = 0; j < 4; ++j) worst = fmax(worst, quad_distance(pts[j], &m));
+        e = fmax(e, (double)child_err[k] + worst);
+    }
+    *err = xyl__round_up(e);
+    return m;
+}
+
+/* ---- the heap of candidate pairs ------------------------------------------------------------ */
+
+/* 16 bytes, in a 4-ary heap: a node's four children share one cache line. The cost is rounded
+ * to float; ties (more of them than in double, none that matter) go to the lower indices. */
+typedef struct entry {
+    float cost;
+    uint32_t lo, hi;  /* the pair, lo < hi */
+    uint32_t stamp;   /* the owner's version << 1, | 1 when the owner is hi */
+} entry;
+
+static bool before(const entry *x, const entry *y)
+{
+    if (x->cost != y->cost) return x->cost < y->cost;
+    if (x->lo != y->lo) return x->lo < y->lo;
+    if (x->hi != y->hi) return x->hi < y->hi;
+    return x->stamp < y->stamp;
+}
+
+static void sift_up(entry *h, size_t i)
+{
+    entry e = h[i];
+    while (i > 0) {
+        size_t p = (i - 1) / 4;
+        if (!before(&e, &h[p])) break;
+        h[i] = h[p];
+        i = p;
+    }
+    h[i] = e;
+}
+
+static void sift_down(entry *h, size_t size, size_t i)
+{
+    entry e = h[i];
+    for (;;) {
+        size_t c = 4 * i + 1;
+        if (c >= size) break;
+        size_t end = c + 4 < size ? c + 4 : size, m = c;
+        for (size_t k = c + 1; k < end; ++k)
+            if (before(&h[k], &h[m])) m = k;
+        if (!before(&h[m], &e)) break;
+        h[i] = h[m];
+        i = m;
+    }
+    h[i] = e;
+}
+
+/* ---- the collapse state ------------------------------------------------------------------ */
+
+/* What the search touches of a live leaf, in one cache line. A node is a slot that a merged
+ * leaf takes over from one of its children, and the first slots go to the leaves in the
+ * grid's cell order: neighbours' nodes lie near each other in memory, whose latency bounds the
+ * search. */
+typedef struct node {
+    cost_leaf key;
+    float best;       /* the cost of the leaf's latest entry; INFINITY if none */
+    uint32_t version; /* of its latest entry */
+    uint32_t alive;
+    uint32_t leaf;    /* the leaf in the slot now */
+    uint32_t pad[2];
+} node;
+_Static_assert(sizeof(node) == 64, "a node is one cache line");
+
+typedef struct collapse {
+    const xyl__collapse_options *o;
+    xyl_leaf *leaves;
+    float *error;
+    uint32_t *children;
+    node *nodes;      /* n slots, 64-byte aligned in nodes_block */
+    void *nodes_block;
+    uint32_t *slot;   /* per leaf: its node */
+    entry *heap;      /* the root at heap[0], children of k at 4k + 1 .. 4k + 4 */
+    void *heap_block;
+    size_t heap_size, heap_cap;
+    cost_terms terms;
+    xyl__grid g;
+    uint32_t count, live, merges;
+    double max_d2;
+    xyl__collapse_stats stats;
+} collapse;
+
+/* A block of count * size bytes whose element 'first' starts a 64-byte line, from a. */
+static void *alloc_lines(const xyl_allocator *a, size_t count, size_t size, size_t first, void **block)
+{
+    size_t bytes;
+    if (!xyl__mul_ok(count, size, &bytes) || bytes > SIZE_MAX - 128) return NULL;
+    *block = xyl__alloc(a, bytes + 128);
+    if (!*block) return NULL;
+    uintptr_t at = (uintptr_t)*block + 64 + first * size;
+    at -= at % 64;
+    return (void *)(at - first * size);
+}
+
+/* The angle threshold, asked by the grid of each candidate (only when there is one). */
+typedef struct angle_filter {
+    const collapse *c;
+    uint32_t self;
+} angle_filter;
+
+static bool within_angle(void *ctx, uint32_t j)
+{
+    const angle_filter *f = ctx;
+    const collapse *c = f->c;
+    return normals_angle(&c->nodes[c->slot[f->self]].key, &c->nodes[c->slot[j]].key) <= c->o->max_angle;
+}
+
+static void nearest(collapse *c, uint32_t i, xyl__nearby *nr)
+{
+    angle_filter f = {c, i};
+    bool angles = c->o->max_angle < INFINITY;
+    c->stats.queries++;
+    c->stats.cells_scanned += xyl__grid_nearest(&c->g, i, c->leaves[i].center, c->max_d2,
+                                                angles ? within_angle : NULL, &f, nr);
+    c->stats.leaves_scanned += nr->scanned;
+}
+
+/* ---- the chain ----------------------------------------------------------------------------- */
+
+static uint32_t owner_of(const entry *e)
+{
+    return e->stamp & 1u ? e->hi : e->lo;
+}
+
+static node *node_of(const collapse *c, uint32_t leaf)
+{
+    return &c->nodes[c->slot[leaf]];
+}
+
+static bool alive(const collapse *c, uint32_t leaf)
+{
+    const node *n = node_of(c, leaf);
+    return n->leaf == leaf && n->alive;
+}
+
+static bool current(const collapse *c, const entry *e)
+{
+    uint32_t owner = owner_of(e);
+    return alive(c, owner) && node_of(c, owner)->version == e->stamp >> 1;
+}
+
+/* Makes room for pushes: drops the entries that can no longer be taken (dead or replaced
+ * owner), which leaves at most one per live leaf, and re-heapifies. */
+static void heap_compact(collapse *c)
+{
+    size_t kept = 0;
+    for (size_t k = 0; k < c->heap_size; ++k)
+        if (current(c, &c->heap[k])) c->heap[kept++] = c->heap[k];
+    c->heap_size = kept;
+    for (size_t k = kept / 4 + 1; k-- > 0;)
+        if (k < kept) sift_down(c->heap, kept, k);
+    c->stats.heap_compactions++;
+}
+
+static void push(collapse *c, uint32_t owner, uint32_t partner, float cost)
+{
+    if (c->heap_size == c->heap_cap) heap_compact(c);
+    node *o = node_of(c, owner);
+    o->best = cost;
+    o->version++;
+    entry e = {cost, owner < partner ? owner : partner, owner < partner ? partner : owner,
+               o->version << 1 | (owner > partner)};
+    c->heap[c->heap_size] = e;
+    sift_up(c->heap, c->heap_size++);
+}
+
+/* Leaf i's best partner among its nearest (ties: lower index), pushed; with update_others,
+ * each of them that prefers i to its own entry gets one for i. */
+static void find_partner(collapse *c, uint32_t i, bool update_others)
+{
+    xyl__nearby nr;
+    nearest(c, i, &nr);
+    const cost_leaf *ki = &node_of(c, i)->key;
+    float best = INFINITY;
+    uint32_t partner = 0;
+    for (uint32_t k = 0; k < nr.count; ++k) {
+        uint32_t j = nr.idx[k];
+        node *nj = node_of(c, j);
+        /* on (lower, higher index), so that both orders give the same bits */
+        float cost = (float)(i < j ? pair_cost(ki, &nj->key, &c->terms) : pair_cost(&nj->key, ki, &c->terms));
+        if (cost < best || (cost == best && j < partner)) best = cost, partner = j;
+        if (update_others && cost < nj->best) push(c, j, i, cost);
+    }
+    c->stats.cost_evaluations += nr.count;
+    if (nr.count) {
+        push(c, i, partner, best);
+    } else {
+        node_of(c, i)->best = INFINITY;
+        node_of(c, i)->version++;
+    }
+}
+
+/* Puts leaf k in slot s. */
+static void settle(collapse *c, uint32_t k, uint32_t s)
+{
+    node *n = &c->nodes[s];
+    memset(n, 0, sizeof *n);
+    n->key = cost_leaf_of(&c->leaves[k], &c->terms);
+    n->best = INFINITY;
+    n->alive = 1;
+    n->leaf = k;
+    c->slot[k] = s;
+}
+
+static void merge(collapse *c, uint32_t p, uint32_t q)
+{
+    uint32_t k = c->count++;
+    c->leaves[k] = xyl__leaf_merge(&c->leaves[p], &c->leaves[q], c->error[p], c->error[q], &c->error[k]);
+    c->children[2 * (size_t)c->merges] = p;
+    c->children[2 * (size_t)c->merges + 1] = q;
+    c->merges++;
+    node_of(c, q)->alive = 0;
+    xyl__grid_remove(&c->g, p);
+    xyl__grid_remove(&c->g, q);
+    settle(c, k, c->slot[p]);
+    c->live--;
+    if (xyl__grid_full(&c->g)) {
+        xyl__grid_rebuild(&c->g, c->leaves);
+        c->stats.grid_builds++;
+    }
+    xyl__grid_insert(&c->g, c->leaves, k);
+    find_partner(c, k, true);
+}
+
+static void run(collapse *c)
+{
+    xyl__grid_build(&c->g, c->leaves, c->count);
+    c->stats.grid_builds++;
+    for (uint32_t k = 0; k < c->g.item_count; ++k) settle(c, c->g.items[k].leaf, k);
+    /* in the grid's cell order: neighbours one after another keep the search in cache (the
+       order of the pushes does not matter, the heap's order is total) */
+    for (uint32_t k = 0; k < c->g.item_count; ++k) find_partner(c, c->g.items[k].leaf, false);
+    while (c->heap_size > 0) {
+        entry e = c->heap[0];
+        c->heap[0] = c->heap[--c->heap_size];
+        if (c->heap_size) sift_down(c->heap, c->heap_size, 0);
+        if (!current(c, &e)) continue;
+        uint32_t owner = owner_of(&e), partner = owner == e.lo ? e.hi : e.lo;
+        if (!alive(c, partner)) {
+            find_partner(c, owner, false); /* its partner merged with another: look again */
+            continue;
+        }
+        merge(c, e.lo, e.hi);
+    }
+}
+
+xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
+                         const xyl__collapse_options *o, const xyl_allocator *a,
+                         uint32_t *merges, xyl__collapse_stats *stats, xyl_diag *diag)
+{
+    collapse c;
+    memset(&c, 0, sizeof c);
+    c.o = o;
+    c.terms = cost_terms_of(o);
+    c.leaves = leaves;
+    c.error = error;
+    c.children = children;
+    c.count = c.live = n;
+    c.max_d2 = o->max_distance < INFINITY ? o->max_distance * o->max_distance : INFINITY;
+    size_t cap = n ? 2 * (size_t)n - 1 : 1;
+    c.heap_cap = 2 * (size_t)n + 2 * XYL__GRID_K + 16;
+    xyl_result r = xyl__grid_init(&c.g, n, a);
+    c.nodes = alloc_lines(a, n ? n : 1, sizeof *c.nodes, 0, &c.nodes_block);
+    c.slot = xyl__alloc_array(a, cap, sizeof *c.slot);
+    c.heap = alloc_lines(a, c.heap_cap, sizeof *c.heap, 1, &c.heap_block);
+    if (r != XYL_OK || !c.nodes || !c.slot || !c.heap) {
+        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the collapse of %u leaves", n);
+    } else {
+        for (uint32_t i = 0; i < n; ++i) error[i] = 0.0f;
+        if (n) run(&c);
+        *merges = c.merges;
+        c.stats.bytes = (n ? n : 1) * sizeof *c.nodes + cap * sizeof *c.slot +
+                        c.heap_cap * sizeof *c.heap + 256 + c.g.bytes;
+        if (stats) *stats = c.stats;
+    }
+    xyl__free(a, c.nodes_block);
+    xyl__free(a, c.slot);
+    xyl__free(a, c.heap_block);
+    xyl__grid_free(&c.g, a);
+    return r;
+}
+
+/* ---- defaults -------------------------------------------------------------------------------- */
+
+void xyl__collapse_defaults(const xyl_leaf *leaves, uint32_t n, xyl__collapse_options *o)
+{
+    static const double weights[XYL__COLLAPSE_TERMS] = XYL__COLLAPSE_WEIGHTS;
+    memcpy(o->weights, weights, sizeof weights);
+    o->max_distance = INFINITY;
+    o->max_angle = INFINITY;
+    double total = 0.0;
+    xyl__dvec3 sum = xyl__d3(0, 0, 0);
+    for (uint32_t i = 0; i < n; ++i) {
+        double count = leaves[i].count ? leaves[i].count : 1; /* 0: the default, 1 */
+        total += count;
+        sum = xyl__d3_add(sum, xyl__d3_scale(xyl__from_f3(leaves[i].center), count));
+    }
+    o->axis_origin = total > 0.0 ? xyl__d3_scale(sum, 1.0 / total) : xyl__d3(0, 0, 0);
+    o->axis_direction = xyl__d3(0, 1, 0);
+    xyl__collapse_units(leaves, n, o);
+}
+
+void xyl__collapse_units(const xyl_leaf *leaves, uint32_t n, xyl__collapse_options *o)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double largest = 0.0, radius = 0.0;
+    for (uint32_t i = 0; i < n; ++i) {
+        const float v[3] = {leaves[i].center.x, leaves[i].center.y, leaves[i].center.z};
+        for (int k = 0; k < 3; ++k) lo[k] = fmin(lo[k], v[k]), hi[k] = fmax(hi[k], v[k]);
+        double l = 2.0 * fmax(xyl__d3_len(xyl__from_f3(leaves[i].axis)),
+                              xyl__d3_len(xyl__from_f3(leaves[i].side)));
+        largest = fmax(largest, l);
+        radius = fmax(radius, axis_distance(xyl__from_f3(leaves[i].center), o));
+    }
+    double diagonal = n ? xyl__d3_len(xyl__d3(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])) : 0.0;
+    o->scale = fmax(diagonal, largest);
+    if (!(o->scale > 0.0)) o->scale = 1.0;
+    o->radius = radius > 0.0 ? radius : o->scale;
+}

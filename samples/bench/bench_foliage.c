@@ -1,0 +1,300 @@
+/* bench_foliage: the leaf-collapse chain (xyl_foliage_build: checks, collapse, linear array,
+ * LOD table) for 10^3, 10^4 and 10^5 random leaves in a crown and for the leaves of preset
+ * trees, its peak memory counted through the desc's allocator, and what sectors cost in error
+ * at equal leaf count.
+ *
+ *   bench_foliage [--quick] [--no-peer] [--repeats N]
+ *
+ * The random crown: centres uniform in an ellipsoid of radii 3, 2, 3 m around (0, 4, 0), normals
+ * uniform over the directions within about 107 degrees of +Y (biased up), leaves 5 to 15 cm
+ * long and 30 to 80 % as wide, a fixed seed. Every time is the median of N samples
+ * (CLOCK_MONOTONIC) of the build alone (destroying the foliage is not timed); single-threaded,
+ * so one core. --quick stops at 10^4 leaves. --no-peer is accepted for scripts/bench.sh; there
+ * is no peer here.
+ *
+ * Exit status: 0, also when the target is missed; 1 when a build fails; 2 on bad usage. */
+#define _POSIX_C_SOURCE 200809L
+
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench_common.h"
+#include <xylem/xyl_foliage.h>
+
+#define TARGET_N 100000u
+#define TARGET_S 1.0
+
+/* ---- leaves -------------------------------------------------------------------------------- */
+
+static uint64_t next_random(uint64_t *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return *s * UINT64_C(2685821657736338717);
+}
+
+static double uniform(uint64_t *s, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)(next_random(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static void crown(xyl_leaf *out, uint32_t n, uint64_t seed)
+{
+    uint64_t s = seed;
+    for (uint32_t i = 0; i < n; ++i) {
+        double x, y, z;
+        do {
+            x = uniform(&s, -1, 1), y = uniform(&s, -1, 1), z = uniform(&s, -1, 1);
+        } while (x * x + y * y + z * z > 1.0);
+        double az = uniform(&s, 0, 6.283185307179586), h = uniform(&s, -0.3, 1.0);
+        double r = sqrt(1.0 - h * h);
+        const double nrm[3] = {r * cos(az), h, r * sin(az)};
+        /* (u, v) spans the leaf's plane; the axis turns in it by a random roll */
+        const double t[3] = {fabs(nrm[0]) < 0.9 ? 1.0 : 0.0, fabs(nrm[0]) < 0.9 ? 0.0 : 1.0, 0.0};
+        double u[3], v[3], a[3], sd[3];
+        cross(nrm, t, u);
+        double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int k = 0; k < 3; ++k) u[k] /= lu;
+        cross(nrm, u, v);
+        double roll = uniform(&s, 0, 6.283185307179586);
+        for (int k = 0; k < 3; ++k) a[k] = cos(roll) * u[k] + sin(roll) * v[k];
+        cross(a, nrm, sd); /* side = axis x normal */
+        double half_length = uniform(&s, 0.025, 0.075), half_width = half_length * uniform(&s, 0.3, 0.8);
+        xyl_leaf l = {0};
+        l.center = (xyl_vec3){(float)(3 * x), (float)(4 + 2 * y), (float)(3 * z)};
+        l.normal = (xyl_vec3){(float)nrm[0], (float)nrm[1], (float)nrm[2]};
+        l.axis = (xyl_vec3){(float)(a[0] * half_length), (float)(a[1] * half_length), (float)(a[2] * half_length)};
+        l.side = (xyl_vec3){(float)(sd[0] * half_width), (float)(sd[1] * half_width), (float)(sd[2] * half_width)};
+        l.node = -1;
+        out[i] = l;
+    }
+}
+
+/* The leaves of a preset tree at its own depth (NULL and *n = 0 if it has none). */
+static xyl_leaf *preset_leaves(const char *name, size_t *n, xyl_diag *diag)
+{
+    *n = 0;
+    xyl_grammar_desc gd = {0};
+    gd.source = xyl_lsystem_preset_source(name);
+    xyl_grammar *g = NULL;
+    xyl_lstring *s = NULL;
+    xyl_skeleton *sk = NULL;
+    xyl_leaf *leaves = NULL;
+    if (!gd.source || xyl_grammar_parse(&gd, &g, diag) || xyl_lsystem_derive(g, NULL, &s, diag) ||
+        xyl_lsystem_interpret(g, s, NULL, &sk, diag) ||
+        xyl_foliage_leaves_from_skeleton(sk, NULL, NULL, 0, n, diag))
+        *n = 0;
+    else if (*n && (leaves = malloc(*n * sizeof *leaves)) != NULL &&
+             xyl_foliage_leaves_from_skeleton(sk, NULL, leaves, *n, n, diag)) {
+        free(leaves);
+        leaves = NULL;
+        *n = 0;
+    }
+    xyl_skeleton_destroy(sk);
+    xyl_lstring_destroy(s);
+    xyl_grammar_destroy(g);
+    return leaves;
+}
+
+/* ---- memory, counted through the allocator --------------------------------------------------- */
+
+typedef struct counter {
+    size_t live, peak;
+} counter;
+
+static void *count_alloc(size_t size, void *user)
+{
+    counter *c = user;
+    size_t *p = malloc(size + 16);
+    if (!p) return NULL;
+    p[0] = size;
+    c->live += size;
+    if (c->live > c->peak) c->peak = c->live;
+    return (char *)p + 16;
+}
+
+static void count_free(void *ptr, void *user)
+{
+    if (!ptr) return;
+    counter *c = user;
+    size_t *p = (size_t *)((char *)ptr - 16);
+    c->live -= p[0];
+    free(p);
+}
+
+/* ---- the chain ------------------------------------------------------------------------------- */
+
+typedef struct row {
+    const char *name;
+    size_t n;
+    double median_s;
+    size_t peak, kept; /* bytes during the build, and held by the foliage */
+    uint32_t merges;
+    float error_10; /* the error of the LOD with a tenth of the leaves */
+} row;
+
+static int bench_chain(const options *o, const char *name, const xyl_leaf *leaves, size_t n, row *out)
+{
+    xyl_diag diag = {0};
+    xyl_foliage_desc d = {0};
+    d.leaves = leaves;
+    d.leaf_count = n;
+    counter c = {0, 0};
+    d.alloc = (xyl_allocator){count_alloc, count_free, &c};
+    xyl_foliage *f = NULL;
+    xyl_result r = xyl_foliage_build(&d, &f, &diag);
+    if (r) {
+        report_error(name, r, &diag);
+        return 1;
+    }
+    const xyl_foliage_sector *s = &f->sectors[0];
+    uint32_t tenth = (uint32_t)(n - (n + 9) / 10 < s->merged_count ? n - (n + 9) / 10 : s->merged_count);
+    *out = (row){name, n, 0.0, c.peak, c.live, s->merged_count, s->lods[tenth].error};
+    xyl_foliage_destroy(f);
+    d.alloc = (xyl_allocator){0};
+    double v[MAX_SAMPLES];
+    int repeats = n >= TARGET_N && o->repeats > 5 ? 5 : o->repeats;
+    for (int k = 0; k < repeats; ++k) {
+        double t0 = now_s();
+        r = xyl_foliage_build(&d, &f, &diag);
+        double t1 = now_s();
+        if (r) {
+            report_error(name, r, &diag);
+            return 1;
+        }
+        xyl_foliage_destroy(f);
+        v[k] = t1 - t0;
+    }
+    out->median_s = median_of(v, repeats);
+    printf("%-34s %9zu %10.4f %10.3f %9.0f %9.0f %9u %11.4g\n", name, n, out->median_s,
+           rate((double)n, out->median_s) / 1e6, (double)out->peak / (double)(n ? n : 1),
+           (double)out->kept / (double)(n ? n : 1), out->merges, (double)out->error_10);
+    return 0;
+}
+
+/* ---- sectors at equal leaf count ------------------------------------------------------------- */
+
+/* Per sector the LOD that keeps the fraction of its leaves; the worst error of them and the
+ * leaves drawn. */
+static void at_fraction(const xyl_foliage *f, double fraction, size_t *drawn, float *worst)
+{
+    *drawn = 0;
+    *worst = 0.0f;
+    for (uint32_t k = 0; k < f->sector_count; ++k) {
+        const xyl_foliage_sector *s = &f->sectors[k];
+        if (!s->original_count) continue;
+        uint32_t keep = (uint32_t)ceil(fraction * s->original_count);
+        uint32_t left = s->original_count - s->merged_count;
+        if (keep < left) keep = left;
+        uint32_t i = s->original_count - keep;
+        *drawn += keep;
+        if (s->lods[i].error > *worst) *worst = s->lods[i].error;
+    }
+}
+
+static int bench_sectors(const options *o, const xyl_leaf *leaves, size_t n)
+{
+    static const uint32_t counts[] = {1, 2, 4, 8};
+    static const double fractions[] = {0.5, 0.1, 0.01};
+    printf("\n== sectors: error at equal leaf count (%zu crown leaves; per sector the LOD that "
+           "keeps the fraction, the worst sector's error) ==\n", n);
+    printf("%-8s", "sectors");
+    for (size_t k = 0; k < sizeof fractions / sizeof *fractions; ++k)
+        printf("   %6.0f%%: leaves  error (m)", 100.0 * fractions[k]);
+    printf("\n");
+    (void)o;
+    for (size_t c = 0; c < sizeof counts / sizeof *counts; ++c) {
+        xyl_foliage_desc d = {0};
+        d.leaves = leaves;
+        d.leaf_count = n;
+        d.sectors = counts[c];
+        xyl_foliage *f = NULL;
+        xyl_diag diag = {0};
+        xyl_result r = xyl_foliage_build(&d, &f, &diag);
+        if (r) {
+            report_error("sectors", r, &diag);
+            return 1;
+        }
+        printf("%-8u", counts[c]);
+        for (size_t k = 0; k < sizeof fractions / sizeof *fractions; ++k) {
+            size_t drawn;
+            float worst;
+            at_fraction(f, fractions[k], &drawn, &worst);
+            printf("          %7zu %10.4g", drawn, (double)worst);
+        }
+        printf("\n");
+        xyl_foliage_destroy(f);
+    }
+    return 0;
+}
+
+/* ---- main ------------------------------------------------------------------------------------ */
+
+int main(int argc, char **argv)
+{
+    options o = {0};
+    int rc = bench_parse_options(argc, argv, &o, "bench_foliage");
+    if (rc) return rc == 1 ? 0 : rc;
+    printf("bench_foliage: xyl_foliage_build, median of %d samples (at most 5 from %u leaves)%s\n",
+           o.repeats, TARGET_N, o.quick ? ", --quick sizes" : "");
+    static const uint32_t sizes_full[] = {1000, 10000, 100000};
+    static const uint32_t sizes_quick[] = {1000, 10000};
+    const uint32_t *sizes = o.quick ? sizes_quick : sizes_full;
+    size_t count = o.quick ? 2 : 3;
+    printf("\n== chain: collapse + linear array + LOD table, one sector, default options ==\n");
+    printf("%-34s %9s %10s %10s %9s %9s %9s %11s\n", "leaves", "n", "median s", "Mleaves/s",
+           "peak B/l", "kept B/l", "merges", "err@10% m");
+    int failures = 0;
+    row largest = {0};
+    xyl_leaf *leaves = malloc(sizes[count - 1] * sizeof *leaves);
+    if (!leaves) return 1;
+    for (size_t k = 0; k < count; ++k) {
+        char name[64];
+        snprintf(name, sizeof name, "random crown");
+        crown(leaves, sizes[k], 0x5eed + sizes[k]);
+        row rw;
+        if (bench_chain(&o, name, leaves, sizes[k], &rw)) ++failures;
+        else if (sizes[k] == sizes[count - 1]) largest = rw;
+    }
+    const char *trees[2] = {xyl_lsystem_default_preset(), "abop-1.25-bush"};
+    for (int t = 0; t < 2; ++t) {
+        xyl_diag diag = {0};
+        size_t n = 0;
+        xyl_leaf *tl = preset_leaves(trees[t], &n, &diag);
+        char name[64];
+        snprintf(name, sizeof name, "%s%s", trees[t], t == 0 ? " (default)" : "");
+        if (!n) printf("%-34s has no leaf attachments: nothing to collapse\n", name);
+        else {
+            row rw;
+            if (bench_chain(&o, name, tl, n, &rw)) ++failures;
+        }
+        free(tl);
+    }
+    uint32_t sector_n = o.quick ? 1000 : 10000;
+    crown(leaves, sector_n, 0x5eed + sector_n);
+    failures += bench_sectors(&o, leaves, sector_n);
+    free(leaves);
+
+    printf("\n== targets ==\n");
+    if (o.quick)
+        printf("chain for %u leaves under %.0f s on one core: not measured [--quick sizes]\n",
+               TARGET_N, TARGET_S);
+    else
+        printf("chain for %u leaves under %.0f s on one core: %s (%.3f s, median; %.0f bytes a "
+               "leaf at the peak)\n", TARGET_N, TARGET_S,
+               largest.median_s < TARGET_S ? "MET" : "NOT MET", largest.median_s,
+               (double)largest.peak / TARGET_N);
+    return failures ? 1 : 0;
+}

@@ -1,0 +1,85 @@
+/* xyl_foliage_shared.h: the leaf record read by both C and GLSL.
+ *
+ * In GLSL the build puts "#define XYL_GLSL 1" before this file; in C it is included from
+ * xylem/xyl_foliage.h, which pins the layout with _Static_assert, and tests/foliage_glsl.cmake
+ * compiles it into a shader and checks the offsets glslang gives the GLSL half. Keep both
+ * halves in step.
+ *
+ * One leaf in 32 bytes, the same in C and in a std430 buffer (an array stride of 32):
+ *   bytes  0..11  centre: 3 floats, the leaf's own (world coordinates keep full float
+ *                 precision);
+ *   bytes 12..23  the half-axes as 6 IEEE binary16 half floats, axis x, y, z then side x, y, z
+ *                 (GLSL: unpackHalf2x16 of the words at 12, 16 and 20). A half keeps an 11-bit
+ *                 significand: relative error <= 2^-11 for 6.1e-5 <= |x| <= 65504; below
+ *                 6.1e-5 it is subnormal, absolute error <= 2^-25 (a component that small
+ *                 next to a half-axis of 6.1e-5 or more changes the direction by < 2^-11);
+ *                 |x| > 65504 does not fit (xyl_foliage_pack_gpu refuses it);
+ *   bytes 24..31  the texture rectangle u0, v0, u1, v1 as unorm16 (value / 65535; GLSL:
+ *                 unpackUnorm2x16 of the words at 24 and 28): error <= 0.5 / 65535.
+ * The normal is not stored: normal = normalize(cross(side, axis)), the handedness of xyl_leaf
+ * ((side, axis, normal) like (x, y, z)); it is within 2^-9 radians of the leaf's when both
+ * half-axes are at least 6.1e-5 long (tested). Count and node stay on the CPU. Words are read
+ * little-endian, as on every GPU host xylem targets. */
+#ifndef XYL_FOLIAGE_SHARED_H
+#define XYL_FOLIAGE_SHARED_H
+
+#define XYL_FOLIAGE_GPU_LEAF_SIZE 32
+
+#ifdef XYL_GLSL
+
+struct xyl_foliage_gpu_leaf {
+    vec3 center;
+    uint axis_xy;       /* packHalf2x16(axis.x, axis.y) */
+    uint axis_z_side_x; /* packHalf2x16(axis.z, side.x) */
+    uint side_yz;       /* packHalf2x16(side.y, side.z) */
+    uint uv0;           /* packUnorm2x16(u0, v0) */
+    uint uv1;           /* packUnorm2x16(u1, v1) */
+};
+
+vec3 xyl_foliage_axis(xyl_foliage_gpu_leaf l)
+{
+    return vec3(unpackHalf2x16(l.axis_xy), unpackHalf2x16(l.axis_z_side_x).x);
+}
+
+vec3 xyl_foliage_side(xyl_foliage_gpu_leaf l)
+{
+    return vec3(unpackHalf2x16(l.axis_z_side_x).y, unpackHalf2x16(l.side_yz));
+}
+
+vec3 xyl_foliage_normal(xyl_foliage_gpu_leaf l)
+{
+    return normalize(cross(xyl_foliage_side(l), xyl_foliage_axis(l)));
+}
+
+/* u0, v0, u1, v1 */
+vec4 xyl_foliage_uv_rect(xyl_foliage_gpu_leaf l)
+{
+    return vec4(unpackUnorm2x16(l.uv0), unpackUnorm2x16(l.uv1));
+}
+
+/* The point centre + st.x side + st.y axis, st in [-1, 1]^2, and its texture coordinate. */
+vec3 xyl_foliage_corner(xyl_foliage_gpu_leaf l, vec2 st)
+{
+    return l.center + st.x * xyl_foliage_side(l) + st.y * xyl_foliage_axis(l);
+}
+
+vec2 xyl_foliage_corner_uv(xyl_foliage_gpu_leaf l, vec2 st)
+{
+    vec4 r = xyl_foliage_uv_rect(l);
+    return mix(r.xy, r.zw, 0.5 * st + 0.5);
+}
+
+#else /* C */
+
+#include <stdint.h>
+
+typedef struct xyl_foliage_gpu_leaf {
+    float center[3];
+    uint16_t axis[3]; /* binary16 bits */
+    uint16_t side[3]; /* binary16 bits */
+    uint16_t uv[4];   /* unorm16: u0, v0, u1, v1 */
+} xyl_foliage_gpu_leaf;
+
+#endif
+
+#endif /* XYL_FOLIAGE_SHARED_H */
