@@ -142,6 +142,57 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
                                                     xyl_leaf *leaves, size_t capacity,
                                                     size_t *count, xyl_diag *diag);
 
+/* ---- leaves from a leaf mesh ------------------------------------------------------------------
+ *
+ * A Wavefront OBJ text whose faces are leaves: each connected component (faces sharing a vertex
+ * index) becomes one quad, as Zhang reduces a leaf mesh: the plane fitted to the component by
+ * area-weighted least squares, the long axis of its area in that plane running from the stalk
+ * end to the tip end, and the bounding rectangle of the component projected on the plane along
+ * that axis (docs/foliage.md, "Leaves from a mesh"). */
+
+/* Which end of a component's long axis is the stalk end: the end nearer stalk_point when one
+ * is given; else, with two or more components, the end nearer the vertical (+Y) line through
+ * the whole mesh's centroid (leaves point away from their stem, whose axis foliage takes to be
+ * vertical by default); else, or where the ends are tied (within 1e-6 of the length), the
+ * lower end in Y, then the end nearer the origin. */
+typedef struct xyl_leaf_mesh_desc {
+    float planarity;      /* the farthest a vertex may lie from its component's fitted plane, as
+                             a fraction of the component's length; default (0): 0.1; > 0 */
+    bool has_stalk_point; /* true: every component's stalk end is the end nearer stalk_point */
+    xyl_vec3 stalk_point;
+    float uv[4];          /* every leaf's texture rectangle; default (all 0): 0, 0, 1, 1 */
+    xyl_foliage_limits limits; /* max_leaves bounds the components, max_coordinate every vertex
+                                  coordinate */
+    xyl_allocator alloc;  /* the call's scratch memory (about 32 bytes a vertex, 24 a face and
+                             4 a face corner); nothing stays allocated */
+} xyl_leaf_mesh_desc;
+
+/* One leaf per connected component of the faces of an OBJ text (text[0 .. size), no NUL
+ * needed), in the order of the components' first faces, each with count 1 and node -1.
+ * Read: "v x y z [w]" (or with r g b [a] after x y z), "f" with three or more corners "i", "i/t", "i//n" or "i/t/n" (negative i counts back from the last vertex so far;
+ * a face may use only vertices defined before it), comments, blank lines, LF or CRLF. vt, vn,
+ * vp, o, g, s, l, p, usemtl and mtllib lines are skipped; any other record is an error. Vertices
+ * no face uses are ignored; text without faces gives *count = 0 and XYL_OK.
+ * Count-then-fill: with leaves == NULL sets *count and returns XYL_OK (the whole text is read
+ * and checked either way); with capacity < the count, XYL_ERR_INVALID_ARGUMENT. desc may be
+ * NULL (defaults). Errors, with diag.line (and column for the text's own errors):
+ *   - XYL_ERR_PARSE: a malformed record or number, an index 0 or out of range, a NUL byte;
+ *   - XYL_ERR_TRUNCATED: the text ends inside a record (its last line, without a line break,
+ *     is missing fields);
+ *   - XYL_ERR_NON_FINITE: a NaN or infinity;
+ *   - XYL_ERR_LIMIT_EXCEEDED: a coordinate beyond limits.max_coordinate, more components than
+ *     limits.max_leaves, more than 2^32 - 2 vertices or faces;
+ *   - XYL_ERR_INVALID_ARGUMENT: NULL text (with size > 0) or count, an option out of range, a
+ *     component of zero area (collinear or coincident vertices) or beyond the planarity, or
+ *     whose quad would break the leaf rules; diag.index names the component (the leaf) and
+ *     diag.line its first face;
+ *   - XYL_ERR_OUT_OF_MEMORY.
+ * Nothing is written unless every leaf is good. Memory linear in the text; time linear (near
+ * linear: a union-find joins the components). */
+XYL_API xyl_result xyl_foliage_leaves_from_obj(const char *text, size_t size,
+                                               const xyl_leaf_mesh_desc *desc, xyl_leaf *leaves,
+                                               size_t capacity, size_t *count, xyl_diag *diag);
+
 #define XYL_FOLIAGE_MAX_SECTORS 256
 
 /* ---- levels of detail ------------------------------------------------------------------------
