@@ -157,7 +157,7 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
  * lower end in Y, then the end nearer the origin. */
 typedef struct xyl_leaf_mesh_desc {
     float planarity;      /* the farthest a vertex may lie from its component's fitted plane, as
-                             a fraction of the component's length; default (0): 0.1; > 0 */
+                             a fraction of the longer side of its quad; default (0): 0.1; >= 0 */
     bool has_stalk_point; /* true: every component's stalk end is the end nearer stalk_point */
     xyl_vec3 stalk_point;
     float uv[4];          /* every leaf's texture rectangle; default (all 0): 0, 0, 1, 1 */
