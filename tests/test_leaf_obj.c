@@ -549,6 +549,72 @@ static void every_allocation_failure_is_reported_and_freed(void **state)
     free(text);
 }
 
+/* ---- a template leaf ------------------------------------------------------------------------ */
+
+static void template_leaf_gives_the_shape_of_every_attachment(void **state)
+{
+    (void)state;
+    size_t size, n = 0;
+    char *text = read_data("template_leaf.obj", &size);
+    xyl_leaf tmpl;
+    xyl_diag d = {0};
+    assert_int_equal(xyl_foliage_leaves_from_obj(text, size, NULL, &tmpl, 1, &n, &d), XYL_OK);
+    free(text);
+    xyl_foliage_leaves_desc ld = {0};
+    ld.shape.seed = 7;
+    assert_int_equal(xyl_leaf_shape_from_template(&tmpl, NULL, &ld.shape, &d), XYL_OK);
+    assert_near(ld.shape.aspect, 0.45 / 1.15, 1e-4);
+    assert_near(ld.shape.stalk, 0.0, 1e-6); /* the petiole is part of the mesh */
+    assert_true(ld.shape.uv[2] == 1.0f && ld.shape.uv[3] == 1.0f);
+    assert_true(ld.shape.seed == 7);
+    /* placed at an attachment of size 2 heading +y, facing +z: the template, scaled by 2 / 1.15 */
+    xyl_skel_node nodes[1] = {{{0, 0, 0}, 0.1f, -1, 0, 0}};
+    xyl_skel_leaf at[1] = {{{1, 2, 3}, {0, 1, 0}, {-1, 0, 0}, {0, 0, 1}, 2.0f, 0}};
+    xyl_skeleton sk;
+    memset(&sk, 0, sizeof sk);
+    sk.nodes = nodes;
+    sk.node_count = 1;
+    sk.leaves = at;
+    sk.leaf_count = 1;
+    xyl_leaf l;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(&sk, &ld, &l, 1, &n, &d), XYL_OK);
+    assert_vec_near(l.center, 1, 3, 3, 1e-4);
+    assert_vec_near(l.axis, 0, 1, 0, 1e-4);
+    assert_near(len3(l.side), 0.45 / 1.15, 1e-4);
+    /* a stalk point below the stalked leaf's stalk end: 1 of its 1.5 long */
+    xyl_leaf s[16];
+    assert_int_equal(read_leaves(stalked_leaf, NULL, s), 1);
+    xyl_vec3 below = {0, -1.2f, 0};
+    assert_int_equal(xyl_leaf_shape_from_template(&s[0], &below, &ld.shape, &d), XYL_OK);
+    assert_near(ld.shape.stalk, 1.0 / 1.5, 1e-6);
+    assert_near(ld.shape.aspect, 0.3 / 0.75, 1e-6);
+}
+
+static void template_shape_rejects_bad_templates_and_leaves_the_shape_alone(void **state)
+{
+    (void)state;
+    xyl_leaf s[16];
+    assert_int_equal(read_leaves(stalked_leaf, NULL, s), 1);
+    xyl_leaf_shape shape, before;
+    memset(&shape, 0x33, sizeof shape);
+    memcpy(&before, &shape, sizeof shape);
+    xyl_diag d = {0};
+    assert_int_equal(xyl_leaf_shape_from_template(NULL, NULL, &shape, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_leaf_shape_from_template(&s[0], NULL, NULL, &d), XYL_ERR_INVALID_ARGUMENT);
+    xyl_vec3 inside = {0, 0.5f, 0}, nan_point = {0, NAN, 0};
+    assert_int_equal(xyl_leaf_shape_from_template(&s[0], &inside, &shape, &d),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_leaf_shape_from_template(&s[0], &nan_point, &shape, &d),
+                     XYL_ERR_NON_FINITE);
+    xyl_leaf flat = s[0];
+    flat.side = (xyl_vec3){0, 0, 0};
+    assert_int_equal(xyl_leaf_shape_from_template(&flat, NULL, &shape, &d), XYL_ERR_INVALID_ARGUMENT);
+    xyl_leaf bad = s[0];
+    bad.center.x = INFINITY;
+    assert_int_equal(xyl_leaf_shape_from_template(&bad, NULL, &shape, &d), XYL_ERR_NON_FINITE);
+    assert_memory_equal(&shape, &before, sizeof shape);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -568,6 +634,8 @@ int main(void)
         cmocka_unit_test(broadleaf_twig_gives_six_outward_leaves_that_build_a_foliage),
         cmocka_unit_test(template_leaf_and_card_reduce_to_their_own_quads),
         cmocka_unit_test(every_allocation_failure_is_reported_and_freed),
+        cmocka_unit_test(template_leaf_gives_the_shape_of_every_attachment),
+        cmocka_unit_test(template_shape_rejects_bad_templates_and_leaves_the_shape_alone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

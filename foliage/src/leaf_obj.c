@@ -720,7 +720,7 @@ static xyl_result resolve(const xyl_leaf_mesh_desc *in, reduce_ctx *x, xyl__foli
             return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "a leaf mesh option is NaN or infinite");
     if (in->planarity < 0.0f)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "planarity is %g; it must be > 0 (0: 0.1)", (double)in->planarity);
+                         "planarity is %g; it must be >= 0 (0: 0.1)", (double)in->planarity);
     for (int k = 0; k < 4; ++k)
         if (in->uv[k] < 0.0f || in->uv[k] > 1.0f)
             return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -822,6 +822,47 @@ xyl_result xyl_foliage_leaves_from_obj(const char *text, size_t size,
     reader_free(&r);
     if (res != XYL_OK) return res;
     *count = n;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+/* ==== a template leaf as the shape of every attachment ====================================== */
+
+xyl_result xyl_leaf_shape_from_template(const xyl_leaf *template_leaf, const xyl_vec3 *stalk_point,
+                                        xyl_leaf_shape *shape, xyl_diag *diag)
+{
+    if (!template_leaf || !shape)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "template_leaf and shape must not be NULL");
+    xyl__foliage_limits lim;
+    xyl_result res = xyl__foliage_limits_resolve(NULL, &lim, diag);
+    if (res == XYL_OK) res = xyl__leaf_check(template_leaf, 0, &lim, diag);
+    if (res != XYL_OK) return res;
+    xyl_vec3 origin = {0, 0, 0};
+    if (!stalk_point) stalk_point = &origin;
+    if (!isfinite(stalk_point->x) || !isfinite(stalk_point->y) || !isfinite(stalk_point->z))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the stalk point is NaN or infinite");
+    xyl_leaf t = xyl__leaf_tidy(template_leaf);
+    xyl__dvec3 axis = xyl__from_f3(t.axis);
+    double half = xyl__d3_len(axis);
+    xyl__dvec3 stalk_end = xyl__d3_sub(xyl__from_f3(t.center), axis);
+    /* along the axis, from the stalk point to the stalk end, in lengths */
+    double stalk = xyl__d3_dot(xyl__d3_sub(stalk_end, xyl__from_f3(*stalk_point)), axis) /
+                   (half * 2.0 * half);
+    if (!(stalk >= -END_TIE))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the stalk point lies %g of the leaf's length past its stalk end, towards "
+                         "its tip; a stalk cannot be negative", -stalk);
+    float aspect = (float)(xyl__d3_len(xyl__from_f3(t.side)) / half);
+    float stalk_f = (float)fmax(stalk, 0.0);
+    /* an aspect of 0 would read as the default, one of inf as an error of the shape's user */
+    if (!(aspect > 0.0f) || !isfinite(aspect) || !isfinite(stalk_f))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the template's aspect (%g) or stalk (%g) is not a positive float",
+                         (double)aspect, stalk);
+    shape->aspect = aspect;
+    shape->stalk = stalk_f;
+    memcpy(shape->uv, t.uv, sizeof shape->uv);
     xyl__diag_ok(diag);
     return XYL_OK;
 }

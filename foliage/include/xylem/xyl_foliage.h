@@ -193,6 +193,19 @@ XYL_API xyl_result xyl_foliage_leaves_from_obj(const char *text, size_t size,
                                                const xyl_leaf_mesh_desc *desc, xyl_leaf *leaves,
                                                size_t capacity, size_t *count, xyl_diag *diag);
 
+/* The shape that gives every leaf attachment a copy of a template leaf (say the one leaf of a
+ * single-leaf mesh from xyl_foliage_leaves_from_obj): its aspect |side| / |axis|, its stalk
+ * (how far the quad's stalk end, center - axis, lies from stalk_point along the axis, over the
+ * quad's length; NULL stalk_point: the origin, where modelling tools put a leaf's pivot) and
+ * its texture rectangle. The attachment's size then sets the blade's length, its frame the
+ * blade's direction. shape's other fields (jitters, seed) are kept. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL template_leaf or shape, a template the leaf rules refuse, a
+ * stalk point more than 1e-6 of the length past the stalk end towards the tip: a negative
+ * stalk), XYL_ERR_NON_FINITE (a NaN or infinity); shape is then untouched. Allocates nothing. */
+XYL_API xyl_result xyl_leaf_shape_from_template(const xyl_leaf *template_leaf,
+                                                const xyl_vec3 *stalk_point,
+                                                xyl_leaf_shape *shape, xyl_diag *diag);
+
 #define XYL_FOLIAGE_MAX_SECTORS 256
 
 /* ---- levels of detail ------------------------------------------------------------------------
