@@ -10,6 +10,11 @@
  *     xyl_leaf *leaves = malloc((n ? n : 1) * sizeof *leaves);
  *     if (xyl_foliage_leaves_from_skeleton(sk, &ld, leaves, n, &n, &diag)) puts(diag.message);
  *
+ *     // or one leaf per connected component of an OBJ leaf mesh (count, then fill), or one
+ *     // template leaf from such a mesh as the shape of every attachment
+ *     xyl_foliage_leaves_from_obj(obj_text, obj_size, NULL, NULL, 0, &n, &diag);
+ *     xyl_leaf_shape_from_template(&template_leaf, NULL, &ld.shape, &diag);
+ *
  *     // or your own leaves, checked with the rules every call that takes leaves applies
  *     if (xyl_foliage_check_leaves(mine, count, NULL, &diag)) printf("leaf %lld: %s\n",
  *                                                  (long long)diag.index, diag.message);
@@ -35,8 +40,9 @@
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
  *     xyl_foliage_destroy(f);
  *
- * Every call is reentrant; only xyl_foliage_build allocates (through its desc's allocator). A
- * foliage is immutable once built, so threads may read it at once.
+ * Every call is reentrant; only xyl_foliage_build and xyl_foliage_leaves_from_obj allocate
+ * (through their desc's allocator). A foliage is immutable once built, so threads may read it
+ * at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
