@@ -327,7 +327,7 @@ static xyl_result face_record(reader *r)
     token t;
     void *p;
     while (next_token(r, &t)) {
-        uint32_t vertex;
+        uint32_t vertex = 0;
         xyl_result res = corner_field(r, &t, &vertex);
         if (res != XYL_OK) return res;
         p = r->corner;
@@ -756,7 +756,7 @@ static xyl__dvec3 mesh_centroid(const reader *r, const components *cs)
 static xyl_result reduce_all(reduce_ctx *x, xyl_leaf *leaves, size_t capacity, size_t *count)
 {
     const reader *r = x->r;
-    components cs;
+    components cs = {0, NULL, NULL};
     xyl_result res = find_components(r, &cs, x->diag);
     if (res != XYL_OK) return res;
     x->c = &cs;
@@ -781,7 +781,7 @@ static xyl_result reduce_all(reduce_ctx *x, xyl_leaf *leaves, size_t capacity, s
     for (size_t k = 0; res == XYL_OK && k < cs.count; ++k) {
         xyl_leaf l;
         res = reduce(x, k, &l);
-        if (tmp) tmp[k] = l;
+        if (res == XYL_OK && tmp) tmp[k] = l;
     }
     if (res == XYL_OK && leaves && cs.count) memcpy(leaves, tmp, cs.count * sizeof *tmp);
     if (res == XYL_OK) *count = cs.count;
