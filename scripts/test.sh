@@ -34,19 +34,20 @@ passed=$((passed + 1))
 stage "3/5 libFuzzer: ${fuzz_seconds}s per target"
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
   -DXYL_BUILD_FUZZERS=ON -DXYL_BUILD_TESTS=ON >/dev/null
-cmake --build build-fuzz -j "$jobs" --target fuzz_grammar fuzz_skel fuzz_glb xylem_cli
+cmake --build build-fuzz -j "$jobs" --target fuzz_grammar fuzz_skel fuzz_leaf_obj fuzz_glb xylem_cli
 corpus=$(mktemp -d)
 trap 'rm -rf "$corpus"' EXIT
-mkdir -p "$corpus/grammar" "$corpus/skel" "$corpus/glb"
+mkdir -p "$corpus/grammar" "$corpus/skel" "$corpus/leaf_obj" "$corpus/glb"
 cp tests/data/grammars/*.lsys "$corpus/grammar/"
 for p in $(./build-fuzz/samples/xylem presets | cut -d' ' -f1); do
   ./build-fuzz/samples/xylem preset "$p" > "$corpus/grammar/preset-$p.lsys"
 done
 cp tests/data/skel/*.skel "$corpus/skel/"
+cp tests/data/leaves/*.obj "$corpus/leaf_obj/"
 for k in 3 4; do  # xylem's own GLBs: quads to rejoin (k = 4), triangles too (k = 3)
   ./build-fuzz/samples/xylem mesh --preset abop-1.24a --sides "$k" --out "$corpus/glb/k$k.glb" >/dev/null
 done
-for target in grammar skel glb; do
+for target in grammar skel leaf_obj glb; do
   echo "fuzz_$target:"
   (cd "$corpus" && "$OLDPWD/build-fuzz/tests/fuzz_$target" -max_total_time="$fuzz_seconds" \
      -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "$corpus/$target" 2>&1 |

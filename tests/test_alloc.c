@@ -19,6 +19,7 @@
 
 #include "test_util.h"
 #include "xyl_internal.h"
+#include "xylem/xyl_foliage.h"
 #include "xylem/xyl_tessellate.h"
 
 /* ---- watching malloc ------------------------------------------------------------------------ */
@@ -713,6 +714,30 @@ static xyl_result tess_refine(const xyl_allocator *a)
     return mesh_done(r, m);
 }
 
+/* ---- foliage -------------------------------------------------------------------------------- */
+
+/* Two leaves, one a quad and one a fan of two triangles. */
+static xyl_result leaves_from_obj(const xyl_allocator *a)
+{
+    static const char text[] = "v 0 0 0\nv 1 0 0\nv 1 2 0\nv 0 2 0\nf 1 2 3 4\n"
+                               "v 5 0 0\nv 6 1 0\nv 5 3 0\nv 4 1 0\nf 5 6 7\nf 5 7 8\n";
+    xyl_leaf_mesh_desc d = {0};
+    d.alloc = *a;
+    xyl_leaf leaves[2], before[2];
+    memset(leaves, 0x5a, sizeof leaves);
+    memcpy(before, leaves, sizeof leaves);
+    size_t n = 7;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_foliage_leaves_from_obj(text, sizeof text - 1, &d, leaves, 2, &n, &diag);
+    if (r == XYL_OK) {
+        assert_int_equal(n, 2);
+    } else {
+        assert_int_equal(n, 7);
+        assert_memory_equal(leaves, before, sizeof leaves);
+    }
+    return r;
+}
+
 /* ---- the suite ------------------------------------------------------------------------------ */
 
 static const walk_case cases[] = {
@@ -747,6 +772,7 @@ static const walk_case cases[] = {
     {"xyl_tess_patterns_create", tess_patterns, false, true},
     {"xyl_tess_select", tess_select, false, true},
     {"xyl_tess_refine", tess_refine, false, true},
+    {"xyl_foliage_leaves_from_obj", leaves_from_obj, false, true},
 };
 
 static void every_call_survives_each_allocation_failure_and_uses_only_its_allocator(void **state)

@@ -10,6 +10,11 @@
  *     xyl_leaf *leaves = malloc((n ? n : 1) * sizeof *leaves);
  *     if (xyl_foliage_leaves_from_skeleton(sk, &ld, leaves, n, &n, &diag)) puts(diag.message);
  *
+ *     // or one leaf per connected component of an OBJ leaf mesh (count, then fill), or one
+ *     // template leaf from such a mesh as the shape of every attachment
+ *     xyl_foliage_leaves_from_obj(obj_text, obj_size, NULL, NULL, 0, &n, &diag);
+ *     xyl_leaf_shape_from_template(&template_leaf, NULL, &ld.shape, &diag);
+ *
  *     // or your own leaves, checked with the rules every call that takes leaves applies
  *     if (xyl_foliage_check_leaves(mine, count, NULL, &diag)) printf("leaf %lld: %s\n",
  *                                                  (long long)diag.index, diag.message);
@@ -35,8 +40,9 @@
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
  *     xyl_foliage_destroy(f);
  *
- * Every call is reentrant; only xyl_foliage_build allocates (through its desc's allocator). A
- * foliage is immutable once built, so threads may read it at once.
+ * Every call is reentrant; only xyl_foliage_build and xyl_foliage_leaves_from_obj allocate
+ * (through their desc's allocator). A foliage is immutable once built, so threads may read it
+ * at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
@@ -141,6 +147,70 @@ XYL_API xyl_result xyl_foliage_leaves_from_skeleton(const xyl_skeleton *skeleton
                                                     const xyl_foliage_leaves_desc *desc,
                                                     xyl_leaf *leaves, size_t capacity,
                                                     size_t *count, xyl_diag *diag);
+
+/* ---- leaves from a leaf mesh ------------------------------------------------------------------
+ *
+ * A Wavefront OBJ text whose faces are leaves: each connected component (faces sharing a vertex
+ * index) becomes one quad, as Zhang reduces a leaf mesh: the plane fitted to the component by
+ * area-weighted least squares, the long axis of its area in that plane running from the stalk
+ * end to the tip end, and the bounding rectangle of the component projected on the plane along
+ * that axis (docs/foliage.md, "Leaves from a mesh"). */
+
+/* Which end of a component's long axis is the stalk end: the end nearer stalk_point when one
+ * is given; else, with two or more components, the end nearer the vertical (+Y) line through
+ * the whole mesh's centroid (leaves point away from their stem, whose axis foliage takes to be
+ * vertical by default); else, or where the ends are tied (within 1e-6 of the length), the
+ * lower end in Y, then the end nearer the origin. */
+typedef struct xyl_leaf_mesh_desc {
+    float planarity;      /* the farthest a vertex may lie from its component's fitted plane, as
+                             a fraction of the longer side of its quad; default (0): 0.1; >= 0 */
+    bool has_stalk_point; /* true: every component's stalk end is the end nearer stalk_point */
+    xyl_vec3 stalk_point;
+    float uv[4];          /* every leaf's texture rectangle; default (all 0): 0, 0, 1, 1 */
+    xyl_foliage_limits limits; /* max_leaves bounds the components, max_coordinate every vertex
+                                  coordinate */
+    xyl_allocator alloc;  /* the call's scratch memory (about 28 bytes a vertex, 20 a face, 4 a
+                             face corner, 80 a leaf); nothing stays allocated */
+} xyl_leaf_mesh_desc;
+
+/* One leaf per connected component of the faces of an OBJ text (text[0 .. size), no NUL
+ * needed), in the order of the components' first faces, each with count 1 and node -1.
+ * Read: "v x y z [w]" (or with r g b [a] after x y z), "f" with three or more corners "i", "i/t", "i//n" or "i/t/n" (negative i counts back from the last vertex so far;
+ * a face may use only vertices defined before it), comments, blank lines, LF or CRLF. vt, vn,
+ * vp, o, g, s, l, p, usemtl and mtllib lines are skipped; any other record is an error. Vertices
+ * no face uses are ignored; text without faces gives *count = 0 and XYL_OK.
+ * Count-then-fill: with leaves == NULL sets *count and returns XYL_OK (the whole text is read
+ * and checked either way); with capacity < the count, XYL_ERR_INVALID_ARGUMENT. desc may be
+ * NULL (defaults). Errors, with diag.line (and column for the text's own errors):
+ *   - XYL_ERR_PARSE: a malformed record or number, an index 0 or out of range, a NUL byte;
+ *   - XYL_ERR_TRUNCATED: the text ends inside a record (its last line, without a line break,
+ *     is missing fields);
+ *   - XYL_ERR_NON_FINITE: a NaN or infinity;
+ *   - XYL_ERR_LIMIT_EXCEEDED: a coordinate beyond limits.max_coordinate, more components than
+ *     limits.max_leaves, more than 2^32 - 2 vertices or faces;
+ *   - XYL_ERR_INVALID_ARGUMENT: NULL text (with size > 0) or count, an option out of range, a
+ *     component of zero area (collinear or coincident vertices) or beyond the planarity, or
+ *     whose quad would break the leaf rules; diag.index names the component (the leaf) and
+ *     diag.line its first face;
+ *   - XYL_ERR_OUT_OF_MEMORY.
+ * Nothing is written unless every leaf is good. Memory linear in the text; time linear (near
+ * linear: a union-find joins the components). */
+XYL_API xyl_result xyl_foliage_leaves_from_obj(const char *text, size_t size,
+                                               const xyl_leaf_mesh_desc *desc, xyl_leaf *leaves,
+                                               size_t capacity, size_t *count, xyl_diag *diag);
+
+/* The shape that gives every leaf attachment a copy of a template leaf (say the one leaf of a
+ * single-leaf mesh from xyl_foliage_leaves_from_obj): its aspect |side| / |axis|, its stalk
+ * (how far the quad's stalk end, center - axis, lies from stalk_point along the axis, over the
+ * quad's length; NULL stalk_point: the origin, where modelling tools put a leaf's pivot) and
+ * its texture rectangle. The attachment's size then sets the blade's length, its frame the
+ * blade's direction. shape's other fields (jitters, seed) are kept. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL template_leaf or shape, a template the leaf rules refuse, a
+ * stalk point more than 1e-6 of the length past the stalk end towards the tip: a negative
+ * stalk), XYL_ERR_NON_FINITE (a NaN or infinity); shape is then untouched. Allocates nothing. */
+XYL_API xyl_result xyl_leaf_shape_from_template(const xyl_leaf *template_leaf,
+                                                const xyl_vec3 *stalk_point,
+                                                xyl_leaf_shape *shape, xyl_diag *diag);
 
 #define XYL_FOLIAGE_MAX_SECTORS 256
 
