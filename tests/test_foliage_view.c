@@ -35,6 +35,47 @@ static xyl_leaf flat_leaf(float x, float y, float cz, float half_length, float h
     return l;
 }
 
+static uint64_t next_random(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static double uniform(uint64_t *s, double lo, double hi)
+{
+    return lo + (hi - lo) * (double)(next_random(s) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/* n leaves in an ellipsoid crown about (0, 4, 0), random orientation, sizes 0.05 .. 0.15. */
+static xyl_leaf *crown(uint32_t n, uint64_t seed)
+{
+    xyl_leaf *l = malloc((n ? n : 1) * sizeof *l);
+    assert_non_null(l);
+    uint64_t rng = seed;
+    for (uint32_t i = 0; i < n; ++i) {
+        double x, y, z;
+        do {
+            x = uniform(&rng, -1, 1), y = uniform(&rng, -1, 1), z = uniform(&rng, -1, 1);
+        } while (x * x + y * y + z * z > 1.0);
+        xyl__dvec3 nrm = xyl__d3_normalize_or(xyl__d3(uniform(&rng, -1, 1), uniform(&rng, -0.3, 1),
+                                                      uniform(&rng, -1, 1)), xyl__d3(0, 1, 0));
+        xyl__dvec3 a = xyl__d3_any_orthogonal(nrm);
+        a = xyl__d3_rotate(a, nrm, uniform(&rng, 0, 6.283185307179586));
+        double hl = uniform(&rng, 0.025, 0.075), hw = hl * uniform(&rng, 0.3, 0.8);
+        xyl__dvec3 s = xyl__d3_cross(a, nrm);
+        xyl_leaf t = {0};
+        t.center = xyl__to_f3(xyl__d3(3 * x, 4 + 2 * y, 3 * z));
+        t.normal = xyl__to_f3(nrm);
+        t.axis = xyl__to_f3(xyl__d3_scale(a, hl));
+        t.side = xyl__to_f3(xyl__d3_scale(s, hw));
+        t.node = -1;
+        l[i] = xyl__leaf_tidy(&t);
+    }
+    return l;
+}
+
 /* Looking down -z at the plane z = 0: one world unit a pixel for an image of 2 half pixels. */
 static xyl__ortho_view top_view(double half)
 {
@@ -211,6 +252,299 @@ static void dodecahedron_views_are_twenty_unit_frames_framing_the_sphere(void **
     }
 }
 
+/* ---- the image error ----------------------------------------------------------------------- */
+
+static void image_error_of_a_set_against_itself_is_zero(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(500, 3);
+    xyl_foliage_image_error e;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_image_error_of(l, 500, l, 500, NULL, &e, &diag), XYL_OK);
+    assert_true(e.rmse_mean == 0.0 && e.rmse_worst == 0.0 && e.coverage_mean == 0.0 &&
+                e.coverage_worst == 0.0);
+    assert_near(e.hausdorff, 0.0, 1e-7); /* the samples' rounding off their float quads */
+    assert_int_equal(e.resolution, 256);
+    assert_true(e.radius > 3.0f && e.radius < 4.5f);
+    free(l);
+}
+
+/* One square facing +z against nothing: every view sees it but the four that lie in its plane
+ * (views 9, 12, 15, 18: (+-1/phi, +-phi, 0)), so the coverage error is 1 in 16 views, 0 in 4. */
+static void image_error_of_a_removed_square_is_its_coverage(void **state)
+{
+    (void)state;
+    xyl_leaf sq = flat_leaf(0, 0, 0, 1, 1);
+    xyl_foliage_image_error e;
+    xyl_diag diag = {0};
+    xyl_foliage_image_desc d = {0};
+    d.resolution = 64;
+    assert_int_equal(xyl_foliage_image_error_of(&sq, 1, NULL, 0, &d, &e, &diag), XYL_OK);
+    for (int v = 0; v < XYL_FOLIAGE_IMAGE_VIEWS; ++v) {
+        bool edge_on = v == 9 || v == 12 || v == 15 || v == 18;
+        assert_true(e.coverage[v] == (edge_on ? 0.0 : 1.0));
+        if (edge_on) assert_true(e.rmse[v] == 0.0);
+        else assert_true(e.rmse[v] > 0.1);
+    }
+    assert_near(e.coverage_mean, 0.8, 1e-12);
+    assert_true(e.coverage_worst == 1.0);
+    assert_true(isinf(e.hausdorff));
+    /* seen straight on in its own view (toward (1, 1, 1) / sqrt 3), the square covers the
+       fraction 4 cos / (pi r^2 ... ) of the frame: its shade |n . l| = 3 / sqrt(14) over area
+       4 / sqrt(3) of a (2 sqrt 2)^2 frame gives rmse = shade sqrt(fraction) */
+    double fraction = (4.0 / sqrt(3.0)) / 8.0, shade = 3.0 / sqrt(14.0);
+    assert_near(e.rmse[7], shade * sqrt(fraction), 0.02);
+    /* two squares side by side, one removed: half the covered pixels in every view that sees
+       them, up to the pixels' quantisation */
+    xyl_leaf two[2] = {flat_leaf(-1, 0, 0, 1, 1), flat_leaf(1, 0, 0, 1, 1)};
+    d.resolution = 512;
+    assert_int_equal(xyl_foliage_image_error_of(two, 2, two, 1, &d, &e, &diag), XYL_OK);
+    for (int v = 0; v < XYL_FOLIAGE_IMAGE_VIEWS; ++v) {
+        bool edge_on = v == 9 || v == 12 || v == 15 || v == 18;
+        if (edge_on) assert_true(e.coverage[v] == 0.0);
+        else assert_near(e.coverage[v], 0.5, 0.01);
+    }
+    assert_near(e.coverage_mean, 0.4, 0.01);
+    assert_near(e.hausdorff, 2.0, 1e-6); /* the far edge of the removed square */
+}
+
+static void hausdorff_of_parallel_squares_is_their_offset(void **state)
+{
+    (void)state;
+    const double offsets[4] = {0.0, 0.001, 0.3, 7.0};
+    for (int i = 0; i < 4; ++i) {
+        xyl_leaf a = flat_leaf(0.5f, 0.5f, 0, 0.5f, 0.5f), b = flat_leaf(0.5f, 0.5f, (float)offsets[i], 0.5f, 0.5f);
+        xyl_foliage_image_error e;
+        xyl_diag diag = {0};
+        assert_int_equal(xyl_foliage_image_error_of(&a, 1, &b, 1, NULL, &e, &diag), XYL_OK);
+        assert_near(e.hausdorff, (double)(float)offsets[i], 1e-7);
+    }
+    /* shifted in its plane by 0.25: the far edges are 0.25 from the other square */
+    xyl_leaf a = flat_leaf(0, 0, 0, 0.5f, 0.5f), b = flat_leaf(0.25f, 0, 0, 0.5f, 0.5f);
+    xyl_foliage_image_error e;
+    assert_int_equal(xyl_foliage_image_error_of(&a, 1, &b, 1, NULL, &e, NULL), XYL_OK);
+    assert_near(e.hausdorff, 0.25, 1e-7);
+}
+
+/* Against a brute force over every sample and every quad: the grid search loses nothing. */
+static void hausdorff_matches_a_brute_force(void **state)
+{
+    (void)state;
+    xyl_leaf *a = crown(150, 5), *b = crown(90, 6);
+    for (uint32_t i = 0; i < 90; ++i) b[i].center.x += 0.5f;
+    xyl_foliage_image_desc d = {0};
+    d.hausdorff_step = 0.02f;
+    xyl_foliage_image_error e;
+    assert_int_equal(xyl_foliage_image_error_of(a, 150, b, 90, &d, &e, NULL), XYL_OK);
+    double h = 0.0;
+    for (int dir = 0; dir < 2; ++dir) {
+        const xyl_leaf *p = dir ? b : a, *q = dir ? a : b;
+        uint32_t np = dir ? 90 : 150, nq = dir ? 150 : 90;
+        for (uint32_t i = 0; i < np; ++i) {
+            xyl__dvec3 c = xyl__from_f3(p[i].center), s = xyl__from_f3(p[i].side), t = xyl__from_f3(p[i].axis);
+            double ks = fmax(2, ceil(2 * xyl__d3_len(s) / 0.02f) + 1), kt = fmax(2, ceil(2 * xyl__d3_len(t) / 0.02f) + 1);
+            for (double u = 0; u < ks; ++u)
+                for (double w = 0; w < kt; ++w) {
+                    xyl__dvec3 x = xyl__d3_add(c, xyl__d3_add(xyl__d3_scale(s, -1 + 2 * u / (ks - 1)),
+                                                              xyl__d3_scale(t, -1 + 2 * w / (kt - 1))));
+                    double m = INFINITY;
+                    for (uint32_t j = 0; j < nq; ++j) m = fmin(m, xyl__leaf_quad_distance(x, &q[j]));
+                    h = fmax(h, m);
+                }
+        }
+    }
+    assert_near(e.hausdorff, h, 1e-8); /* the call measures tidied copies */
+    assert_true(h > 0.3);
+    free(a);
+    free(b);
+}
+
+static void image_error_is_deterministic(void **state)
+{
+    (void)state;
+    xyl_leaf *a = crown(800, 8), *b = crown(300, 9);
+    xyl_foliage_image_error e1, e2;
+    memset(&e1, 0x5A, sizeof e1);
+    memset(&e2, 0xA5, sizeof e2);
+    xyl_foliage_image_desc d = {0};
+    d.resolution = 128;
+    assert_int_equal(xyl_foliage_image_error_of(a, 800, b, 300, &d, &e1, NULL), XYL_OK);
+    assert_int_equal(xyl_foliage_image_error_of(a, 800, b, 300, &d, &e2, NULL), XYL_OK);
+    assert_memory_equal(&e1.rmse, &e2.rmse, sizeof e1.rmse);
+    assert_memory_equal(&e1.coverage, &e2.coverage, sizeof e1.coverage);
+    assert_true(e1.hausdorff == e2.hausdorff && e1.rmse_mean == e2.rmse_mean);
+    assert_true(e1.coverage_mean > 0.1 && e1.coverage_worst >= e1.coverage_mean);
+    free(a);
+    free(b);
+}
+
+static void image_error_rejects_bad_input_with_its_code(void **state)
+{
+    (void)state;
+    xyl_leaf good[2] = {flat_leaf(0, 0, 0, 1, 1), flat_leaf(3, 0, 0, 1, 1)};
+    xyl_leaf bad[2] = {good[0], good[1]};
+    xyl_foliage_image_error e, before;
+    memset(&e, 0x3C, sizeof e);
+    before = e;
+    xyl_diag diag = {0};
+    xyl_foliage_image_desc d = {0};
+#define EXPECT(call, want)                                                                         \
+    do {                                                                                           \
+        assert_int_equal((call), (want));                                                          \
+        assert_int_equal(diag.code, (want));                                                       \
+        assert_memory_equal(&e, &before, sizeof e);                                                \
+    } while (0)
+    EXPECT(xyl_foliage_image_error_of(NULL, 0, good, 2, &d, &e, &diag), XYL_ERR_INVALID_ARGUMENT);
+    EXPECT(xyl_foliage_image_error_of(good, 0, good, 2, &d, &e, &diag), XYL_ERR_INVALID_ARGUMENT);
+    EXPECT(xyl_foliage_image_error_of(good, 2, NULL, 2, &d, &e, &diag), XYL_ERR_INVALID_ARGUMENT);
+    EXPECT(xyl_foliage_image_error_of(good, 2, good, 2, &d, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    bad[1].center.y = NAN;
+    EXPECT(xyl_foliage_image_error_of(good, 2, bad, 2, &d, &e, &diag), XYL_ERR_NON_FINITE);
+    assert_int_equal(diag.index, 1);
+    assert_non_null(strstr(diag.message, "approx"));
+    EXPECT(xyl_foliage_image_error_of(bad, 2, good, 2, &d, &e, &diag), XYL_ERR_NON_FINITE);
+    assert_non_null(strstr(diag.message, "reference"));
+    bad[1].center.y = 2e6f;
+    EXPECT(xyl_foliage_image_error_of(bad, 2, good, 2, &d, &e, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    bad[1] = good[1];
+    bad[1].axis.y = 0;
+    EXPECT(xyl_foliage_image_error_of(good, 2, bad, 2, &d, &e, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.resolution = XYL_FOLIAGE_IMAGE_MAX_RESOLUTION + 1;
+    EXPECT(xyl_foliage_image_error_of(good, 2, good, 2, &d, &e, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.resolution = 0;
+    d.hausdorff_step = -1.0f;
+    EXPECT(xyl_foliage_image_error_of(good, 2, good, 2, &d, &e, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.hausdorff_step = NAN;
+    EXPECT(xyl_foliage_image_error_of(good, 2, good, 2, &d, &e, &diag), XYL_ERR_NON_FINITE);
+    d.hausdorff_step = 1e-4f; /* (2e4 + 1)^2 samples a square */
+    EXPECT(xyl_foliage_image_error_of(good, 2, good, 2, &d, &e, &diag), XYL_ERR_LIMIT_EXCEEDED);
+    d.hausdorff_step = 0.0f;
+    d.limits.max_leaves = 1;
+    EXPECT(xyl_foliage_image_error_of(good, 2, good, 1, &d, &e, &diag), XYL_ERR_LIMIT_EXCEEDED);
+#undef EXPECT
+    /* a huge approximation far from the reference is measured, not refused */
+    xyl_leaf far = flat_leaf(9e5f, 0, 0, 9e4f, 9e4f);
+    d.limits.max_leaves = 0;
+    d.hausdorff_step = 1e4f;
+    assert_int_equal(xyl_foliage_image_error_of(good, 2, &far, 1, &d, &e, &diag), XYL_OK);
+    assert_near(e.coverage_mean, 0.8, 1e-12); /* nothing of it in the frame */
+    assert_true(e.hausdorff > 8e5);
+}
+
+/* ---- the leaves of a LOD, and its resolution ----------------------------------------------- */
+
+static xyl_foliage *build(const xyl_leaf *l, uint32_t n, uint32_t sectors)
+{
+    xyl_foliage_desc d = {0};
+    d.leaves = l;
+    d.leaf_count = n;
+    d.sectors = sectors;
+    xyl_foliage *f = NULL;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_build(&d, &f, &diag), XYL_OK);
+    return f;
+}
+
+static void gather_counts_then_fills_the_two_ranges_of_each_sector(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(400, 11);
+    xyl_foliage *f = build(l, 400, 3);
+    uint32_t lods[3] = {0, f->sectors[1].merged_count / 2, f->sectors[2].merged_count};
+    size_t n = 0;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_gather(f, lods, 3, NULL, 0, &n, &diag), XYL_OK);
+    size_t want = 0;
+    for (int s = 0; s < 3; ++s) want += f->sectors[s].lods[lods[s]].a + f->sectors[s].lods[lods[s]].c;
+    assert_int_equal(n, want);
+    xyl_leaf *out = malloc(n * sizeof *out);
+    assert_non_null(out);
+    size_t m = 0;
+    assert_int_equal(xyl_foliage_gather(f, lods, 3, out, n, &m, &diag), XYL_OK);
+    assert_int_equal(m, n);
+    size_t at = 0;
+    uint32_t represented = 0;
+    for (int s = 0; s < 3; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        const xyl_foliage_lod *lod = &sec->lods[lods[s]];
+        for (uint32_t k = 0; k < lod->a; ++k) assert_memory_equal(&out[at++], &f->leaves[sec->base + k], sizeof *out);
+        for (uint32_t k = 0; k < lod->c; ++k)
+            assert_memory_equal(&out[at++], &f->leaves[sec->base + lod->b + k], sizeof *out);
+    }
+    for (size_t k = 0; k < n; ++k) represented += out[k].count;
+    assert_int_equal(represented, 400);
+    /* bad calls leave out and count alone */
+    size_t keep = 77;
+    xyl_leaf first = out[0];
+    assert_int_equal(xyl_foliage_gather(f, lods, 3, out, n - 1, &keep, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_gather(f, lods, 2, out, n, &keep, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_gather(NULL, lods, 3, out, n, &keep, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_gather(f, lods, 3, out, n, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    lods[2] += 1;
+    assert_int_equal(xyl_foliage_gather(f, lods, 3, out, n, &keep, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(diag.index, 2);
+    assert_int_equal(keep, 77);
+    assert_memory_equal(&out[0], &first, sizeof first);
+    free(out);
+    xyl_foliage_destroy(f);
+    free(l);
+}
+
+static void lod_resolution_is_where_the_pick_starts_to_choose_the_lod(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(300, 12);
+    xyl_foliage *f = build(l, 300, 1);
+    const xyl_foliage_sector *s = &f->sectors[0];
+    uint32_t res = 0;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, 0, 0.0f, &res, &diag), XYL_OK);
+    assert_int_equal(res, XYL_FOLIAGE_IMAGE_MAX_RESOLUTION);
+    uint32_t lod = s->merged_count / 2;
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, lod, 1.0f, &res, &diag), XYL_OK);
+    assert_int_equal(res, (uint32_t)floor(2.0 * f->radius / s->lods[lod].error));
+    /* a pixel of 2 radius / res world units is at least lods[lod].error: the pick allows it */
+    assert_true(2.0 * f->radius / res >= s->lods[lod].error);
+    assert_true(2.0 * f->radius / (res + 1) < s->lods[lod].error);
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, s->merged_count, 0.0f, &res, &diag), XYL_OK);
+    assert_true(res >= 1);
+    assert_int_equal(xyl_foliage_lod_resolution(f, 1, 0, 0.0f, &res, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, s->merged_count + 1, 0.0f, &res, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, 0, -1.0f, &res, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, 0, NAN, &res, &diag), XYL_ERR_NON_FINITE);
+    assert_int_equal(xyl_foliage_lod_resolution(NULL, 0, 0, 0.0f, &res, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_lod_resolution(f, 0, 0, 0.0f, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    xyl_foliage_destroy(f);
+    free(l);
+}
+
+/* LOD 0 is the reference; coarser LODs look worse, measured at one resolution. */
+static void image_error_of_lods_is_zero_at_lod_0_and_grows(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(600, 13);
+    xyl_foliage *f = build(l, 600, 1);
+    xyl_leaf *g = malloc(600 * sizeof *g);
+    assert_non_null(g);
+    xyl_foliage_image_desc d = {0};
+    d.resolution = 128;
+    double last = -1.0, last_h = -1.0;
+    const uint32_t lods[4] = {0, 300, 540, 599};
+    for (int i = 0; i < 4; ++i) {
+        size_t n = 0;
+        assert_int_equal(xyl_foliage_gather(f, &lods[i], 1, g, 600, &n, NULL), XYL_OK);
+        assert_int_equal(n, 600 - lods[i]);
+        xyl_foliage_image_error e;
+        assert_int_equal(xyl_foliage_image_error_of(l, 600, g, n, &d, &e, NULL), XYL_OK);
+        if (i == 0) assert_true(e.coverage_mean == 0.0 && e.rmse_mean == 0.0 && e.hausdorff < 1e-7);
+        assert_true(e.coverage_mean > last && e.hausdorff > last_h);
+        last = e.coverage_mean, last_h = e.hausdorff;
+    }
+    free(g);
+    xyl_foliage_destroy(f);
+    free(l);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -219,6 +553,15 @@ int main(void)
         cmocka_unit_test(raster_keeps_the_nearest_leaf_and_skips_edge_on_ones),
         cmocka_unit_test(raster_is_exact_far_from_the_origin_and_for_huge_leaves),
         cmocka_unit_test(dodecahedron_views_are_twenty_unit_frames_framing_the_sphere),
+        cmocka_unit_test(image_error_of_a_set_against_itself_is_zero),
+        cmocka_unit_test(image_error_of_a_removed_square_is_its_coverage),
+        cmocka_unit_test(hausdorff_of_parallel_squares_is_their_offset),
+        cmocka_unit_test(hausdorff_matches_a_brute_force),
+        cmocka_unit_test(image_error_is_deterministic),
+        cmocka_unit_test(image_error_rejects_bad_input_with_its_code),
+        cmocka_unit_test(gather_counts_then_fills_the_two_ranges_of_each_sector),
+        cmocka_unit_test(lod_resolution_is_where_the_pick_starts_to_choose_the_lod),
+        cmocka_unit_test(image_error_of_lods_is_zero_at_lod_0_and_grows),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

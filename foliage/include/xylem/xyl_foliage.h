@@ -281,6 +281,80 @@ typedef struct xyl_foliage_view {
 XYL_API xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
                                     uint32_t *lods, size_t capacity, xyl_diag *diag);
 
+/* ---- the leaves of a LOD and its image error --------------------------------------------- */
+
+/* The leaves drawn for one LOD per sector (lods[s] for sector s, as xyl_foliage_pick gives
+ * them): the two ranges of each sector, sector after sector. Count-then-fill: with out == NULL
+ * sets *count and returns XYL_OK; with capacity < *count, XYL_ERR_INVALID_ARGUMENT. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL foliage, lods or count, lod_count != sector_count, a LOD
+ * beyond its sector's merged_count: diag.index = the sector); out is then untouched.
+ * Allocates nothing. */
+XYL_API xyl_result xyl_foliage_gather(const xyl_foliage *f, const uint32_t *lods, size_t lod_count,
+                                      xyl_leaf *out, size_t capacity, size_t *count, xyl_diag *diag);
+
+#define XYL_FOLIAGE_IMAGE_VIEWS 20              /* the vertices of a regular dodecahedron */
+#define XYL_FOLIAGE_IMAGE_MAX_RESOLUTION 4096
+
+typedef struct xyl_foliage_image_desc {
+    uint32_t resolution;      /* pixels across the framed sphere (each view is resolution x
+                                 resolution); default (0): 256, at most 4096 */
+    float hausdorff_step;     /* world spacing of the points sampled on each quad for the
+                                 Hausdorff distance, which is then exact to within
+                                 step / sqrt(2) below; default (0): one pixel, 2 radius /
+                                 resolution */
+    uint64_t max_samples;     /* points sampled for the Hausdorff distance, both sets together;
+                                 default (0): 1 << 26 */
+    xyl_foliage_limits limits;/* the leaf rules, as xyl_foliage_check_leaves */
+    xyl_allocator alloc;      /* every allocation of the call (freed before it returns) */
+} xyl_foliage_image_desc;
+
+/* How far an approximation of a leaf set looks from it. The image of a view: each pixel the
+ * Lambert shade |normal . light| of the nearest leaf whose projection covers the pixel's
+ * centre (leaves are double-sided; light the fixed unit (1, 2, 3) / sqrt(14)), 0 where none
+ * does. */
+typedef struct xyl_foliage_image_error {
+    double rmse[XYL_FOLIAGE_IMAGE_VIEWS];     /* per view: root mean square of the shade
+                                                 difference over all its pixels */
+    double coverage[XYL_FOLIAGE_IMAGE_VIEWS]; /* per view: pixels covered in exactly one of
+                                                 the two images / pixels covered in either
+                                                 (0 when neither covers any) */
+    double rmse_mean, rmse_worst;             /* over the 20 views */
+    double coverage_mean, coverage_worst;
+    double hausdorff;   /* symmetric Hausdorff distance between the two sets as surfaces, world
+                           units (INFINITY when approx is empty) */
+    xyl_vec3 center;    /* the sphere the views frame: the reference's */
+    float radius;
+    uint32_t resolution;/* the resolution used */
+} xyl_foliage_image_error;
+
+/* Renders both sets from the 20 views (the vertices of a regular dodecahedron around the
+ * REFERENCE's bounding sphere, each an orthographic square framing it) into
+ * resolution x resolution images and compares them pixel by pixel; and measures the
+ * Hausdorff distance by sampling each quad on a grid of spacing at most hausdorff_step
+ * (corners and edges included) and taking each sample's exact distance to the other set's
+ * quads: the result h satisfies H - step / sqrt(2) <= h <= H for the true H.
+ * Deterministic. Errors: XYL_ERR_INVALID_ARGUMENT (NULL reference, approx with a count,
+ * desc or out; an empty reference; a resolution over 4096; a negative step), those of
+ * xyl_foliage_check_leaves for either set (diag.index = the leaf; the message says which
+ * set), XYL_ERR_NON_FINITE (the step), XYL_ERR_LIMIT_EXCEEDED (more samples than
+ * max_samples), XYL_ERR_OUT_OF_MEMORY. desc may be NULL (defaults). On failure *out is
+ * untouched. Time O(views (n + resolution^2) + samples); memory about 24 resolution^2 bytes
+ * plus the sets' grids. */
+XYL_API xyl_result xyl_foliage_image_error_of(const xyl_leaf *reference, size_t reference_count,
+                                              const xyl_leaf *approx, size_t approx_count,
+                                              const xyl_foliage_image_desc *desc,
+                                              xyl_foliage_image_error *out, xyl_diag *diag);
+
+/* The resolution at which xyl_foliage_pick would start to pick LOD lod of sector sector (the
+ * view of the whole foliage's sphere, 2 radius across, whose pixel is lods[lod].error /
+ * error_px world units): floor(2 radius error_px / error), at least 1, and
+ * XYL_FOLIAGE_IMAGE_MAX_RESOLUTION for LOD 0 (error 0) or beyond it. Pass it as the image
+ * desc's resolution to measure a LOD at the size it is drawn. error_px 0 means 0.5, the pick's
+ * default. Errors: XYL_ERR_INVALID_ARGUMENT (NULL foliage or resolution, a sector or LOD that
+ * does not exist, error_px < 0), XYL_ERR_NON_FINITE. Allocates nothing. */
+XYL_API xyl_result xyl_foliage_lod_resolution(const xyl_foliage *f, uint32_t sector, uint32_t lod,
+                                              float error_px, uint32_t *resolution, xyl_diag *diag);
+
 /* ---- the GPU record ------------------------------------------------------------------------ */
 
 /* Packs count leaves into out[0 .. count), one 32-byte xyl_foliage_gpu_leaf each (layout and
