@@ -545,6 +545,184 @@ static void image_error_of_lods_is_zero_at_lod_0_and_grows(void **state)
     free(l);
 }
 
+
+/* ---- the viewpoint-driven collapse --------------------------------------------------------- */
+
+static xyl_foliage *build_viewpoint(const xyl_leaf *l, uint32_t n, uint32_t resolution, float max_distance)
+{
+    xyl_foliage_desc d = {0};
+    d.leaves = l;
+    d.leaf_count = n;
+    d.cost = XYL_FOLIAGE_COST_VIEWPOINT;
+    d.viewpoint.resolution = resolution;
+    d.max_distance = max_distance;
+    xyl_foliage *f = NULL;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_foliage_build(&d, &f, &diag);
+    if (r != XYL_OK) fail_msg("build: %s (%s)", xyl_result_string(r), diag.message);
+    return f;
+}
+
+static void viewpoint_chain_is_deterministic(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(700, 21);
+    xyl_foliage *f = build_viewpoint(l, 700, 96, 0.0f), *g = build_viewpoint(l, 700, 96, 0.0f);
+    assert_int_equal(f->leaf_count, 2 * 700 - 1);
+    assert_int_equal(g->leaf_count, f->leaf_count);
+    assert_memory_equal(f->leaves, g->leaves, f->leaf_count * sizeof *f->leaves);
+    assert_memory_equal(f->links, g->links, f->leaf_count * sizeof *f->links);
+    assert_memory_equal(f->sectors[0].lods, g->sectors[0].lods, 700 * sizeof *f->sectors[0].lods);
+    /* and it is not the Hidalgo chain */
+    xyl_foliage *h = build(l, 700, 1);
+    assert_true(memcmp(f->links, h->links, f->leaf_count * sizeof *f->links) != 0);
+    xyl_foliage_destroy(f);
+    xyl_foliage_destroy(g);
+    xyl_foliage_destroy(h);
+    free(l);
+}
+
+/* Two large leaves and a small one between them: the small one is the least visible in every
+ * view, so the first merge takes it. */
+static void viewpoint_chain_merges_the_least_visible_leaf_first(void **state)
+{
+    (void)state;
+    xyl_leaf l[3] = {flat_leaf(-2, 0, 0, 1, 1), flat_leaf(2.5f, 0, 0, 1, 1), flat_leaf(0, 0, 0, 0.1f, 0.1f)};
+    l[1].normal = (xyl_vec3){0, 1, 0};
+    l[1].axis = (xyl_vec3){0, 0, -1};
+    xyl_foliage *f = build_viewpoint(l, 3, 128, 0.0f);
+    /* LOD 1 draws one original, stored first (originals by decreasing LOD of death): not it */
+    assert_int_equal(f->sectors[0].lods[1].a, 1);
+    for (size_t k = 0; k < 3; ++k)
+        if (f->links[k].source == 2) assert_true(k >= 1);
+    xyl_foliage_destroy(f);
+}
+
+static void viewpoint_chain_keeps_the_distance_threshold(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(600, 22);
+    xyl_foliage *f = build_viewpoint(l, 600, 64, 0.3f);
+    const xyl_foliage_sector *s = &f->sectors[0];
+    assert_true(s->merged_count > 0 && s->merged_count < 599);
+    assert_int_equal(f->coarsest_count, 600 - s->merged_count);
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        const xyl_leaf_link *ln = &f->links[k];
+        if (ln->source != UINT32_MAX) continue;
+        xyl_vec3 a = f->leaves[ln->children[0]].center, b = f->leaves[ln->children[1]].center;
+        double dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+        assert_true(sqrt(dx * dx + dy * dy + dz * dz) <= 0.3 * (1 + 1e-6));
+    }
+    xyl_foliage_destroy(f);
+    free(l);
+}
+
+static void viewpoint_options_are_checked(void **state)
+{
+    (void)state;
+    xyl_leaf l[2] = {flat_leaf(0, 0, 0, 1, 1), flat_leaf(3, 0, 0, 1, 1)};
+    xyl_foliage_desc d = {0};
+    d.leaves = l;
+    d.leaf_count = 2;
+    xyl_foliage *f = (xyl_foliage *)(uintptr_t)1;
+    xyl_diag diag = {0};
+    d.cost = (xyl_foliage_cost)2;
+    assert_int_equal(xyl_foliage_build(&d, &f, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.cost = XYL_FOLIAGE_COST_VIEWPOINT;
+    d.viewpoint.resolution = XYL_FOLIAGE_IMAGE_MAX_RESOLUTION + 1;
+    assert_int_equal(xyl_foliage_build(&d, &f, &diag), XYL_ERR_INVALID_ARGUMENT);
+    d.viewpoint.resolution = 0;
+    d.viewpoint.cell_leaves = 9;
+    assert_int_equal(xyl_foliage_build(&d, &f, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_ptr_equal(f, (xyl_foliage *)(uintptr_t)1);
+    d.viewpoint.cell_leaves = 1;
+    d.viewpoint.resolution = 1;
+    assert_int_equal(xyl_foliage_build(&d, &f, &diag), XYL_OK);
+    assert_int_equal(f->sectors[0].merged_count, 1);
+    xyl_foliage_destroy(f);
+}
+
+static void viewpoint_build_survives_every_allocation_failure(void **state)
+{
+    (void)state;
+    xyl_leaf *l = crown(150, 23);
+    for (size_t fail = 1;; ++fail) {
+        tu_counter c = {0, 0, 0, fail};
+        xyl_foliage_desc d = {0};
+        d.leaves = l;
+        d.leaf_count = 150;
+        d.sectors = 2;
+        d.cost = XYL_FOLIAGE_COST_VIEWPOINT;
+        d.viewpoint.resolution = 32;
+        d.alloc = tu_counting(&c);
+        xyl_foliage *f = (xyl_foliage *)(uintptr_t)1;
+        xyl_result r = xyl_foliage_build(&d, &f, NULL);
+        if (c.attempts < fail) {
+            assert_int_equal(r, XYL_OK);
+            xyl_foliage_destroy(f);
+            assert_int_equal(c.allocs, c.frees);
+            break;
+        }
+        assert_int_equal(r, XYL_ERR_OUT_OF_MEMORY);
+        assert_ptr_equal(f, (xyl_foliage *)(uintptr_t)1);
+        assert_int_equal(c.allocs, c.frees);
+    }
+    free(l);
+}
+
+/* The coverage error of `live` leaves of a chain (replayed from its children) against the
+ * originals. */
+static double chain_coverage(const xyl_leaf *orig, const xyl_leaf *chain, const uint32_t *children,
+                             uint32_t n, uint32_t live)
+{
+    uint8_t *alive = calloc(2 * n, 1);
+    xyl_leaf *g = malloc(2 * n * sizeof *g);
+    assert_true(alive && g);
+    memset(alive, 1, n);
+    uint32_t k = 0;
+    for (; n - k > live; ++k) alive[children[2 * k]] = alive[children[2 * k + 1]] = 0, alive[n + k] = 1;
+    size_t m = 0;
+    for (uint32_t i = 0; i < n + k; ++i)
+        if (alive[i]) g[m++] = chain[i];
+    xyl_foliage_image_desc d = {0};
+    d.resolution = 128;
+    xyl_foliage_image_error e;
+    assert_int_equal(xyl_foliage_image_error_of(orig, n, g, m, &d, &e, NULL), XYL_OK);
+    free(alive);
+    free(g);
+    return e.coverage_mean;
+}
+
+/* Between renders the merged leaves' visible pixels are estimated; rendering after every
+ * merge instead gives LODs that look nearly the same. */
+static void viewpoint_estimates_stay_near_an_exact_recomputation(void **state)
+{
+    (void)state;
+    enum { N = 240 };
+    xyl_leaf *l = crown(N, 24);
+    double cov[2][3];
+    for (int exact = 0; exact < 2; ++exact) {
+        xyl_leaf *c = malloc(2 * N * sizeof *c);
+        float *e = malloc(2 * N * sizeof *e);
+        uint32_t *ch = malloc(2 * N * sizeof *ch), m = 0;
+        assert_true(c && e && ch);
+        memcpy(c, l, N * sizeof *l);
+        xyl__viewpoint_options o = {64, XYL__GRID_K, exact ? 1u : 0u, INFINITY, INFINITY};
+        xyl__viewpoint_stats st;
+        assert_int_equal(xyl__collapse_viewpoint(c, e, ch, N, &o, NULL, &m, &st, NULL), XYL_OK);
+        assert_int_equal(m, N - 1);
+        if (exact) assert_int_equal(st.renders, N - 1); /* before every merge but the first */
+        else assert_true(st.renders < N / 3);
+        const uint32_t live[3] = {N / 2, N / 4, N / 10};
+        for (int i = 0; i < 3; ++i) cov[exact][i] = chain_coverage(l, c, ch, N, live[i]);
+        free(c);
+        free(e);
+        free(ch);
+    }
+    for (int i = 0; i < 3; ++i) assert_near(cov[0][i], cov[1][i], 0.03);
+    free(l);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -562,6 +740,12 @@ int main(void)
         cmocka_unit_test(gather_counts_then_fills_the_two_ranges_of_each_sector),
         cmocka_unit_test(lod_resolution_is_where_the_pick_starts_to_choose_the_lod),
         cmocka_unit_test(image_error_of_lods_is_zero_at_lod_0_and_grows),
+        cmocka_unit_test(viewpoint_chain_is_deterministic),
+        cmocka_unit_test(viewpoint_chain_merges_the_least_visible_leaf_first),
+        cmocka_unit_test(viewpoint_chain_keeps_the_distance_threshold),
+        cmocka_unit_test(viewpoint_options_are_checked),
+        cmocka_unit_test(viewpoint_build_survives_every_allocation_failure),
+        cmocka_unit_test(viewpoint_estimates_stay_near_an_exact_recomputation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -209,4 +209,31 @@ xyl__dvec3 xyl__raster_light(void);
  * of i is set), b = +-phi (+ when bit 1 is). */
 void xyl__dodecahedron_views(xyl__dvec3 center, double radius, xyl__ortho_view out[XYL__VIEWS]);
 
+/* ---- the viewpoint-driven collapse (viewpoint.c) ---- */
+
+#define XYL__VIEWPOINT_RESOLUTION 128 /* default z-buffer width and height per view */
+
+typedef struct xyl__viewpoint_options {
+    uint32_t resolution;  /* z-buffer width and height of each of the 20 views, 1 .. XYL__RASTER_MAX */
+    uint32_t cell_leaves; /* N': the candidates, the nearest live leaves, 1 .. XYL__GRID_K */
+    uint32_t refresh;     /* merges between renders of the views; 0: a sixteenth of the live leaves */
+    double max_distance;  /* between centres; INFINITY: no threshold */
+    double max_angle;     /* between normals, radians; INFINITY: no threshold */
+} xyl__viewpoint_options;
+
+typedef struct xyl__viewpoint_stats {
+    uint64_t renders, queries, candidates;
+    size_t bytes; /* scratch memory */
+} xyl__viewpoint_stats;
+
+/* Runs the viewpoint-driven chain on leaves[0 .. n) (checked and tidy) with the same output as
+ * xyl__collapse: leaves[n .. n + *merges) the merged leaves in the order they were made, merge
+ * k joined children[2k] < children[2k + 1], error[] the bounds. The least visible live leaf
+ * (its pixels summed over the 20 views) merges with the one of its cell_leaves nearest live
+ * leaves that changes the mutual information I(V, L) least; a leaf with no candidate within
+ * the thresholds is passed over. Deterministic. Errors: XYL_ERR_OUT_OF_MEMORY only. */
+xyl_result xyl__collapse_viewpoint(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
+                                   const xyl__viewpoint_options *o, const xyl_allocator *a,
+                                   uint32_t *merges, xyl__viewpoint_stats *stats, xyl_diag *diag);
+
 #endif

@@ -173,6 +173,24 @@ typedef struct xyl_collapse_weights {
                           such distance of a leaf centre: inner pairs merge first */
 } xyl_collapse_weights;
 
+/* What the chain merges by. */
+typedef enum xyl_foliage_cost {
+    XYL_FOLIAGE_COST_HIDALGO = 0,  /* the weighted five-term cost of the pair (weights above) */
+    XYL_FOLIAGE_COST_VIEWPOINT = 1 /* viewpoint-driven (Sulan Zhang): the least visible leaf,
+                                      seen from the 20 vertices of a dodecahedron around the
+                                      sector, merges with the candidate near it that changes
+                                      the mutual information between views and leaves least
+                                      (docs/foliage.md); the weights are not used, the
+                                      thresholds are */
+} xyl_foliage_cost;
+
+typedef struct xyl_foliage_viewpoint {
+    uint32_t resolution;  /* z-buffer width and height of each view, pixels across the
+                             sector's bounding sphere; default (0): 128, at most 4096 */
+    uint32_t cell_leaves; /* N': the candidates, the nearest live leaves to the least visible
+                             one; default (0): 8, at most 8 */
+} xyl_foliage_viewpoint;
+
 typedef struct xyl_foliage_desc {
     const xyl_leaf *leaves;   /* checked as xyl_foliage_check_leaves does */
     size_t leaf_count;        /* 0 is fine: an empty foliage */
@@ -187,6 +205,8 @@ typedef struct xyl_foliage_desc {
     uint32_t sectors;         /* the crown split by azimuth about the trunk axis into this many
                                  equal sectors, each collapsed on its own with its own LODs
                                  (ERA); default (0): 1, at most XYL_FOLIAGE_MAX_SECTORS */
+    xyl_foliage_cost cost;    /* default (0): XYL_FOLIAGE_COST_HIDALGO */
+    xyl_foliage_viewpoint viewpoint; /* options of XYL_FOLIAGE_COST_VIEWPOINT */
     xyl_foliage_limits limits;
     xyl_allocator alloc;      /* every allocation of the build and of the foliage it makes */
 } xyl_foliage_desc;
