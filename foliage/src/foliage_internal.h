@@ -216,7 +216,7 @@ void xyl__dodecahedron_views(xyl__dvec3 center, double radius, xyl__ortho_view o
 typedef struct xyl__viewpoint_options {
     uint32_t resolution;  /* z-buffer width and height of each of the 20 views, 1 .. XYL__RASTER_MAX */
     uint32_t cell_leaves; /* N': the candidates, the nearest live leaves, 1 .. XYL__GRID_K */
-    uint32_t refresh;     /* merges between renders of the views; 0: a sixteenth of the live leaves */
+    uint32_t refresh;     /* merges between renders of the views; 0: max(live / 16, 8) */
     double max_distance;  /* between centres; INFINITY: no threshold */
     double max_angle;     /* between normals, radians; INFINITY: no threshold */
 } xyl__viewpoint_options;

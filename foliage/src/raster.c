@@ -133,24 +133,35 @@ static void fill(xyl__raster *r, const int64_t (*v)[2], int n, const double plan
         e[i].inclusive = e[i].dy < 0 || (e[i].dy == 0 && e[i].dx > 0);
     }
     for (int64_t y = y0; y <= y1; ++y) {
-        int64_t row[MAX_VERTS];
-        for (int i = 0; i < n; ++i) row[i] = e[i].e;
+        /* the covered pixels of a row are a span: along the row each edge function falls by
+           dy * 256 a pixel, so each edge bounds it on one side, in exact integers */
+        int64_t first = 0, last = x1 - x0;
+        for (int i = 0; i < n && first <= last; ++i) {
+            int64_t t = e[i].inclusive ? 0 : 1, d = e[i].dy * 256, f = e[i].e;
+            if (d == 0) {
+                if (f < t) last = -1;
+            } else if (d > 0) { /* f - d k >= t  <=>  k <= (f - t) / d */
+                if (f - t < 0) last = -1;
+                else if ((f - t) / d < last) last = (f - t) / d;
+            } else { /* k >= (t - f) / -d */
+                int64_t k = t - f <= 0 ? 0 : (t - f + (-d) - 1) / (-d);
+                if (k > first) first = k;
+            }
+        }
+        for (int i = 0; i < n; ++i) e[i].e += e[i].dx * 256;
+        if (first > last) continue;
         double zy = plane[0] + plane[2] * ((double)y + 0.5);
-        for (int64_t x = x0; x <= x1; ++x) {
-            bool in = true;
-            for (int i = 0; i < n && in; ++i) in = row[i] > 0 || (row[i] == 0 && e[i].inclusive);
-            for (int i = 0; i < n; ++i) row[i] -= e[i].dy * 256;
-            if (!in) continue;
+        size_t base = (size_t)y * r->width;
+        for (int64_t x = x0 + first; x <= x0 + last; ++x) {
             double z = zy + plane[1] * ((double)x + 0.5);
             z = z < zlo ? zlo : z > zhi ? zhi : z;
-            size_t k = (size_t)y * r->width + (size_t)x;
+            size_t k = base + (size_t)x;
             if ((float)z > r->depth[k]) {
                 r->depth[k] = (float)z;
                 r->id[k] = id;
                 r->shade[k] = shade;
             }
         }
-        for (int i = 0; i < n; ++i) e[i].e += e[i].dx * 256;
     }
 }
 

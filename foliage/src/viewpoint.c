@@ -14,8 +14,8 @@
  * merged leaf's visible pixels in view v are estimated: its children's visible fraction of
  * their projected area ((a_vp + a_vq) / (P_vp + P_vq), P the unoccluded projected area) times
  * its own projected area P_vr; every leaf else keeps its pixels. The views are rendered again
- * whenever the live leaves have dropped by a sixteenth (or every `refresh` merges), which
- * replaces every estimate by the truth. */
+ * after every max(live / 16, 8) merges (or every `refresh`), which replaces every estimate by
+ * the truth: O(log n) renders down to 128 leaves, then one per 8 merges. */
 #include <string.h>
 
 #include "foliage_internal.h"
@@ -236,7 +236,7 @@ static void run(vp *c)
     xyl__grid_build(&c->g, c->leaves, c->n);
     render(c);
     while (c->live > 1 && c->heap_count > 0) {
-        uint32_t period = c->o->refresh ? c->o->refresh : (c->live / 16 ? c->live / 16 : 1);
+        uint32_t period = c->o->refresh ? c->o->refresh : (c->live / 16 > 8 ? c->live / 16 : 8);
         if (c->since_render >= period) render(c);
         entry e = heap_pop(c);
         if (!c->alive[e.leaf]) continue;
