@@ -33,10 +33,20 @@
  *     const xyl_foliage_sector *s = &f->sectors[0];
  *     const xyl_foliage_lod *l = &s->lods[lod[0]];
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
+ *
+ *     // how a LOD looks against all the leaves: its leaves (count, then fill), then RMSE and
+ *     // coverage over 20 views, and the Hausdorff distance
+ *     size_t m = 0;
+ *     xyl_foliage_gather(f, lod, 1, NULL, 0, &m, &diag);
+ *     xyl_leaf *approx = malloc((m ? m : 1) * sizeof *approx);
+ *     xyl_foliage_gather(f, lod, 1, approx, m, &m, &diag);
+ *     xyl_foliage_image_error e;
+ *     xyl_foliage_image_error_of(leaves, n, approx, m, NULL, &e, &diag);
  *     xyl_foliage_destroy(f);
  *
- * Every call is reentrant; only xyl_foliage_build allocates (through its desc's allocator). A
- * foliage is immutable once built, so threads may read it at once.
+ * Every call is reentrant; only xyl_foliage_build and xyl_foliage_image_error_of allocate
+ * (through their desc's allocator). A foliage is immutable once built, so threads may read it
+ * at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
