@@ -45,6 +45,12 @@ static xyl_result check_options(const xyl_foliage_desc *d, xyl_diag *diag)
         return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "a threshold or the axis is NaN or infinite");
     if (d->max_distance < 0.0f || d->max_angle < 0.0f)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "thresholds must be >= 0 (0: none)");
+    if (d->cost != XYL_FOLIAGE_COST_HIDALGO && d->cost != XYL_FOLIAGE_COST_VIEWPOINT)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "cost %d is not a xyl_foliage_cost", (int)d->cost);
+    if (d->viewpoint.resolution > XYL_FOLIAGE_IMAGE_MAX_RESOLUTION || d->viewpoint.cell_leaves > XYL__GRID_K)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "viewpoint: resolution at most %u, cell_leaves at most %u",
+                         XYL_FOLIAGE_IMAGE_MAX_RESOLUTION, XYL__GRID_K);
     if (d->sectors > XYL_FOLIAGE_MAX_SECTORS)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "%u sectors; at most %u",
                          d->sectors, XYL_FOLIAGE_MAX_SECTORS);
@@ -138,15 +144,31 @@ static bool alloc_build(build *b, const xyl_allocator *a, size_t n, uint32_t sec
            b->children && b->source;
 }
 
+/* The viewpoint options as the chain takes them; NULL for the Hidalgo cost. */
+static const xyl__viewpoint_options *resolve_viewpoint(const xyl_foliage_desc *d,
+                                                       const xyl__collapse_options *o,
+                                                       xyl__viewpoint_options *vo)
+{
+    if (d->cost != XYL_FOLIAGE_COST_VIEWPOINT) return NULL;
+    vo->resolution = d->viewpoint.resolution ? d->viewpoint.resolution : XYL__VIEWPOINT_RESOLUTION;
+    vo->cell_leaves = d->viewpoint.cell_leaves ? d->viewpoint.cell_leaves : XYL__GRID_K;
+    vo->refresh = 0;
+    vo->max_distance = o->max_distance;
+    vo->max_angle = o->max_angle;
+    return vo;
+}
+
 /* Collapses one sector whose originals are already at leaves[base ..] (their indices in the
- * desc in source[]) and lays it out there. */
+ * desc in source[]) and lays it out there; by the viewpoint-driven chain when vo is given. */
 static xyl_result build_sector(build *b, xyl_foliage_sector *s, const uint32_t *source,
                                xyl_foliage_lod *lods, const xyl__collapse_options *o,
-                               const xyl_allocator *a, xyl_diag *diag)
+                               const xyl__viewpoint_options *vo, const xyl_allocator *a,
+                               xyl_diag *diag)
 {
     xyl_leaf *leaves = b->f->leaves + s->base;
     uint32_t n = s->original_count, m = 0;
-    xyl_result r = xyl__collapse(leaves, b->error, b->children, n, o, a, &m, NULL, diag);
+    xyl_result r = vo ? xyl__collapse_viewpoint(leaves, b->error, b->children, n, vo, a, &m, NULL, diag)
+                      : xyl__collapse(leaves, b->error, b->children, n, o, a, &m, NULL, diag);
     if (r == XYL_OK)
         r = xyl__linearize(leaves, b->error, b->children, n, m, s->base, source,
                            b->f->links + s->base, lods, a, diag);
@@ -240,6 +262,8 @@ xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out, xy
     size_t n = desc->leaf_count;
     xyl__collapse_options o;
     resolve_options(desc, desc->leaves, (uint32_t)n, &o);
+    xyl__viewpoint_options vo;
+    const xyl__viewpoint_options *view = resolve_viewpoint(desc, &o, &vo);
     sectors sc = {desc->sectors ? desc->sectors : 1, o.axis_origin, o.axis_direction,
                   azimuth_zero(o.axis_direction), xyl__d3(0, 0, 0)};
     sc.quarter = xyl__d3_cross(sc.axis, sc.zero);
@@ -256,7 +280,7 @@ xyl_result xyl_foliage_build(const xyl_foliage_desc *desc, xyl_foliage **out, xy
         sector->base = base;
         memmove(f->leaves + base, originals_end(f, n) + first,
                 sector->original_count * sizeof *f->leaves);
-        r = build_sector(&b, sector, b.source + first, f->lods + lods, &o, a, diag);
+        r = build_sector(&b, sector, b.source + first, f->lods + lods, &o, view, a, diag);
         base += sector->original_count + sector->merged_count;
         first += sector->original_count;
         lods += sector->merged_count + 1;

@@ -162,4 +162,78 @@ xyl_result xyl__linearize(xyl_leaf *leaves, const float *error, const uint32_t *
                           xyl_leaf_link *links, xyl_foliage_lod *lods, const xyl_allocator *a,
                           xyl_diag *diag);
 
+/* ---- the CPU rasteriser of leaf quads (raster.c) ---- */
+
+#define XYL__VIEWS 20                /* the vertices of a regular dodecahedron */
+#define XYL__RASTER_MAX 8192         /* the widest and tallest image */
+#define XYL__RASTER_NONE UINT32_MAX  /* the id of a pixel no leaf covers */
+
+/* An orthographic view: the point at the image's centre, a right-handed unit frame with
+ * toward pointing from the scene to the eye (right x up = toward), and the world half-width
+ * of the image; pixels are square, so the height follows from the image's aspect. */
+typedef struct xyl__ortho_view {
+    xyl__dvec3 center, right, up, toward;
+    double half;
+} xyl__ortho_view;
+
+/* An owned width x height image, row 0 at the top: per pixel the depth of the nearest leaf
+ * (along toward, relative to the view's centre: larger is nearer; -inf for none), its id and
+ * its shade (0 for none). */
+typedef struct xyl__raster {
+    uint32_t width, height;
+    float *depth;
+    uint32_t *id;
+    float *shade;
+} xyl__raster;
+
+/* A cleared image; XYL_ERR_INVALID_ARGUMENT for a size of 0 or over XYL__RASTER_MAX,
+ * XYL_ERR_OUT_OF_MEMORY (nothing left allocated). */
+xyl_result xyl__raster_init(xyl__raster *r, uint32_t width, uint32_t height, const xyl_allocator *a);
+void xyl__raster_free(xyl__raster *r, const xyl_allocator *a);
+void xyl__raster_clear(xyl__raster *r);
+/* Draws one leaf (a tidy or checked one) with the given id and shade where it is nearer than
+ * what is there (ties: what was drawn first stays). A pixel is covered when its centre lies
+ * inside the projected quad, or on a top or left edge of it (vertices snapped to 1/256 pixel);
+ * a quad seen edge-on covers nothing. */
+void xyl__raster_leaf(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *leaf, uint32_t id,
+                      float shade);
+/* Draws leaves[i] with id i and the Lambert shade |normal . light| (double-sided leaves). */
+void xyl__raster_leaves(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *leaves, size_t n,
+                        xyl__dvec3 light);
+/* The fixed light of the image error: unit (1, 2, 3) / sqrt(14). */
+xyl__dvec3 xyl__raster_light(void);
+/* The 20 views from the vertices of a regular dodecahedron, each an orthographic square
+ * framing the sphere (center, radius) with up as near world +Y as it can be: views 0-7 look
+ * from (+-1, +-1, +-1) / sqrt(3) (bit 0 of the view: +x, bit 1: +y, bit 2: +z), then for
+ * i = 0 .. 3 from (0, a, b), (a, b, 0), (b, 0, a) / sqrt(3) in turn, a = +-1/phi (+ when bit 0
+ * of i is set), b = +-phi (+ when bit 1 is). */
+void xyl__dodecahedron_views(xyl__dvec3 center, double radius, xyl__ortho_view out[XYL__VIEWS]);
+
+/* ---- the viewpoint-driven collapse (viewpoint.c) ---- */
+
+#define XYL__VIEWPOINT_RESOLUTION 128 /* default z-buffer width and height per view */
+
+typedef struct xyl__viewpoint_options {
+    uint32_t resolution;  /* z-buffer width and height of each of the 20 views, 1 .. XYL__RASTER_MAX */
+    uint32_t cell_leaves; /* N': the candidates, the nearest live leaves, 1 .. XYL__GRID_K */
+    uint32_t refresh;     /* merges between renders of the views; 0: max(live / 16, 8) */
+    double max_distance;  /* between centres; INFINITY: no threshold */
+    double max_angle;     /* between normals, radians; INFINITY: no threshold */
+} xyl__viewpoint_options;
+
+typedef struct xyl__viewpoint_stats {
+    uint64_t renders, queries, candidates;
+    size_t bytes; /* scratch memory */
+} xyl__viewpoint_stats;
+
+/* Runs the viewpoint-driven chain on leaves[0 .. n) (checked and tidy) with the same output as
+ * xyl__collapse: leaves[n .. n + *merges) the merged leaves in the order they were made, merge
+ * k joined children[2k] < children[2k + 1], error[] the bounds. The least visible live leaf
+ * (its pixels summed over the 20 views) merges with the one of its cell_leaves nearest live
+ * leaves that changes the mutual information I(V, L) least; a leaf with no candidate within
+ * the thresholds is passed over. Deterministic. Errors: XYL_ERR_OUT_OF_MEMORY only. */
+xyl_result xyl__collapse_viewpoint(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
+                                   const xyl__viewpoint_options *o, const xyl_allocator *a,
+                                   uint32_t *merges, xyl__viewpoint_stats *stats, xyl_diag *diag);
+
 #endif

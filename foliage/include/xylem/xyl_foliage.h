@@ -38,9 +38,19 @@
  *     const xyl_foliage_sector *s = &f->sectors[0];
  *     const xyl_foliage_lod *l = &s->lods[lod[0]];
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
+ *
+ *     // how a LOD looks against all the leaves: its leaves (count, then fill), then RMSE and
+ *     // coverage over 20 views, and the Hausdorff distance
+ *     size_t m = 0;
+ *     xyl_foliage_gather(f, lod, 1, NULL, 0, &m, &diag);
+ *     xyl_leaf *approx = malloc((m ? m : 1) * sizeof *approx);
+ *     xyl_foliage_gather(f, lod, 1, approx, m, &m, &diag);
+ *     xyl_foliage_image_error e;
+ *     xyl_foliage_image_error_of(leaves, n, approx, m, NULL, &e, &diag);
  *     xyl_foliage_destroy(f);
  *
- * Every call is reentrant; only xyl_foliage_build and xyl_foliage_leaves_from_obj allocate
+ * Every call is reentrant; only xyl_foliage_build, xyl_foliage_leaves_from_obj and
+ * xyl_foliage_image_error_of allocate
  * (through their desc's allocator). A foliage is immutable once built, so threads may read it
  * at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
@@ -243,6 +253,24 @@ typedef struct xyl_collapse_weights {
                           such distance of a leaf centre: inner pairs merge first */
 } xyl_collapse_weights;
 
+/* What the chain merges by. */
+typedef enum xyl_foliage_cost {
+    XYL_FOLIAGE_COST_HIDALGO = 0,  /* the weighted five-term cost of the pair (weights above) */
+    XYL_FOLIAGE_COST_VIEWPOINT = 1 /* viewpoint-driven (Sulan Zhang): the least visible leaf,
+                                      seen from the 20 vertices of a dodecahedron around the
+                                      sector, merges with the candidate near it that changes
+                                      the mutual information between views and leaves least
+                                      (docs/foliage.md); the weights are not used, the
+                                      thresholds are */
+} xyl_foliage_cost;
+
+typedef struct xyl_foliage_viewpoint {
+    uint32_t resolution;  /* z-buffer width and height of each view, pixels across the
+                             sector's bounding sphere; default (0): 128, at most 4096 */
+    uint32_t cell_leaves; /* N': the candidates, the nearest live leaves to the least visible
+                             one; default (0): 8, at most 8 */
+} xyl_foliage_viewpoint;
+
 typedef struct xyl_foliage_desc {
     const xyl_leaf *leaves;   /* checked as xyl_foliage_check_leaves does */
     size_t leaf_count;        /* 0 is fine: an empty foliage */
@@ -257,6 +285,8 @@ typedef struct xyl_foliage_desc {
     uint32_t sectors;         /* the crown split by azimuth about the trunk axis into this many
                                  equal sectors, each collapsed on its own with its own LODs
                                  (ERA); default (0): 1, at most XYL_FOLIAGE_MAX_SECTORS */
+    xyl_foliage_cost cost;    /* default (0): XYL_FOLIAGE_COST_HIDALGO */
+    xyl_foliage_viewpoint viewpoint; /* options of XYL_FOLIAGE_COST_VIEWPOINT */
     xyl_foliage_limits limits;
     xyl_allocator alloc;      /* every allocation of the build and of the foliage it makes */
 } xyl_foliage_desc;
@@ -350,6 +380,80 @@ typedef struct xyl_foliage_view {
  * untouched. Allocates nothing. */
 XYL_API xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
                                     uint32_t *lods, size_t capacity, xyl_diag *diag);
+
+/* ---- the leaves of a LOD and its image error --------------------------------------------- */
+
+/* The leaves drawn for one LOD per sector (lods[s] for sector s, as xyl_foliage_pick gives
+ * them): the two ranges of each sector, sector after sector. Count-then-fill: with out == NULL
+ * sets *count and returns XYL_OK; with capacity < *count, XYL_ERR_INVALID_ARGUMENT. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL foliage, lods or count, lod_count != sector_count, a LOD
+ * beyond its sector's merged_count: diag.index = the sector); out is then untouched.
+ * Allocates nothing. */
+XYL_API xyl_result xyl_foliage_gather(const xyl_foliage *f, const uint32_t *lods, size_t lod_count,
+                                      xyl_leaf *out, size_t capacity, size_t *count, xyl_diag *diag);
+
+#define XYL_FOLIAGE_IMAGE_VIEWS 20              /* the vertices of a regular dodecahedron */
+#define XYL_FOLIAGE_IMAGE_MAX_RESOLUTION 4096
+
+typedef struct xyl_foliage_image_desc {
+    uint32_t resolution;      /* pixels across the framed sphere (each view is resolution x
+                                 resolution); default (0): 256, at most 4096 */
+    float hausdorff_step;     /* world spacing of the points sampled on each quad for the
+                                 Hausdorff distance, which is then exact to within
+                                 step / sqrt(2) below; default (0): one pixel, 2 radius /
+                                 resolution */
+    uint64_t max_samples;     /* points sampled for the Hausdorff distance, both sets together;
+                                 default (0): 1 << 26 */
+    xyl_foliage_limits limits;/* the leaf rules, as xyl_foliage_check_leaves */
+    xyl_allocator alloc;      /* every allocation of the call (freed before it returns) */
+} xyl_foliage_image_desc;
+
+/* How far an approximation of a leaf set looks from it. The image of a view: each pixel the
+ * Lambert shade |normal . light| of the nearest leaf whose projection covers the pixel's
+ * centre (leaves are double-sided; light the fixed unit (1, 2, 3) / sqrt(14)), 0 where none
+ * does. */
+typedef struct xyl_foliage_image_error {
+    double rmse[XYL_FOLIAGE_IMAGE_VIEWS];     /* per view: root mean square of the shade
+                                                 difference over all its pixels */
+    double coverage[XYL_FOLIAGE_IMAGE_VIEWS]; /* per view: pixels covered in exactly one of
+                                                 the two images / pixels covered in either
+                                                 (0 when neither covers any) */
+    double rmse_mean, rmse_worst;             /* over the 20 views */
+    double coverage_mean, coverage_worst;
+    double hausdorff;   /* symmetric Hausdorff distance between the two sets as surfaces, world
+                           units (INFINITY when approx is empty) */
+    xyl_vec3 center;    /* the sphere the views frame: the reference's */
+    float radius;
+    uint32_t resolution;/* the resolution used */
+} xyl_foliage_image_error;
+
+/* Renders both sets from the 20 views (the vertices of a regular dodecahedron around the
+ * REFERENCE's bounding sphere, each an orthographic square framing it) into
+ * resolution x resolution images and compares them pixel by pixel; and measures the
+ * Hausdorff distance by sampling each quad on a grid of spacing at most hausdorff_step
+ * (corners and edges included) and taking each sample's exact distance to the other set's
+ * quads: the result h satisfies H - step / sqrt(2) <= h <= H for the true H.
+ * Deterministic. Errors: XYL_ERR_INVALID_ARGUMENT (NULL reference, approx with a count,
+ * desc or out; an empty reference; a resolution over 4096; a negative step), those of
+ * xyl_foliage_check_leaves for either set (diag.index = the leaf; the message says which
+ * set), XYL_ERR_NON_FINITE (the step), XYL_ERR_LIMIT_EXCEEDED (more samples than
+ * max_samples), XYL_ERR_OUT_OF_MEMORY. desc may be NULL (defaults). On failure *out is
+ * untouched. Time O(views (n + resolution^2) + samples); memory about 24 resolution^2 bytes
+ * plus the sets' grids. */
+XYL_API xyl_result xyl_foliage_image_error_of(const xyl_leaf *reference, size_t reference_count,
+                                              const xyl_leaf *approx, size_t approx_count,
+                                              const xyl_foliage_image_desc *desc,
+                                              xyl_foliage_image_error *out, xyl_diag *diag);
+
+/* The resolution at which xyl_foliage_pick would start to pick LOD lod of sector sector (the
+ * view of the whole foliage's sphere, 2 radius across, whose pixel is lods[lod].error /
+ * error_px world units): floor(2 radius error_px / error), at least 1, and
+ * XYL_FOLIAGE_IMAGE_MAX_RESOLUTION for LOD 0 (error 0) or beyond it. Pass it as the image
+ * desc's resolution to measure a LOD at the size it is drawn. error_px 0 means 0.5, the pick's
+ * default. Errors: XYL_ERR_INVALID_ARGUMENT (NULL foliage or resolution, a sector or LOD that
+ * does not exist, error_px < 0), XYL_ERR_NON_FINITE. Allocates nothing. */
+XYL_API xyl_result xyl_foliage_lod_resolution(const xyl_foliage *f, uint32_t sector, uint32_t lod,
+                                              float error_px, uint32_t *resolution, xyl_diag *diag);
 
 /* ---- the GPU record ------------------------------------------------------------------------ */
 
