@@ -3,7 +3,8 @@
 # samples/bench/), builds bench_lsystem, bench_stems, bench_tess and bench_foliage in Release
 # and runs them one after the other; the figures go to the terminal and to
 # $BUILD_DIR/<name>.txt, bench_tess's rows also to $BUILD_DIR/bench_tess.dat (+ .front), plotted
-# by gnuplot into $BUILD_DIR/bench_tess.png. docs/BENCHMARKS.md explains the tables.
+# by gnuplot into $BUILD_DIR/bench_tess.png, and bench_foliage's comparison with meshoptimizer
+# to $BUILD_DIR/bench_foliage.dat and .png. docs/BENCHMARKS.md explains the tables.
 #
 #   scripts/bench.sh                 # full sizes (a few minutes)
 #   scripts/bench.sh --quick         # smoke sizes; options are passed to both benchmarks
@@ -11,7 +12,8 @@
 #
 # bench_lsystem and bench_stems take --quick, --no-peer, --repeats N and --node PATH
 # (--peer-script would name one script for both: run the binaries directly for that);
-# bench_tess and bench_foliage get --quick only (they have no peer; bench_tess --help).
+# bench_tess and bench_foliage get --quick only (bench_tess has no peer; bench_foliage's is
+# meshoptimizer, linked in when libmeshoptimizer-dev is installed).
 #
 # Without node/npm it tries apt-get (Debian/Ubuntu); if that is not possible the benchmark still
 # runs and reports the peer as not available.
@@ -111,7 +113,14 @@ else
     status=$?
 fi
 echo
-foliage_args=()
+foliage_args=(--dat "$BUILD_DIR/bench_foliage.dat")
 for a in "$@"; do [ "$a" = --quick ] && foliage_args+=(--quick); done
-run_bench bench_foliage "${foliage_args[@]}" || status=$?
+if run_bench bench_foliage "${foliage_args[@]}"; then
+    if command -v gnuplot >/dev/null 2>&1; then
+        gnuplot -e "dat='$BUILD_DIR/bench_foliage.dat'; out='$BUILD_DIR/bench_foliage.png'" \
+            scripts/plot_foliage.gp && echo "bench.sh: plot written to $BUILD_DIR/bench_foliage.png"
+    fi
+else
+    status=$?
+fi
 exit "$status"

@@ -16,7 +16,8 @@ packages=(
   libpng-dev                 # xylem render writes PNG (samples only)
   libglfw3-dev xvfb xauth    # xylem view: GL in a GLFW window; tests run it under Xvfb
   libtinygltf-dev nlohmann-json3-dev   # xylem render --mesh reads .glb (samples only)
-  gnuplot-nox                # docs/ plots from bench_tess (scripts/bench.sh)
+  gnuplot-nox                # docs/ plots from bench_tess and bench_foliage (scripts/bench.sh)
+  libmeshoptimizer-dev       # bench_foliage's peer (samples only)
   locales                    # a decimal-comma locale for the writers' locale tests
 )
 

@@ -762,6 +762,32 @@ static xyl_result foliage_image_error(const xyl_allocator *a)
     return r;
 }
 
+/* Two leaves against three triangles. */
+static xyl_result foliage_image_error_triangles(const xyl_allocator *a)
+{
+    xyl_leaf l[2];
+    memset(l, 0, sizeof l);
+    for (int i = 0; i < 2; ++i) {
+        l[i].center = (xyl_vec3){(float)i, 0.5f * (float)i, 0};
+        l[i].normal = (xyl_vec3){0, 0, 1};
+        l[i].axis = (xyl_vec3){0, 0.4f, 0};
+        l[i].side = (xyl_vec3){0.2f, 0, 0};
+        l[i].node = -1;
+    }
+    const float pos[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0.5f};
+    const uint32_t idx[9] = {0, 1, 2, 1, 3, 2, 0, 3, 2};
+    xyl_foliage_image_desc d = {0};
+    d.resolution = 16;
+    d.alloc = *a;
+    xyl_foliage_image_error e, before;
+    memset(&e, 0x5A, sizeof e);
+    before = e;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_foliage_image_error_triangles(l, 2, pos, 4, idx, 3, &d, &e, &diag);
+    if (r != XYL_OK) assert_memory_equal(&e, &before, sizeof e);
+    return r;
+}
+
 /* ---- the suite ------------------------------------------------------------------------------ */
 
 static const walk_case cases[] = {
@@ -798,6 +824,7 @@ static const walk_case cases[] = {
     {"xyl_tess_refine", tess_refine, false, true},
     {"xyl_foliage_leaves_from_obj", leaves_from_obj, false, true},
     {"xyl_foliage_image_error_of", foliage_image_error, false, true},
+    {"xyl_foliage_image_error_triangles", foliage_image_error_triangles, false, true},
 };
 
 static void every_call_survives_each_allocation_failure_and_uses_only_its_allocator(void **state)

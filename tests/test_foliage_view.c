@@ -723,6 +723,115 @@ static void viewpoint_estimates_stay_near_an_exact_recomputation(void **state)
     free(l);
 }
 
+/* ---- triangles against leaves ---------------------------------------------------------------- */
+
+/* Leaves split into two triangles each: the same set, measured the same way. */
+static void triangles_of_the_leaves_measure_as_the_leaves(void **state)
+{
+    (void)state;
+    const uint32_t n = 300;
+    xyl_leaf *l = crown(n, 11);
+    float *pos = malloc(12 * n * sizeof *pos);
+    uint32_t *idx = malloc(6 * n * sizeof *idx);
+    assert_non_null(pos);
+    assert_non_null(idx);
+    for (uint32_t i = 0; i < n; ++i) {
+        xyl__dvec3 c[4];
+        xyl__leaf_corners(&l[i], c);
+        for (int k = 0; k < 4; ++k) {
+            pos[12 * i + 3 * k] = (float)c[k].x;
+            pos[12 * i + 3 * k + 1] = (float)c[k].y;
+            pos[12 * i + 3 * k + 2] = (float)c[k].z;
+        }
+        const uint32_t t[6] = {0, 1, 3, 0, 3, 2};
+        for (int k = 0; k < 6; ++k) idx[6 * i + k] = 4 * i + t[k];
+    }
+    xyl_foliage_image_desc d = {0};
+    d.resolution = 128;
+    xyl_foliage_image_error e;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_image_error_triangles(l, n, pos, 4 * n, idx, 2 * n, &d, &e, &diag), XYL_OK);
+    assert_true(e.coverage_worst <= 1e-3); /* corners rounded to float may move a pixel centre */
+    assert_true(e.rmse_worst <= 0.01);
+    assert_true(e.hausdorff <= 1e-5);
+    assert_int_equal(e.resolution, 128);
+    /* and half of them missing shows */
+    xyl_foliage_image_error half;
+    assert_int_equal(xyl_foliage_image_error_triangles(l, n, pos, 4 * n, idx, n, &d, &half, &diag), XYL_OK);
+    assert_true(half.coverage_mean > 0.2);
+    free(pos);
+    free(idx);
+    free(l);
+}
+
+/* The unit square at z = 0 against the triangle of its lower-left half lifted to z = h: the
+ * square's corner (1, 1, 0) lies sqrt(1/2 + h^2) from the triangle, every point of the
+ * triangle h from the square. */
+static void hausdorff_of_a_square_and_a_triangle(void **state)
+{
+    (void)state;
+    const double heights[3] = {0.0, 0.25, 2.0};
+    for (int i = 0; i < 3; ++i) {
+        xyl_leaf sq = flat_leaf(0.5f, 0.5f, 0, 0.5f, 0.5f);
+        float h = (float)heights[i];
+        const float pos[9] = {0, 0, h, 1, 0, h, 0, 1, h};
+        const uint32_t idx[3] = {0, 1, 2};
+        xyl_foliage_image_desc d = {0};
+        d.hausdorff_step = 0.01f;
+        xyl_foliage_image_error e;
+        assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, pos, 3, idx, 1, &d, &e, NULL), XYL_OK);
+        double want = sqrt(0.5 + (double)h * h);
+        assert_true(e.hausdorff <= want + 1e-6);
+        assert_true(e.hausdorff >= want - 0.01 / sqrt(2.0));
+    }
+    /* a degenerate triangle counts as its segment: from (0, 0, 0) to (1, 0, 0) */
+    xyl_leaf sq = flat_leaf(0.5f, 0.5f, 0, 0.5f, 0.5f);
+    const float seg[9] = {0, 0, 0, 1, 0, 0, 0.5f, 0, 0};
+    const uint32_t idx[3] = {0, 1, 2};
+    xyl_foliage_image_error e;
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, seg, 3, idx, 1, NULL, &e, NULL), XYL_OK);
+    assert_near(e.hausdorff, 1.0, 1e-6); /* the far edge y = 1 */
+    for (int v = 0; v < XYL_FOLIAGE_IMAGE_VIEWS; ++v) assert_true(e.coverage[v] == 1.0 || e.coverage[v] == 0.0);
+}
+
+static void image_error_triangles_rejects_bad_input(void **state)
+{
+    (void)state;
+    xyl_leaf sq = flat_leaf(0.5f, 0.5f, 0, 0.5f, 0.5f);
+    float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    uint32_t idx[6] = {0, 1, 2, 0, 2, 3};
+    xyl_foliage_image_error e;
+    memset(&e, 0x5a, sizeof e);
+    xyl_foliage_image_error before = e;
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, pos, 3, idx, 2, NULL, &e, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(diag.index, 1);
+    assert_non_null(strstr(diag.message, "vertex 3"));
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, NULL, 3, idx, 1, NULL, &e, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, pos, 3, NULL, 1, NULL, &e, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_image_error_triangles(NULL, 0, pos, 3, idx, 1, NULL, &e, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    pos[4] = NAN;
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, pos, 3, idx, 1, NULL, &e, &diag), XYL_ERR_NON_FINITE);
+    assert_int_equal(diag.index, 1);
+    pos[4] = 3e6f;
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, pos, 3, idx, 1, NULL, &e, &diag),
+                     XYL_ERR_LIMIT_EXCEEDED);
+    pos[4] = 0;
+    xyl_foliage_image_desc d = {0};
+    d.limits.max_leaves = 1;
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, pos, 3, idx, 2, &d, &e, &diag),
+                     XYL_ERR_LIMIT_EXCEEDED);
+    assert_memory_equal(&e, &before, sizeof e);
+    /* no triangles: nothing drawn, nothing near */
+    assert_int_equal(xyl_foliage_image_error_triangles(&sq, 1, NULL, 0, NULL, 0, NULL, &e, &diag), XYL_OK);
+    assert_true(isinf(e.hausdorff));
+    assert_true(e.coverage_worst == 1.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -746,6 +855,9 @@ int main(void)
         cmocka_unit_test(viewpoint_options_are_checked),
         cmocka_unit_test(viewpoint_build_survives_every_allocation_failure),
         cmocka_unit_test(viewpoint_estimates_stay_near_an_exact_recomputation),
+        cmocka_unit_test(triangles_of_the_leaves_measure_as_the_leaves),
+        cmocka_unit_test(hausdorff_of_a_square_and_a_triangle),
+        cmocka_unit_test(image_error_triangles_rejects_bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -197,6 +197,10 @@ void xyl__raster_clear(xyl__raster *r);
  * a quad seen edge-on covers nothing. */
 void xyl__raster_leaf(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *leaf, uint32_t id,
                       float shade);
+/* Draws the triangle p[0], p[1], p[2] (either winding) by the same rules; a degenerate one
+ * covers nothing. */
+void xyl__raster_triangle(xyl__raster *r, const xyl__ortho_view *v, const xyl__dvec3 p[3], uint32_t id,
+                          float shade);
 /* Draws leaves[i] with id i and the Lambert shade |normal . light| (double-sided leaves). */
 void xyl__raster_leaves(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *leaves, size_t n,
                         xyl__dvec3 light);

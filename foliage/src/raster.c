@@ -6,7 +6,8 @@
  * it when its centre is inside every edge, evaluated in 64-bit integers, or on an edge that is
  * a top or a left one (the top-left convention). Two quads that share an edge therefore never
  * both cover, nor both miss, a pixel centre on it. Setup is in double, relative to the view's
- * centre, so leaves far from the origin lose nothing to the float of their coordinates. */
+ * centre, so leaves far from the origin lose nothing to the float of their coordinates.
+ * Triangles (another simplifier's output, measured the same way) take the same path. */
 #include <string.h>
 
 #include "foliage_internal.h"
@@ -165,20 +166,62 @@ static void fill(xyl__raster *r, const int64_t (*v)[2], int n, const double plan
     }
 }
 
-/* Depth as an affine function of pixel coordinates, from the leaf's plane: z0 + za X + zb Y.
- * false when the plane is seen (almost) edge-on. */
-static bool depth_plane(const xyl__ortho_view *v, const xyl__raster *r, const xyl_leaf *leaf,
-                        const pvert *centre, double plane[3])
+/* Depth as an affine function of pixel coordinates, from the polygon's plane (normal n through
+ * the projected point on): z0 + za X + zb Y. false when the plane is seen (almost) edge-on. */
+static bool depth_plane(const xyl__ortho_view *v, const xyl__raster *r, xyl__dvec3 n,
+                        const pvert *on, double plane[3])
 {
-    xyl__dvec3 n = xyl__from_f3(leaf->normal);
     double nr = xyl__d3_dot(n, v->right), nu = xyl__d3_dot(n, v->up), nt = xyl__d3_dot(n, v->toward);
     if (!(fabs(nt) > 1e-9)) return false;
     double pix = 2.0 * v->half / r->width;
     /* world offsets a = (X - X0) pix, b = -(Y - Y0) pix; z = z0 - (nr a + nu b) / nt */
     double za = -nr * pix / nt, zb = nu * pix / nt;
     plane[1] = za, plane[2] = zb;
-    plane[0] = centre->z - za * centre->x - zb * centre->y;
+    plane[0] = on->z - za * on->x - zb * on->y;
     return true;
+}
+
+static pvert project(const xyl__ortho_view *v, const xyl__raster *r, xyl__dvec3 p)
+{
+    double inv = r->width / (2.0 * v->half);
+    xyl__dvec3 q = xyl__d3_sub(p, v->center);
+    return (pvert){0.5 * r->width + xyl__d3_dot(q, v->right) * inv,
+                   0.5 * r->height - xyl__d3_dot(q, v->up) * inv, xyl__d3_dot(q, v->toward)};
+}
+
+/* Draws the convex planar polygon p[0 .. count) (3 or 4 corners in order round it) whose
+ * plane has the normal n and passes through on. */
+static void raster_polygon(xyl__raster *r, const xyl__ortho_view *v, const xyl__dvec3 *p, int count,
+                           xyl__dvec3 n, xyl__dvec3 on, uint32_t id, float shade)
+{
+    pvert poly[MAX_VERTS];
+    double zlo = INFINITY, zhi = -INFINITY;
+    for (int i = 0; i < count; ++i) {
+        poly[i] = project(v, r, p[i]);
+        zlo = fmin(zlo, poly[i].z), zhi = fmax(zhi, poly[i].z);
+    }
+    pvert centre = project(v, r, on);
+    double plane[3];
+    if (!depth_plane(v, r, n, &centre, plane)) plane[0] = 0.5 * (zlo + zhi), plane[1] = plane[2] = 0.0;
+    int m = clip_guard(poly, count, r->width, r->height);
+    if (m < 3) return;
+    int64_t s[MAX_VERTS][2];
+    for (int i = 0; i < m; ++i) {
+        s[i][0] = (int64_t)llround(poly[i].x * SUBPIXEL);
+        s[i][1] = (int64_t)llround(poly[i].y * SUBPIXEL);
+    }
+    int64_t area2 = 0;
+    for (int i = 0; i < m; ++i) {
+        const int64_t *a = s[i], *b = s[(i + 1) % m];
+        area2 += a[0] * b[1] - a[1] * b[0];
+    }
+    if (area2 == 0) return; /* edge-on after snapping: covers no pixel centre */
+    if (area2 < 0)          /* make the interior the positive side of every edge */
+        for (int i = 0, j = m - 1; i < j; ++i, --j) {
+            int64_t t0 = s[i][0], t1 = s[i][1];
+            s[i][0] = s[j][0], s[i][1] = s[j][1], s[j][0] = t0, s[j][1] = t1;
+        }
+    fill(r, (const int64_t(*)[2])s, m, plane, zlo, zhi, id, shade);
 }
 
 void xyl__raster_leaf(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *leaf, uint32_t id,
@@ -186,41 +229,16 @@ void xyl__raster_leaf(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *
 {
     xyl__dvec3 c[4];
     xyl__leaf_corners(leaf, c);
-    static const int order[4] = {0, 1, 3, 2}; /* round the quad */
-    double pix = 2.0 * v->half / r->width, inv = 1.0 / pix;
-    double cx = 0.5 * r->width, cy = 0.5 * r->height;
-    pvert poly[MAX_VERTS];
-    double zlo = INFINITY, zhi = -INFINITY;
-    for (int i = 0; i < 4; ++i) {
-        xyl__dvec3 q = xyl__d3_sub(c[order[i]], v->center);
-        poly[i] = (pvert){cx + xyl__d3_dot(q, v->right) * inv, cy - xyl__d3_dot(q, v->up) * inv,
-                          xyl__d3_dot(q, v->toward)};
-        zlo = fmin(zlo, poly[i].z), zhi = fmax(zhi, poly[i].z);
-    }
-    xyl__dvec3 q = xyl__d3_sub(xyl__from_f3(leaf->center), v->center);
-    pvert centre = {cx + xyl__d3_dot(q, v->right) * inv, cy - xyl__d3_dot(q, v->up) * inv,
-                    xyl__d3_dot(q, v->toward)};
-    double plane[3];
-    if (!depth_plane(v, r, leaf, &centre, plane)) plane[0] = 0.5 * (zlo + zhi), plane[1] = plane[2] = 0.0;
-    int n = clip_guard(poly, 4, r->width, r->height);
-    if (n < 3) return;
-    int64_t s[MAX_VERTS][2];
-    for (int i = 0; i < n; ++i) {
-        s[i][0] = (int64_t)llround(poly[i].x * SUBPIXEL);
-        s[i][1] = (int64_t)llround(poly[i].y * SUBPIXEL);
-    }
-    int64_t area2 = 0;
-    for (int i = 0; i < n; ++i) {
-        const int64_t *a = s[i], *b = s[(i + 1) % n];
-        area2 += a[0] * b[1] - a[1] * b[0];
-    }
-    if (area2 == 0) return; /* edge-on after snapping: covers no pixel centre */
-    if (area2 < 0)          /* make the interior the positive side of every edge */
-        for (int i = 0, j = n - 1; i < j; ++i, --j) {
-            int64_t t0 = s[i][0], t1 = s[i][1];
-            s[i][0] = s[j][0], s[i][1] = s[j][1], s[j][0] = t0, s[j][1] = t1;
-        }
-    fill(r, (const int64_t(*)[2])s, n, plane, zlo, zhi, id, shade);
+    const xyl__dvec3 round[4] = {c[0], c[1], c[3], c[2]};
+    raster_polygon(r, v, round, 4, xyl__from_f3(leaf->normal), xyl__from_f3(leaf->center), id, shade);
+}
+
+void xyl__raster_triangle(xyl__raster *r, const xyl__ortho_view *v, const xyl__dvec3 p[3], uint32_t id,
+                          float shade)
+{
+    xyl__dvec3 n = xyl__d3_cross(xyl__d3_sub(p[1], p[0]), xyl__d3_sub(p[2], p[0]));
+    n = xyl__d3_normalize_or(n, v->right); /* degenerate: seen edge-on, it covers nothing */
+    raster_polygon(r, v, p, 3, n, p[0], id, shade);
 }
 
 void xyl__raster_leaves(xyl__raster *r, const xyl__ortho_view *v, const xyl_leaf *leaves, size_t n,

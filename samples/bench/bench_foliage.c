@@ -3,14 +3,18 @@
  * trees, its peak memory counted through the desc's allocator, and what sectors cost in error
  * at equal leaf count.
  *
- *   bench_foliage [--quick] [--no-peer] [--repeats N]
+ *   bench_foliage [--quick] [--no-peer] [--repeats N] [--dat FILE]
  *
  * The random crown: centres uniform in an ellipsoid of radii 3, 2, 3 m around (0, 4, 0), normals
  * uniform over the directions within about 107 degrees of +Y (biased up), leaves 5 to 15 cm
  * long and 30 to 80 % as wide, a fixed seed. Every time is the median of N samples
  * (CLOCK_MONOTONIC) of the build alone (destroying the foliage is not timed); single-threaded,
- * so one core. --quick stops at 10^4 leaves. --no-peer is accepted for scripts/bench.sh; there
- * is no peer here.
+ * so one core. --quick stops at 10^4 leaves.
+ *
+ * The peer: meshoptimizer (Debian libmeshoptimizer-dev) simplifies the same leaves as
+ * triangles, and foliage_peer.c compares the image errors at equal triangle count for the
+ * default tree and a crown of 10^5 leaves; --no-peer skips it, --dat FILE writes its rows for
+ * scripts/plot_foliage.gp.
  *
  * Exit status: 0, also when the target is missed; 1 when a build fails; 2 on bad usage. */
 #define _POSIX_C_SOURCE 200809L
@@ -23,6 +27,7 @@
 #include <string.h>
 
 #include "bench_common.h"
+#include "foliage_peer.h"
 #include <xylem/xyl_foliage.h>
 
 #define TARGET_N 100000u
@@ -315,6 +320,22 @@ static int bench_viewpoint(const options *o)
 
 int main(int argc, char **argv)
 {
+    /* --dat FILE: the meshoptimizer comparison's rows for scripts/plot_foliage.gp */
+    FILE *dat = NULL;
+    int kept = 0;
+    for (int i = 0; i < argc; ++i) {
+        if (i > 0 && strcmp(argv[i], "--dat") == 0 && i + 1 < argc) {
+            if (dat) fclose(dat);
+            dat = fopen(argv[++i], "w");
+            if (!dat) {
+                fprintf(stderr, "bench_foliage: cannot write %s\n", argv[i]);
+                return 2;
+            }
+            continue;
+        }
+        argv[kept++] = argv[i];
+    }
+    argc = kept;
     options o = {0};
     int rc = bench_parse_options(argc, argv, &o, "bench_foliage");
     if (rc) return rc == 1 ? 0 : rc;
@@ -353,6 +374,18 @@ int main(int argc, char **argv)
         }
         free(tl);
     }
+    /* against meshoptimizer: the default tree, and a crown of 10^5 leaves (10^4 with --quick) */
+    peer_summary peer[2] = {{0}};
+    if (o.peer) {
+        xyl_diag diag = {0};
+        size_t n = 0;
+        xyl_leaf *tl = preset_leaves(xyl_lsystem_default_preset(), &n, &diag);
+        if (n) failures += bench_foliage_peer(xyl_lsystem_default_preset(), tl, n, o.quick, dat, &peer[0]);
+        free(tl);
+        uint32_t big = o.quick ? 10000 : TARGET_N;
+        crown(leaves, big, 0x5eed + big);
+        failures += bench_foliage_peer("random crown", leaves, big, o.quick, dat, &peer[1]);
+    }
     uint32_t sector_n = o.quick ? 1000 : 10000;
     crown(leaves, sector_n, 0x5eed + sector_n);
     failures += bench_sectors(&o, leaves, sector_n);
@@ -368,5 +401,17 @@ int main(int argc, char **argv)
                "leaf at the peak)\n", TARGET_N, TARGET_S,
                largest.median_s < TARGET_S ? "MET" : "NOT MET", largest.median_s,
                (double)largest.peak / TARGET_N);
+    for (int k = 0; k < 2; ++k) {
+        const char *what = k ? "the random crown" : "the default tree";
+        if (!peer[k].measured || !peer[k].rows)
+            printf("leaf-collapse RMSE at most half of meshoptimizer's best, %s: not measured "
+                   "[%s]\n", what, peer[k].measured ? "no LOD in the scene's range" : "no meshoptimizer");
+        else
+            printf("leaf-collapse RMSE at most half of meshoptimizer's best at equal triangle count, "
+                   "%s, LODs used %.0f-%.0f crown radii away: %s (%d of %d LODs; worst ratio %.3f)\n",
+                   what, 2.0, 64.0, peer[k].rows_met == peer[k].rows ? "MET" : "NOT MET", peer[k].rows_met,
+                   peer[k].rows, peer[k].worst_ratio);
+    }
+    if (dat) fclose(dat);
     return failures ? 1 : 0;
 }

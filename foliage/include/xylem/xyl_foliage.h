@@ -50,7 +50,7 @@
  *     xyl_foliage_destroy(f);
  *
  * Every call is reentrant; only xyl_foliage_build, xyl_foliage_leaves_from_obj and
- * xyl_foliage_image_error_of allocate
+ * xyl_foliage_image_error_of / _triangles allocate
  * (through their desc's allocator). A foliage is immutable once built, so threads may read it
  * at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
@@ -444,6 +444,21 @@ XYL_API xyl_result xyl_foliage_image_error_of(const xyl_leaf *reference, size_t 
                                               const xyl_leaf *approx, size_t approx_count,
                                               const xyl_foliage_image_desc *desc,
                                               xyl_foliage_image_error *out, xyl_diag *diag);
+
+/* The same measures for a triangle mesh against the reference leaves: another simplifier's
+ * output (or leaves drawn as triangles) judged exactly as a leaf set is. Triangles are
+ * double-sided, shaded by their face normal; a degenerate one covers no pixel but counts in the
+ * Hausdorff distance as the segment or point it is. positions holds xyz per vertex, indices
+ * three per triangle. Errors: those of xyl_foliage_image_error_of for the reference and the
+ * desc; for the mesh XYL_ERR_INVALID_ARGUMENT (NULL arrays with a count, an index beyond
+ * vertex_count: diag.index = the triangle), XYL_ERR_NON_FINITE and XYL_ERR_LIMIT_EXCEEDED (a
+ * coordinate beyond limits.max_coordinate: diag.index = the vertex; more triangles than
+ * limits.max_leaves). Zero triangles: images of nothing and a Hausdorff distance of INFINITY. */
+XYL_API xyl_result xyl_foliage_image_error_triangles(const xyl_leaf *reference, size_t reference_count,
+                                                     const float *positions, size_t vertex_count,
+                                                     const uint32_t *indices, size_t triangle_count,
+                                                     const xyl_foliage_image_desc *desc,
+                                                     xyl_foliage_image_error *out, xyl_diag *diag);
 
 /* The resolution at which xyl_foliage_pick would start to pick LOD lod of sector sector (the
  * view of the whole foliage's sphere, 2 radius across, whose pixel is lods[lod].error /
