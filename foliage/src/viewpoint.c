@@ -187,7 +187,7 @@ static bool merge_least_visible(vp *c, uint32_t p)
     xyl__grid_nearest(&c->g, p, c->leaves[p].center, max_d2, NULL, NULL, &near);
     c->stats.queries++;
     double I = information(c->T, c->S1, c->SA, c->SL);
-    double best = INFINITY, best_ar[XYL__VIEWS], best_A[XYL__VIEWS], best_s[4];
+    double best = INFINITY, best_ar[XYL__VIEWS], best_A[XYL__VIEWS], best_s[4] = {0, 0, 0, 0};
     uint32_t best_q = UINT32_MAX;
     xyl_leaf best_leaf;
     float best_err = 0.0f;
