@@ -199,7 +199,7 @@ bool count_of(const tinygltf::Value &o, const char *key, uint64_t max, uint64_t 
 bool read_sector(const tinygltf::Value &o, xyl_sample_leaf_sector *s)
 {
     uint64_t base, n, m;
-    if (!count_of(o, "base", UINT32_MAX, &base) || !count_of(o, "original_count", UINT32_MAX, &n) ||
+    if (!o.IsObject() || !count_of(o, "base", UINT32_MAX, &base) || !count_of(o, "original_count", UINT32_MAX, &n) ||
         !count_of(o, "merged_count", UINT32_MAX, &m))
         return false;
     s->base = uint32_t(base);
