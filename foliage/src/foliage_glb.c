@@ -201,8 +201,8 @@ static void json_extras(const xyl_foliage *f, xyl__sink *s)
 
 static void json_leaves_mesh(const leaf_doc *d, xyl__sink *s)
 {
-    static const char *const keys[] = {"{\"name\":\"leaves\",\"primitives\":[{\"attributes\":{"
-                                       "\"POSITION\":",
+    static const char *const keys[] = {("{\"name\":\"leaves\",\"primitives\":[{\"attributes\":{"
+                                        "\"POSITION\":"),
                                        ",\"NORMAL\":", ",\"TEXCOORD_0\":", "},\"indices\":"};
     for (uint32_t k = 0; k < 4; ++k) {
         xyl__put_str(s, keys[k]);

@@ -267,8 +267,8 @@ xyl_result xyl__glb_mesh_add(const xyl_mesh *m, const xyl_allocator *alloc, xyl_
 
 void xyl__glb_mesh_json(const xyl__glb_mesh *p, sink *s)
 {
-    static const char *const keys[] = {"{\"name\":\"stems\",\"primitives\":[{\"attributes\":{"
-                                       "\"POSITION\":",
+    static const char *const keys[] = {("{\"name\":\"stems\",\"primitives\":[{\"attributes\":{"
+                                        "\"POSITION\":"),
                                        ",\"NORMAL\":", ",\"TEXCOORD_0\":", ",\"_BRANCH_ID\":",
                                        "},\"indices\":"};
     for (uint32_t k = 0; k < 5; ++k) {
