@@ -270,6 +270,9 @@ static struct {
     xyl_tess_patches *patches;
     xyl_tess_patterns *patterns;
     xyl_tess_batches *batches;
+    xyl_foliage *foliage;        /* a few leaves in two sectors */
+    size_t leafy_size;           /* its .glb with the stem mesh */
+    unsigned char *leafy;        /* room for it */
 } in;
 
 /* A recognisable non-NULL value that a failing call must leave in its *out. */
@@ -343,12 +346,34 @@ static int setup(void **state)
     v.fixed_level = 2;
     assert_int_equal(xyl_tess_batches_create(NULL, &in.batches, NULL), XYL_OK);
     assert_int_equal(xyl_tess_select(in.patches, in.patterns, &v, in.batches, NULL), XYL_OK);
+    xyl_leaf leaves[6];
+    memset(leaves, 0, sizeof leaves);
+    for (int i = 0; i < 6; ++i) {
+        leaves[i].center = (xyl_vec3){(float)(i % 3) - 1.0f, 1.0f + 0.5f * (float)i, (float)(i / 3)};
+        leaves[i].normal = (xyl_vec3){0, 0, 1};
+        leaves[i].axis = (xyl_vec3){0, 0.2f, 0};
+        leaves[i].side = (xyl_vec3){0.1f, 0, 0};
+        leaves[i].node = -1;
+    }
+    xyl_foliage_desc fd = {0};
+    fd.leaves = leaves;
+    fd.leaf_count = 6;
+    fd.sectors = 2;
+    assert_int_equal(xyl_foliage_build(&fd, &in.foliage, NULL), XYL_OK);
+    xyl_foliage_glb_desc gd = {0};
+    gd.stems = in.mesh;
+    assert_int_equal(xyl_foliage_write_glb_memory(in.foliage, &gd, NULL, 0, &in.leafy_size, NULL),
+                     XYL_OK);
+    in.leafy = malloc(in.leafy_size);
+    assert_non_null(in.leafy);
     return 0;
 }
 
 static int teardown(void **state)
 {
     (void)state;
+    xyl_foliage_destroy(in.foliage);
+    free(in.leafy);
     xyl_tess_batches_destroy(in.batches);
     xyl_tess_patterns_destroy(in.patterns);
     xyl_tess_patches_destroy(in.patches);
@@ -659,6 +684,48 @@ static xyl_result write_file_glb(const xyl_allocator *a)
     return file_written(xyl_mesh_write_file(in.mesh, in.out_path, XYL_MESH_FORMAT_GLB, a, &diag));
 }
 
+/* ---- foliage export: the stems' seam split is what allocates ---------------------------------- */
+
+/* Count, then fill; a failed pass leaves *size and the buffer alone. */
+static xyl_result foliage_glb_memory(const xyl_allocator *a, const xyl_mesh *stems)
+{
+    xyl_foliage_glb_desc gd = {0};
+    gd.stems = stems;
+    gd.alloc = *a;
+    xyl_diag diag = {0};
+    size_t size = 3;
+    memset(in.leafy, 0xA5, in.leafy_size);
+    xyl_result r = xyl_foliage_write_glb_memory(in.foliage, &gd, NULL, 0, &size, &diag);
+    if (r != XYL_OK) {
+        assert_int_equal(size, 3);
+        return r;
+    }
+    if (stems) assert_int_equal(size, in.leafy_size);
+    r = xyl_foliage_write_glb_memory(in.foliage, &gd, in.leafy, in.leafy_size, NULL, &diag);
+    if (r != XYL_OK)
+        for (size_t i = 0; i < in.leafy_size; ++i) assert_int_equal(in.leafy[i], 0xA5);
+    return r;
+}
+
+static xyl_result foliage_glb_memory_stems(const xyl_allocator *a)
+{
+    return foliage_glb_memory(a, in.mesh);
+}
+
+static xyl_result foliage_glb_memory_leaves(const xyl_allocator *a)
+{
+    return foliage_glb_memory(a, NULL);
+}
+
+static xyl_result foliage_glb_file(const xyl_allocator *a)
+{
+    xyl_foliage_glb_desc gd = {0};
+    gd.stems = in.mesh;
+    gd.alloc = *a;
+    xyl_diag diag = {0};
+    return file_written(xyl_foliage_write_glb_file(in.foliage, &gd, in.out_path, &diag));
+}
+
 /* ---- tessellation --------------------------------------------------------------------------- */
 
 static xyl_result tess_patches(const xyl_allocator *a)
@@ -818,6 +885,9 @@ static const walk_case cases[] = {
     {"xyl_mesh_write_memory (glb)", write_memory_glb, false, true},
     {"xyl_mesh_write_file (obj)", write_file_obj, false, true},
     {"xyl_mesh_write_file (glb)", write_file_glb, false, true},
+    {"xyl_foliage_write_glb_memory (stems)", foliage_glb_memory_stems, false, true},
+    {"xyl_foliage_write_glb_memory (leaves)", foliage_glb_memory_leaves, false, false},
+    {"xyl_foliage_write_glb_file", foliage_glb_file, false, true},
     {"xyl_tess_patches_create", tess_patches, false, true},
     {"xyl_tess_patterns_create", tess_patterns, false, true},
     {"xyl_tess_select", tess_select, false, true},

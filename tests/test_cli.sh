@@ -107,6 +107,58 @@ expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out 
 expect 65 "broken skeleton" -- "$XYLEM" mesh --skeleton "$data/skel/bad_parent.skel" --out "$tmp/x.glb"
 expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
 
+# foliage: leaves, their LODs, a .glb and the LOD table
+ok() { passed=$((passed + 1)); }
+bad() { failed=$((failed + 1)); echo "FAIL: $1"; }
+expect 0 "foliage with sectors and a table" -- "$XYLEM" foliage --sectors 4 --out "$tmp/leaves.glb" --table "$tmp/lods.csv"
+contains "5103 leaves -> " "foliage summary counts leaves"
+contains "4 sectors" "foliage summary names the sectors"
+contains "time: skeleton" "foliage summary shows time"
+head -c 4 "$tmp/leaves.glb" | grep -q "glTF" && ok || bad "foliage .glb magic"
+grep -qa '"mimeType":"image/png"' "$tmp/leaves.glb" && ok || bad "the leaf texture is embedded by default"
+grep -qa '"name":"stems"' "$tmp/leaves.glb" && bad "'foliage' wrote stems" || ok
+[ "$(head -n 1 "$tmp/lods.csv")" = "sector,lod,leaves,a,b,c,error" ] && ok || bad "table header"
+# one row per LOD per sector: n - S merges + S = n rows; leaves = a + c; LOD 0 of each sector
+# has no error, and the errors never decrease within a sector
+awk -F, 'NR > 1 { rows++; if ($3 != $4 + $6) bad = 1; if ($2 == 0 && $7 != 0) bad = 1;
+         if ($2 > 0 && $7 + 0 < last) bad = 1; last = $7 + 0; s[$1] = 1 }
+         END { exit (bad || rows != 5103 || length(s) != 4) }' "$tmp/lods.csv" && ok || bad "table rows"
+"$XYLEM" skeleton --preset faycal-leaves --out "$tmp/fl.skel" >/dev/null
+expect 0 "foliage from a .skel" -- "$XYLEM" foliage --skeleton "$tmp/fl.skel" --aspect 0.3 --out "$tmp/fl.glb"
+contains "255 leaves -> 509 in the LOD array, 1 sector" "leaves of the skeleton's attachments"
+expect 0 "foliage with a given texture" -- "$XYLEM" foliage --preset faycal-leaves --leaf-texture "$data/../../docs/img/bench_tess.png" --out "$tmp/tex.glb"
+size=$(stat -c %s "$data/../../docs/img/bench_tess.png")
+grep -qa "\"byteLength\":$size}" "$tmp/tex.glb" && ok || bad "the given texture is embedded whole"
+expect 0 "foliage of a source without leaves" -- "$XYLEM" foliage --preset abop-1.24a --sectors 2 --out "$tmp/noleaf.glb" --table "$tmp/noleaf.csv"
+contains "no leaf attachments" "no-leaf message"
+[ "$(tail -n +2 "$tmp/noleaf.csv")" = "$(printf '0,0,0,0,0,0,0\n1,0,0,0,0,0,0')" ] && ok || bad "no-leaf table: one empty LOD a sector"
+grep -qa '"meshes"' "$tmp/noleaf.glb" && bad "a file without leaves has a mesh" || ok
+expect 64 "foliage needs --out" -- "$XYLEM" foliage
+expect 64 "foliage writes .glb" -- "$XYLEM" foliage --out "$tmp/x.obj"
+expect 64 "foliage sectors 0" -- "$XYLEM" foliage --sectors 0 --out "$tmp/x.glb"
+expect 64 "foliage sectors above 256" -- "$XYLEM" foliage --sectors 257 --out "$tmp/x.glb"
+expect 64 "foliage bad aspect" -- "$XYLEM" foliage --aspect 0 --out "$tmp/x.glb"
+expect 64 "foliage aspect not a number" -- "$XYLEM" foliage --aspect wide --out "$tmp/x.glb"
+expect 64 "foliage table not .csv" -- "$XYLEM" foliage --table "$tmp/t.txt" --out "$tmp/x.glb"
+expect 64 "foliage texture not .png" -- "$XYLEM" foliage --leaf-texture "$tmp/t.jpg" --out "$tmp/x.glb"
+expect 64 "foliage skeleton and preset" -- "$XYLEM" foliage --skeleton "$tmp/fl.skel" --preset abop-1.24a --out "$tmp/x.glb"
+expect 64 "foliage options need foliage" -- "$XYLEM" mesh --sectors 4 --out "$tmp/x.glb"
+expect 64 "--foliage is mesh's" -- "$XYLEM" skeleton --foliage --out "$tmp/x.skel"
+expect 64 "mesh --foliage writes .glb" -- "$XYLEM" mesh --foliage --out "$tmp/x.obj"
+expect 66 "foliage missing texture" -- "$XYLEM" foliage --leaf-texture "$tmp/none.png" --out "$tmp/x.glb"
+printf 'not a png' >"$tmp/fake.png"
+expect 65 "foliage texture that is no PNG" -- "$XYLEM" foliage --leaf-texture "$tmp/fake.png" --out "$tmp/x.glb"
+contains "not a PNG file" "fake texture message"
+[ ! -e "$tmp/x.glb" ] && ok || bad "a refused foliage wrote x.glb"
+expect 73 "foliage unwritable output" -- "$XYLEM" foliage --out "$tmp/no/dir/x.glb"
+expect 73 "foliage unwritable table" -- "$XYLEM" foliage --preset faycal-leaves --out "$tmp/t.glb" --table "$tmp/no/dir/t.csv"
+[ -z "$(ls "$tmp" | grep tmp-)" ] && ok || bad "temporary files left behind"
+expect 0 "mesh with foliage" -- "$XYLEM" mesh --foliage --sectors 2 --out "$tmp/leafy.glb" --table "$tmp/leafy.csv"
+contains "vertices" "mesh summary with foliage"
+contains "5103 leaves -> " "foliage summary with the mesh"
+grep -qa '"nodes":\[{"name":"stems","mesh":0},{"name":"leaves","mesh":1,' "$tmp/leafy.glb" && ok || bad "stems and leaves nodes"
+[ "$(wc -l <"$tmp/leafy.csv")" -eq 5104 ] && ok || bad "mesh --foliage table rows"
+
 if [ "${XYL_CLI_GPU:-0}" != 1 ]; then  # a build without the GL and Vulkan backends
   expect 69 "render without backends" -- "$XYLEM" render --size 16x16 --out "$tmp/x.png"
   contains "built without" "render says why"
@@ -123,6 +175,8 @@ png_magic "$tmp/t.png" && passed=$((passed + 1)) || { failed=$((failed + 1)); ec
 expect 0 "render hardware path, wireframe" -- "$XYLEM" render --tess hardware --wireframe --level 2 --size 64x64 --out "$tmp/h.png"
 expect 0 "render Vulkan from a .glb" -- "$XYLEM" render --mesh "$tmp/tree.glb" --backend vulkan --variant circle --size 64x64 --out "$tmp/v.png"
 contains "(Vulkan)" "Vulkan device named"
+expect 0 "render stems of a leafy .glb" -- "$XYLEM" render --mesh "$tmp/leafy.glb" --size 32x32 --out "$tmp/l.png"
+contains "patches: 11646 (11646 quads)" "the leaves are not refined as stems"
 expect 0 "render CPU reference" -- "$XYLEM" render --tess cpu --error-px 2 --camera 90,20 --size 64x64 --out "$tmp/c.png"
 expect 64 "render needs a .png" -- "$XYLEM" render --out "$tmp/x.jpg"
 expect 64 "render level out of range" -- "$XYLEM" render --level 65 --out "$tmp/x.png"

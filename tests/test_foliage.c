@@ -1,4 +1,6 @@
 /* foliage/: leaves from skeletons and from the caller, and their GPU record. */
+#define _POSIX_C_SOURCE 200809L
+
 #include <float.h>
 #include <math.h>
 #include <setjmp.h>
@@ -14,6 +16,8 @@
 #include "xylem/xyl_foliage.h"
 #include "foliage_internal.h"
 #include "test_util.h"
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* ---- helpers ------------------------------------------------------------------------------- */
 
@@ -1533,6 +1537,452 @@ static void build_refuses_a_million_leaves_over_the_limit_before_allocating(void
     free(in);
 }
 
+
+/* ---- glTF export --------------------------------------------------------------------------- */
+
+/* The two chunks of a GLB, checked against the container's rules. */
+typedef struct glb_parts {
+    char *json;               /* NUL-terminated copy (malloc) */
+    size_t json_len;
+    const unsigned char *bin; /* NULL without a BIN chunk */
+    size_t bin_len;
+} glb_parts;
+
+static uint32_t u32le(const unsigned char *b)
+{
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+static float f32le(const unsigned char *b)
+{
+    uint32_t u = u32le(b);
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+static glb_parts glb_split(const unsigned char *b, size_t n)
+{
+    glb_parts p = {0};
+    assert_true(n >= 20 && n % 4 == 0);
+    assert_int_equal(u32le(b), 0x46546C67u);
+    assert_int_equal(u32le(b + 4), 2);
+    assert_int_equal(u32le(b + 8), n);
+    p.json_len = u32le(b + 12);
+    assert_int_equal(u32le(b + 16), 0x4E4F534Au);
+    assert_true(20 + p.json_len <= n && p.json_len % 4 == 0);
+    p.json = malloc(p.json_len + 1);
+    assert_non_null(p.json);
+    memcpy(p.json, b + 20, p.json_len);
+    p.json[p.json_len] = '\0';
+    size_t at = 20 + p.json_len;
+    if (at < n) {
+        p.bin_len = u32le(b + at);
+        assert_int_equal(u32le(b + at + 4), 0x004E4942u);
+        assert_int_equal(at + 8 + p.bin_len, n);
+        p.bin = b + at + 8;
+    }
+    return p;
+}
+
+static void assert_has(const char *json, const char *part)
+{
+    if (!strstr(json, part)) fail_msg("the JSON lacks %s:\n%.2000s", part, json);
+}
+
+static void assert_lacks(const char *json, const char *part)
+{
+    if (strstr(json, part)) fail_msg("the JSON has %s:\n%.2000s", part, json);
+}
+
+/* Count, then fill; fails the test unless both succeed. */
+static unsigned char *glb_memory(const xyl_foliage *f, const xyl_foliage_glb_desc *d, size_t *n)
+{
+    xyl_diag diag = {0};
+    xyl_result r = xyl_foliage_write_glb_memory(f, d, NULL, 0, n, &diag);
+    if (r != XYL_OK) fail_msg("count: %s (%s)", xyl_result_string(r), diag.message);
+    unsigned char *b = malloc(*n);
+    assert_non_null(b);
+    size_t again = 0;
+    r = xyl_foliage_write_glb_memory(f, d, b, *n, &again, &diag);
+    if (r != XYL_OK) fail_msg("fill: %s (%s)", xyl_result_string(r), diag.message);
+    assert_int_equal(again, *n);
+    return b;
+}
+
+/* Leaves of three sizes with their own texture rectangles, in two sectors. */
+static xyl_foliage *small_foliage(void)
+{
+    xyl_leaf l[7];
+    for (int i = 0; i < 7; ++i) {
+        float a = 6.2831853f * (float)i / 7.0f;
+        l[i] = flat_leaf(2.0f * cosf(a), 3.0f + 0.25f * (float)i, 2.0f * sinf(a),
+                         0.2f + 0.05f * (float)(i % 3), 0.1f);
+        l[i].uv[0] = 0.5f * (float)(i % 2);
+        l[i].uv[1] = 0.0f;
+        l[i].uv[2] = l[i].uv[0] + 0.5f;
+        l[i].uv[3] = 1.0f;
+    }
+    xyl_foliage_desc d = {0};
+    d.sectors = 2;
+    return build_ok(l, 7, &d);
+}
+
+static void glb_holds_the_leaves_corners_normals_uvs_and_triangles_in_array_order(void **state)
+{
+    (void)state;
+    xyl_foliage *f = small_foliage();
+    size_t n = 0;
+    unsigned char *b = glb_memory(f, NULL, &n);
+    glb_parts p = glb_split(b, n);
+    size_t L = f->leaf_count;
+    assert_non_null(p.bin);
+    assert_int_equal(p.bin_len, 152 * L); /* 4 x (12 + 12 + 8) + 6 x 4 bytes a leaf */
+    for (size_t i = 0; i < L; ++i) {
+        const xyl_leaf *l = &f->leaves[i];
+        xyl__dvec3 c[4];
+        xyl__leaf_corners(l, c);
+        const float *r = l->uv;
+        for (int k = 0; k < 4; ++k) {
+            const unsigned char *pos = p.bin + 48 * i + 12 * k, *nrm = pos + 48 * L;
+            const unsigned char *uv = p.bin + 96 * L + 32 * i + 8 * k;
+            assert_true(f32le(pos) == (float)c[k].x && f32le(pos + 4) == (float)c[k].y &&
+                        f32le(pos + 8) == (float)c[k].z);
+            assert_true(f32le(nrm) == l->normal.x && f32le(nrm + 4) == l->normal.y &&
+                        f32le(nrm + 8) == l->normal.z);
+            assert_true(f32le(uv) == (k & 1 ? r[2] : r[0]));
+            assert_true(f32le(uv + 4) == 1.0f - (k & 2 ? r[3] : r[1]));
+        }
+        static const uint32_t tri[6] = {0, 1, 3, 0, 3, 2};
+        for (int k = 0; k < 6; ++k)
+            assert_int_equal(u32le(p.bin + 128 * L + 24 * i + 4 * k), 4 * i + tri[k]);
+    }
+    assert_has(p.json, "\"nodes\":[{\"name\":\"leaves\",\"mesh\":0,\"extras\":{\"xylem_foliage\":"
+                       "{\"version\":1,");
+    assert_has(p.json, "\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"TEXCOORD_0\":2},"
+                       "\"indices\":3,\"material\":0,\"mode\":4");
+    assert_has(p.json, "\"alphaMode\":\"MASK\",\"alphaCutoff\":0.5,\"doubleSided\":true");
+    assert_has(p.json, "\"baseColorFactor\":");
+    assert_lacks(p.json, "\"images\"");
+    assert_lacks(p.json, "stems");
+    free(p.json);
+    free(b);
+    xyl_foliage_destroy(f);
+}
+
+static void glb_extras_hold_every_sectors_lod_table(void **state)
+{
+    (void)state;
+    xyl_foliage *f = small_foliage();
+    size_t n = 0;
+    unsigned char *b = glb_memory(f, NULL, &n);
+    glb_parts p = glb_split(b, n);
+    char want[256];
+    snprintf(want, sizeof want, "\"leaf_count\":%zu,\"original_count\":7,\"vertices_per_leaf\":4,"
+             "\"indices_per_leaf\":6,", f->leaf_count);
+    assert_has(p.json, want);
+    for (uint32_t s = 0; s < f->sector_count; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        snprintf(want, sizeof want, "{\"base\":%u,\"original_count\":%u,\"merged_count\":%u,",
+                 sec->base, sec->original_count, sec->merged_count);
+        assert_has(p.json, want);
+        /* every row, in order: the table is one run of [a,b,c,error] */
+        char *rows = strstr(strstr(p.json, want), "\"lods\":[");
+        assert_non_null(rows);
+        rows += strlen("\"lods\":[");
+        for (uint32_t i = 0; i <= sec->merged_count; ++i) {
+            const xyl_foliage_lod *l = &sec->lods[i];
+            unsigned a, bb, c;
+            float e;
+            int used = 0;
+            assert_int_equal(sscanf(rows, "[%u,%u,%u,%g]%n", &a, &bb, &c, &e, &used), 4);
+            assert_true(used > 0);
+            assert_int_equal(a, l->a);
+            assert_int_equal(bb, l->b);
+            assert_int_equal(c, l->c);
+            assert_true(e == l->error);
+            rows += used;
+            assert_int_equal(*rows, i < sec->merged_count ? ',' : ']');
+            rows++;
+        }
+    }
+    free(p.json);
+    free(b);
+    xyl_foliage_destroy(f);
+}
+
+/* The signature, an IHDR chunk of a 1 x 1 RGBA image and a few more bytes: the header is all the
+ * writer looks at. */
+static const unsigned char FAKE_PNG[37] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A, 0, 0, 0,
+                                           13, 'I', 'H', 'D', 'R', 0, 0, 0, 1, 0, 0, 0, 1, 8, 6,
+                                           0, 0, 0, 1, 2, 3, 4, 'I', 'E', 'N', 'D'};
+
+static void glb_embeds_the_texture_and_its_cutoff(void **state)
+{
+    (void)state;
+    xyl_foliage *f = small_foliage();
+    xyl_foliage_glb_desc d = {0};
+    d.texture_png = FAKE_PNG;
+    d.texture_png_size = sizeof FAKE_PNG;
+    d.alpha_cutoff = 0.25f;
+    size_t n = 0;
+    unsigned char *b = glb_memory(f, &d, &n);
+    glb_parts p = glb_split(b, n);
+    size_t L = f->leaf_count;
+    assert_int_equal(p.bin_len, 152 * L + sizeof FAKE_PNG + 3); /* padded to 4 */
+    assert_memory_equal(p.bin + 152 * L, FAKE_PNG, sizeof FAKE_PNG);
+    char want[128];
+    snprintf(want, sizeof want, "\"images\":[{\"bufferView\":4,\"mimeType\":\"image/png\"}]");
+    assert_has(p.json, want);
+    snprintf(want, sizeof want, "{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":%zu}", 152 * L,
+             sizeof FAKE_PNG);
+    assert_has(p.json, want);
+    assert_has(p.json, "\"baseColorTexture\":{\"index\":0}");
+    assert_has(p.json, "\"textures\":[{\"sampler\":0,\"source\":0}]");
+    assert_has(p.json, "\"alphaMode\":\"MASK\",\"alphaCutoff\":0.25,\"doubleSided\":true");
+    assert_lacks(p.json, "baseColorFactor");
+    free(p.json);
+    free(b);
+    xyl_foliage_destroy(f);
+}
+
+static xyl_mesh *stems_and_leaves(xyl_foliage **f)
+{
+    xyl_skeleton *sk = tu_grow(xyl_lsystem_preset_source("faycal-leaves"), NULL);
+    xyl_mesh *m = NULL;
+    assert_int_equal(xyl_stems_build(sk, NULL, &m, NULL, NULL), XYL_OK);
+    size_t n = 0;
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, NULL, 0, &n, NULL), XYL_OK);
+    assert_true(n > 0);
+    xyl_leaf *leaves = malloc(n * sizeof *leaves);
+    assert_non_null(leaves);
+    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, leaves, n, &n, NULL), XYL_OK);
+    xyl_foliage_desc d = {0};
+    d.sectors = 3;
+    *f = build_ok(leaves, n, &d);
+    free(leaves);
+    xyl_skeleton_destroy(sk);
+    return m;
+}
+
+static void glb_with_stems_holds_the_stem_writers_part_first(void **state)
+{
+    (void)state;
+    xyl_foliage *f = NULL;
+    xyl_mesh *m = stems_and_leaves(&f);
+    xyl_foliage_glb_desc d = {0};
+    d.stems = m;
+    size_t n = 0, ns = 0;
+    unsigned char *b = glb_memory(f, &d, &n);
+    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, NULL, 0, &ns), XYL_OK);
+    unsigned char *bs = malloc(ns);
+    assert_non_null(bs);
+    assert_int_equal(xyl_mesh_write_memory(m, XYL_MESH_FORMAT_GLB, NULL, bs, ns, NULL), XYL_OK);
+    glb_parts p = glb_split(b, n), ps = glb_split(bs, ns);
+    /* the stems' bytes, then the leaves' */
+    assert_int_equal(p.bin_len, ps.bin_len + 152 * f->leaf_count);
+    assert_memory_equal(p.bin, ps.bin, ps.bin_len);
+    assert_has(p.json, "\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":[{\"name\":\"stems\",\"mesh\":0},"
+                       "{\"name\":\"leaves\",\"mesh\":1,\"extras\":");
+    /* the same glTF mesh and accessors as the stem writer's, then the leaves' */
+    char *acc = strstr(ps.json, "\"accessors\":[");
+    assert_non_null(acc);
+    *strchr(acc, ']') = '\0';
+    assert_has(p.json, acc);
+    char *stems = strstr(ps.json, "{\"name\":\"stems\",\"primitives\"");
+    assert_non_null(stems);
+    char *end = strstr(stems, "}]}");
+    assert_non_null(end);
+    end[3] = '\0';
+    assert_has(p.json, stems);
+    assert_has(p.json, "{\"name\":\"leaves\",\"primitives\":[{\"attributes\":{\"POSITION\":5,"
+                       "\"NORMAL\":6,\"TEXCOORD_0\":7},\"indices\":8,\"material\":0");
+    free(p.json);
+    free(ps.json);
+    free(bs);
+    free(b);
+    xyl_mesh_destroy(m);
+    xyl_foliage_destroy(f);
+}
+
+static void glb_of_no_leaves_has_a_leaves_node_without_a_mesh(void **state)
+{
+    (void)state;
+    xyl_foliage_desc fd = {0};
+    fd.sectors = 3;
+    xyl_foliage *f = build_ok(NULL, 0, &fd);
+    xyl_foliage_glb_desc d = {0};
+    d.texture_png = FAKE_PNG; /* no material uses it, so it stays out */
+    d.texture_png_size = sizeof FAKE_PNG;
+    size_t n = 0;
+    unsigned char *b = glb_memory(f, &d, &n);
+    glb_parts p = glb_split(b, n);
+    assert_null(p.bin);
+    assert_has(p.json, "\"nodes\":[{\"name\":\"leaves\",\"extras\":{\"xylem_foliage\":{\"version\":1,"
+                       "\"leaf_count\":0,\"original_count\":0,");
+    assert_has(p.json, "{\"base\":0,\"original_count\":0,\"merged_count\":0,\"center\":");
+    const char *row = p.json;
+    for (int s = 0; s < 3; ++s) assert_non_null(row = strstr(row + 1, "\"lods\":[[0,0,0,0]]}"));
+    assert_null(strstr(row + 1, "\"lods\""));
+    assert_lacks(p.json, "\"meshes\"");
+    assert_lacks(p.json, "\"materials\"");
+    assert_lacks(p.json, "\"images\"");
+    assert_lacks(p.json, "\"buffers\"");
+    free(p.json);
+    free(b);
+    /* with stems: the stems' mesh, and the leaves node still without one */
+    xyl_foliage *g = NULL;
+    xyl_mesh *m = stems_and_leaves(&g);
+    d.stems = m;
+    b = glb_memory(f, &d, &n);
+    p = glb_split(b, n);
+    assert_has(p.json, "\"nodes\":[{\"name\":\"stems\",\"mesh\":0},{\"name\":\"leaves\",\"extras\":");
+    assert_lacks(p.json, "\"materials\"");
+    free(p.json);
+    free(b);
+    xyl_mesh_destroy(m);
+    xyl_foliage_destroy(g);
+    xyl_foliage_destroy(f);
+}
+
+static bool glb_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static void glb_file_holds_the_memory_bytes_and_a_failed_write_leaves_no_file(void **state)
+{
+    (void)state;
+    xyl_foliage *f = small_foliage();
+    size_t n = 0;
+    unsigned char *b = glb_memory(f, NULL, &n);
+    char dir[64], path[96], missing[128];
+    snprintf(dir, sizeof dir, "xyl-foliage-glb-XXXXXX"); /* in the test's working folder */
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/leaves.glb", dir);
+    snprintf(missing, sizeof missing, "%s/no/such/folder/leaves.glb", dir);
+    xyl_diag diag = {0};
+    assert_int_equal(xyl_foliage_write_glb_file(f, NULL, path, &diag), XYL_OK);
+    assert_int_equal(diag.code, XYL_OK);
+    FILE *fp = fopen(path, "rb");
+    assert_non_null(fp);
+    unsigned char *back = malloc(n + 1);
+    assert_non_null(back);
+    assert_int_equal(fread(back, 1, n + 1, fp), n);
+    fclose(fp);
+    assert_memory_equal(back, b, n);
+    assert_int_equal(xyl_foliage_write_glb_file(f, NULL, missing, &diag), XYL_ERR_IO);
+    assert_int_equal(diag.code, XYL_ERR_IO);
+    assert_false(glb_exists(missing));
+    /* a bad desc writes nothing: the old file stays as it was */
+    xyl_foliage_glb_desc d = {0};
+    d.alpha_cutoff = 2.0f;
+    assert_int_equal(xyl_foliage_write_glb_file(f, &d, path, &diag), XYL_ERR_INVALID_ARGUMENT);
+    fp = fopen(path, "rb");
+    assert_non_null(fp);
+    assert_int_equal(fread(back, 1, n + 1, fp), n);
+    fclose(fp);
+    assert_memory_equal(back, b, n);
+    assert_int_equal(unlink(path), 0);
+    assert_int_equal(rmdir(dir), 0);
+    free(back);
+    free(b);
+    xyl_foliage_destroy(f);
+}
+
+static void glb_writers_reject_bad_arguments_with_their_codes(void **state)
+{
+    (void)state;
+    xyl_foliage *f = small_foliage();
+    size_t n = 0;
+    unsigned char *b = glb_memory(f, NULL, &n);
+    unsigned char *out = malloc(n);
+    assert_non_null(out);
+    xyl_diag diag = {0};
+    size_t size = 7;
+    /* too small: refused before a byte is written, the size still told */
+    memset(out, 0xA5, n);
+    assert_int_equal(xyl_foliage_write_glb_memory(f, NULL, out, n - 1, &size, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(size, n);
+    for (size_t i = 0; i < n; ++i) assert_int_equal(out[i], 0xA5);
+    assert_int_equal(xyl_foliage_write_glb_memory(NULL, NULL, NULL, 0, &size, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_write_glb_memory(f, NULL, NULL, 0, NULL, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_write_glb_file(NULL, NULL, "x.glb", &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_write_glb_file(f, NULL, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_write_glb_file(f, NULL, "", &diag), XYL_ERR_INVALID_ARGUMENT);
+    static const unsigned char not_png[40] = "GIF89a, not a PNG at all, but 40 bytes";
+    unsigned char no_ihdr[sizeof FAKE_PNG], empty_image[sizeof FAKE_PNG];
+    memcpy(no_ihdr, FAKE_PNG, sizeof FAKE_PNG);
+    no_ihdr[12] = 'X';
+    memcpy(empty_image, FAKE_PNG, sizeof FAKE_PNG);
+    empty_image[19] = 0; /* width 0 */
+    struct {
+        float cutoff;
+        const unsigned char *png;
+        size_t png_size;
+        xyl_result want;
+    } bad[] = {
+        {NAN, NULL, 0, XYL_ERR_NON_FINITE},
+        {INFINITY, NULL, 0, XYL_ERR_NON_FINITE},
+        {-0.1f, NULL, 0, XYL_ERR_INVALID_ARGUMENT},
+        {1.5f, NULL, 0, XYL_ERR_INVALID_ARGUMENT},
+        {0.5f, NULL, 10, XYL_ERR_INVALID_ARGUMENT},
+        {0.5f, FAKE_PNG, 0, XYL_ERR_INVALID_ARGUMENT},
+        {0.5f, not_png, sizeof not_png, XYL_ERR_INVALID_ARGUMENT},
+        {0.5f, FAKE_PNG, 20, XYL_ERR_INVALID_ARGUMENT},
+        {0.5f, no_ihdr, sizeof no_ihdr, XYL_ERR_INVALID_ARGUMENT},
+        {0.5f, empty_image, sizeof empty_image, XYL_ERR_INVALID_ARGUMENT},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        xyl_foliage_glb_desc d = {0};
+        d.alpha_cutoff = bad[i].cutoff;
+        d.texture_png = bad[i].png;
+        d.texture_png_size = bad[i].png_size;
+        size = 7;
+        diag.code = XYL_OK;
+        memset(out, 0xA5, n);
+        xyl_result r = xyl_foliage_write_glb_memory(f, &d, out, n + 64, &size, &diag);
+        if (r != bad[i].want) fail_msg("case %zu: %s (%s)", i, xyl_result_string(r), diag.message);
+        assert_int_equal(diag.code, bad[i].want);
+        assert_true(strlen(diag.message) > 0);
+        assert_int_equal(size, 7);
+        for (size_t k = 0; k < n; ++k) assert_int_equal(out[k], 0xA5);
+    }
+    /* the ends of the cutoff's range are fine */
+    xyl_foliage_glb_desc ends = {0};
+    ends.alpha_cutoff = 1.0f;
+    assert_int_equal(xyl_foliage_write_glb_memory(f, &ends, NULL, 0, &size, &diag), XYL_OK);
+    /* a bad stem mesh gives its own code */
+    xyl_foliage *g = NULL;
+    xyl_mesh *m = stems_and_leaves(&g);
+    xyl_vec3 *pos = malloc(m->vertex_count * sizeof *pos);
+    assert_non_null(pos);
+    memcpy(pos, m->positions, m->vertex_count * sizeof *pos);
+    pos[3].y = NAN;
+    xyl_mesh view = *m;
+    view.positions = pos;
+    xyl_foliage_glb_desc d = {0};
+    d.stems = &view;
+    assert_int_equal(xyl_foliage_write_glb_memory(f, &d, NULL, 0, &size, &diag),
+                     XYL_ERR_NON_FINITE);
+    assert_int_equal(diag.index, 3);
+    view.positions = m->positions;
+    view.tri_view_count = 0; /* faces without their triangulated view */
+    assert_int_equal(xyl_foliage_write_glb_memory(f, &d, NULL, 0, &size, &diag),
+                     XYL_ERR_INVALID_ARGUMENT);
+    free(pos);
+    xyl_mesh_destroy(m);
+    xyl_foliage_destroy(g);
+    free(out);
+    free(b);
+    xyl_foliage_destroy(f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1579,6 +2029,13 @@ int main(void)
         cmocka_unit_test(sectors_without_leaves_have_one_empty_lod),
         cmocka_unit_test(one_sector_is_the_default),
         cmocka_unit_test(pick_gives_each_sector_its_own_lod),
+        cmocka_unit_test(glb_holds_the_leaves_corners_normals_uvs_and_triangles_in_array_order),
+        cmocka_unit_test(glb_extras_hold_every_sectors_lod_table),
+        cmocka_unit_test(glb_embeds_the_texture_and_its_cutoff),
+        cmocka_unit_test(glb_with_stems_holds_the_stem_writers_part_first),
+        cmocka_unit_test(glb_of_no_leaves_has_a_leaves_node_without_a_mesh),
+        cmocka_unit_test(glb_file_holds_the_memory_bytes_and_a_failed_write_leaves_no_file),
+        cmocka_unit_test(glb_writers_reject_bad_arguments_with_their_codes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,6 +14,7 @@
 #include <string.h>
 #include <time.h>
 
+#include <xylem/xyl_foliage.h>
 #include <xylem/xyl_lsystem.h>
 #include <xylem/xyl_stems.h>
 #include <xylem/xyl_tess_gl.h>
@@ -23,6 +24,7 @@
 #include <xylem/xyl_tessellate.h>
 
 #include "glb_read.h"
+#include "leaf_texture.h"
 #include "png_write.h"
 #ifdef XYL_HAVE_GLFW
 #include "view_glfw.h"
@@ -50,6 +52,16 @@ typedef struct render_options {
     const char *screenshot;  /* view: PNG of the last frame */
 } render_options;
 
+/* The leaves of 'foliage' and 'mesh --foliage'. */
+typedef struct foliage_options {
+    bool enabled;             /* 'foliage', or 'mesh --foliage' */
+    bool given;               /* an option below appeared (only those commands take them) */
+    uint32_t sectors;         /* 0: one */
+    double aspect;            /* 0: the library's 0.5 */
+    const char *table;        /* --table FILE.csv */
+    const char *leaf_texture; /* --leaf-texture FILE.png; NULL: the procedural leaf */
+} foliage_options;
+
 typedef struct options {
     const char *preset;
     const char *grammar_path;
@@ -62,6 +74,7 @@ typedef struct options {
     uint32_t depth;
     xyl_turtle_desc turtle;
     render_options render;
+    foliage_options foliage;
 } options;
 
 static const char usage_text[] =
@@ -78,10 +91,16 @@ static const char usage_text[] =
     "                               grow the branch skeleton and write it\n"
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
-    "           [--joints checked|unchecked] --out FILE.glb|FILE.obj\n"
+    "           [--joints checked|unchecked] [--foliage [foliage options]]\n"
+    "           --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
     "                               checked (default): laterals whose joints intersect\n"
-    "                               start later or are left out\n"
+    "                               start later or are left out; --foliage (.glb only): the\n"
+    "                               leaves of 'foliage' too, in the same file\n"
+    "  foliage  [source | --skeleton FILE.skel] [--seed N] [--sectors N] [--aspect A]\n"
+    "           [--leaf-texture FILE.png] [--table FILE.csv] --out FILE.glb\n"
+    "                               quads for the skeleton's leaves, their leaf-collapse LODs\n"
+    "                               (per sector) and a .glb of them; --table: the LOD table\n"
     "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
@@ -150,6 +169,14 @@ static bool parse_u64(const char *s, uint64_t max, uint64_t *out)
     *out = v;
     return true;
 }
+
+static bool ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+static int parse_turtle_option(options *o, const char *opt, const char *val);
 
 static bool parse_double(const char *s, double *out)
 {
@@ -247,6 +274,32 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
     return 0;
 }
 
+/* Options of 'foliage' and 'mesh --foliage'; the rest go on down the chain. */
+static int parse_foliage_option(options *o, const char *opt, const char *val)
+{
+    foliage_options *f = &o->foliage;
+    uint64_t u;
+    if (strcmp(opt, "--sectors") == 0) {
+        if (!parse_u64(val, 256, &u) || u < 1)
+            return usage_error("--sectors takes a whole number from 1 to 256, not '%s'", val);
+        f->sectors = (uint32_t)u;
+    } else if (strcmp(opt, "--aspect") == 0) {
+        if (!parse_double(val, &f->aspect) || !(f->aspect > 0.0) || f->aspect > 100.0)
+            return usage_error("--aspect takes a width / length in (0, 100], not '%s'", val);
+    } else if (strcmp(opt, "--table") == 0) {
+        if (!ends_with(val, ".csv")) return usage_error("--table takes FILE.csv, not '%s'", val);
+        f->table = val;
+    } else if (strcmp(opt, "--leaf-texture") == 0) {
+        if (!ends_with(val, ".png"))
+            return usage_error("--leaf-texture takes FILE.png, not '%s'", val);
+        f->leaf_texture = val;
+    } else {
+        return parse_turtle_option(o, opt, val);
+    }
+    f->given = true;
+    return 0;
+}
+
 static int parse_turtle_option(options *o, const char *opt, const char *val)
 {
     xyl_turtle_desc *t = &o->turtle;
@@ -283,6 +336,10 @@ static int parse_options(int argc, char **argv, options *o)
             o->render.wireframe = true;
             continue;
         }
+        if (strcmp(opt, "--foliage") == 0) {
+            o->foliage.enabled = true;
+            continue;
+        }
         if (strncmp(opt, "--", 2) != 0) return usage_error("unexpected argument '%s'", opt);
         if (i + 1 >= argc) return usage_error("option '%s' needs a value", opt);
         const char *val = argv[++i];
@@ -300,7 +357,7 @@ static int parse_options(int argc, char **argv, options *o)
             o->depth = (uint32_t)u;
             o->has_depth = true;
         } else {
-            int rc = parse_turtle_option(o, opt, val);
+            int rc = parse_foliage_option(o, opt, val);
             if (rc) return rc;
         }
     }
@@ -420,12 +477,6 @@ static int cmd_derive(const options *o)
     return rc;
 }
 
-static bool ends_with(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcmp(s + n - m, suffix) == 0;
-}
-
 /* The exit code of writing path: an output the system refuses is 73, other errors as usual. */
 static int written(const char *path, xyl_result r, const xyl_diag *d)
 {
@@ -536,16 +587,185 @@ static int write_mesh(const xyl_mesh *m, const char *path)
     return written(path, xyl_mesh_write_file(m, path, fmt, NULL, &d), &d);
 }
 
+/* ---- foliage ------------------------------------------------------------------------------- */
+
+typedef struct leaf_job {
+    xyl_foliage *foliage;
+    unsigned char *png; /* the texture's bytes */
+    size_t png_size;
+    double build_ms, texture_ms;
+} leaf_job;
+
+static int leaf_texture_bytes(const options *o, leaf_job *j)
+{
+    static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
+    const char *path = o->foliage.leaf_texture;
+    if (path) {
+        int rc = 0;
+        j->png = (unsigned char *)read_all(path, &j->png_size, &rc);
+        if (!j->png) return rc;
+        if (j->png_size < 8 || memcmp(j->png, signature, 8) != 0) {
+            fprintf(stderr, "xylem: %s: not a PNG file\n", path);
+            return EXIT_DATA;
+        }
+        return 0;
+    }
+    if (j->foliage->leaf_count == 0) return 0;
+    uint32_t w = XYL_LEAF_TEXTURE_WIDTH, h = XYL_LEAF_TEXTURE_HEIGHT;
+    uint8_t *rgba = malloc((size_t)w * h * 4);
+    char msg[256] = "out of memory";
+    int e = rgba ? 0 : ENOMEM;
+    if (rgba) xyl_leaf_texture(rgba, w, h);
+    if (!e) e = xyl_png_encode(rgba, w, h, &j->png, &j->png_size, msg, sizeof msg);
+    free(rgba);
+    if (e) fprintf(stderr, "xylem: the leaf texture: %s\n", msg);
+    return e ? EXIT_OSERR : 0;
+}
+
+static void leaf_job_free(leaf_job *j)
+{
+    xyl_foliage_destroy(j->foliage);
+    free(j->png);
+}
+
+/* Quads for the skeleton's leaf attachments, and their chain and LOD tables. */
+static int build_foliage(const options *o, const xyl_skeleton *sk, const char *source, leaf_job *j)
+{
+    double t0 = now_seconds();
+    xyl_foliage_leaves_desc ld = {0};
+    ld.shape.aspect = (float)o->foliage.aspect;
+    ld.shape.seed = o->seed;
+    xyl_diag d = {0};
+    size_t n = 0;
+    xyl_leaf *leaves = NULL;
+    xyl_result r = xyl_foliage_leaves_from_skeleton(sk, &ld, NULL, 0, &n, &d);
+    if (r == XYL_OK && !(leaves = malloc((n ? n : 1) * sizeof *leaves))) {
+        r = XYL_ERR_OUT_OF_MEMORY;
+        snprintf(d.message, sizeof d.message, "out of memory for %zu leaves", n);
+    }
+    if (r == XYL_OK) r = xyl_foliage_leaves_from_skeleton(sk, &ld, leaves, n, &n, &d);
+    xyl_foliage_desc fd = {0};
+    fd.leaves = leaves;
+    fd.leaf_count = n;
+    fd.sectors = o->foliage.sectors;
+    if (r == XYL_OK) r = xyl_foliage_build(&fd, &j->foliage, &d);
+    free(leaves);
+    j->build_ms = (now_seconds() - t0) * 1e3;
+    return r ? report(source, r, &d) : 0;
+}
+
+/* The PNG to embed: --leaf-texture's file, or the procedural leaf (none without leaves: no
+ * material would use it). */
+static int leaf_texture_png(const options *o, leaf_job *j)
+{
+    double t0 = now_seconds();
+    int rc = leaf_texture_bytes(o, j);
+    j->texture_ms = (now_seconds() - t0) * 1e3;
+    return rc;
+}
+
+/* One row per LOD per sector: sector,lod,leaves,a,b,c,error (error: the world-unit bound). */
+static int write_table(const xyl_foliage *f, const char *path)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *m = open_memstream(&text, &size);
+    if (!m) {
+        fprintf(stderr, "xylem: out of memory for the LOD table\n");
+        return EXIT_OSERR;
+    }
+    fprintf(m, "sector,lod,leaves,a,b,c,error\n");
+    for (uint32_t s = 0; s < f->sector_count; ++s)
+        for (uint32_t i = 0; i <= f->sectors[s].merged_count; ++i) {
+            const xyl_foliage_lod *l = &f->sectors[s].lods[i];
+            fprintf(m, "%u,%u,%u,%u,%u,%u,%.9g\n", s, i, l->a + l->c, l->a, l->b, l->c,
+                    (double)l->error);
+        }
+    bool bad = fclose(m) != 0;
+    char msg[512];
+    int e = bad ? ENOMEM : xyl_write_file_atomic(path, text, size, msg, sizeof msg);
+    free(text);
+    if (e) fprintf(stderr, "xylem: %s\n", bad ? "out of memory for the LOD table" : msg);
+    return e ? (bad ? EXIT_OSERR : EXIT_CANTCREAT) : 0;
+}
+
+/* Leaves, the LOD array, its tables, in a line or two. */
+static void print_foliage(const xyl_foliage *f, const char *source)
+{
+    if (f->original_count == 0) {
+        printf("%s: no leaf attachments: no leaves, an empty LOD array (the file's \"leaves\" node "
+               "has no mesh)\n", source);
+        return;
+    }
+    size_t lods = 0;
+    float coarse = 0.0f;
+    for (uint32_t s = 0; s < f->sector_count; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        lods += sec->merged_count + 1;
+        if (sec->lods[sec->merged_count].error > coarse) coarse = sec->lods[sec->merged_count].error;
+    }
+    printf("%s: %zu leaves -> %zu in the LOD array, %u sector%s, %zu LODs; coarsest %zu leaves, "
+           "error bound %.4g world units\n", source, f->original_count, f->leaf_count,
+           f->sector_count, f->sector_count == 1 ? "" : "s", lods, f->coarsest_count,
+           (double)coarse);
+}
+
+/* The .glb of the leaves (and the stems, when given), then the table. */
+static int write_foliage(const options *o, const leaf_job *j, const xyl_mesh *stems)
+{
+    xyl_foliage_glb_desc gd = {0};
+    gd.stems = stems;
+    gd.texture_png = j->png;
+    gd.texture_png_size = j->png_size;
+    xyl_diag d = {0};
+    int rc = written(o->out, xyl_foliage_write_glb_file(j->foliage, &gd, o->out, &d), &d);
+    if (!rc && o->foliage.table) rc = write_table(j->foliage, o->foliage.table);
+    return rc;
+}
+
+static int cmd_foliage(const options *o)
+{
+    if (!o->out || !ends_with(o->out, ".glb")) return usage_error("%s", "'foliage' needs --out FILE.glb");
+    if (o->skeleton_path && (o->preset || o->grammar_path))
+        return usage_error("%s", "give --skeleton or a grammar source, not both");
+    double t0 = now_seconds();
+    xyl_skeleton *sk = NULL;
+    const char *source = NULL;
+    leaf_job j;
+    memset(&j, 0, sizeof j);
+    int rc = load_skeleton(o, &sk, &source);
+    double t1 = now_seconds();
+    if (!rc) rc = build_foliage(o, sk, source, &j);
+    double t2 = now_seconds();
+    if (!rc) rc = leaf_texture_png(o, &j);
+    if (!rc) rc = write_foliage(o, &j, NULL);
+    if (!rc) {
+        print_foliage(j.foliage, source);
+        printf("time: skeleton %.3f ms, leaves and LODs %.3f ms, write %.3f ms (leaf texture "
+               "%.3f ms of it)\n", (t1 - t0) * 1e3, j.build_ms, (now_seconds() - t2) * 1e3,
+               j.texture_ms);
+        printf("wrote %s\n", o->out);
+        if (o->foliage.table) printf("wrote %s\n", o->foliage.table);
+    }
+    leaf_job_free(&j);
+    xyl_skeleton_destroy(sk);
+    return rc;
+}
+
 static int cmd_mesh(const options *o)
 {
     if (!o->out) return usage_error("%s", "'mesh' needs --out FILE.glb or FILE.obj");
     if (!ends_with(o->out, ".glb") && !ends_with(o->out, ".obj"))
         return usage_error("--out must end in .glb or .obj, not '%s'", o->out);
+    if (o->foliage.enabled && !ends_with(o->out, ".glb"))
+        return usage_error("--foliage writes stems and leaves to a .glb, not '%s'", o->out);
     if (o->skeleton_path && (o->preset || o->grammar_path))
         return usage_error("%s", "give --skeleton or a grammar source, not both");
     double t0 = now_seconds();
     xyl_skeleton *sk = NULL;
     xyl_mesh *m = NULL;
+    leaf_job j;
+    memset(&j, 0, sizeof j);
     const char *source = NULL;
     int rc = load_skeleton(o, &sk, &source);
     double t1 = now_seconds();
@@ -556,8 +776,10 @@ static int cmd_mesh(const options *o)
         xyl_result r = xyl_stems_build(sk, &desc, &m, &st, &d);
         if (r) rc = report(source, r, &d);
     }
+    if (!rc && o->foliage.enabled) rc = build_foliage(o, sk, source, &j);
     double t2 = now_seconds();
-    if (!rc) rc = write_mesh(m, o->out);
+    if (!rc && o->foliage.enabled) rc = leaf_texture_png(o, &j);
+    if (!rc) rc = o->foliage.enabled ? write_foliage(o, &j, m) : write_mesh(m, o->out);
     if (!rc) {
         printf("%s: %zu nodes -> %zu vertices, %zu quads, %zu triangles (%zu in the triangulated "
                "view)\n",
@@ -571,10 +793,16 @@ static int cmd_mesh(const options *o)
                    st.faces_checked, st.faces_first, st.builds, st.builds == 1 ? "" : "s",
                    st.skeleton_pairs);
         if (d.warning_count) printf("warning: %s\n", d.warning);
+        if (o->foliage.enabled) print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
-               (t2 - t1) * 1e3, (now_seconds() - t2) * 1e3);
+               (t2 - t1) * 1e3 - j.build_ms, (now_seconds() - t2) * 1e3);
+        if (o->foliage.enabled)
+            printf("time: leaves and LODs %.3f ms, leaf texture %.3f ms (in the write)\n",
+                   j.build_ms, j.texture_ms);
         printf("wrote %s\n", o->out);
+        if (o->foliage.table) printf("wrote %s\n", o->foliage.table);
     }
+    leaf_job_free(&j);
     xyl_mesh_destroy(m);
     xyl_skeleton_destroy(sk);
     return rc;
@@ -901,11 +1129,19 @@ int main(int argc, char **argv)
     memset(&o, 0, sizeof o);
     bool derive = strcmp(cmd, "derive") == 0, skeleton = strcmp(cmd, "skeleton") == 0;
     bool mesh = strcmp(cmd, "mesh") == 0, render = strcmp(cmd, "render") == 0;
-    bool view = strcmp(cmd, "view") == 0;
-    if (!derive && !skeleton && !mesh && !render && !view)
+    bool view = strcmp(cmd, "view") == 0, foliage = strcmp(cmd, "foliage") == 0;
+    if (!derive && !skeleton && !mesh && !render && !view && !foliage)
         return usage_error("unknown command '%s'", cmd);
     int rc = parse_options(argc, argv, &o);
     if (rc) return rc;
+    if (o.foliage.enabled && !mesh) return usage_error("%s", "--foliage is an option of 'mesh'");
+    if (o.foliage.given && !foliage && !o.foliage.enabled)
+        return usage_error("%s", "--sectors, --aspect, --table and --leaf-texture go with "
+                                 "'foliage' or 'mesh --foliage'");
+    if (foliage) {
+        o.foliage.enabled = true;
+        return cmd_foliage(&o);
+    }
     if (mesh) return cmd_mesh(&o);
     if (render) return cmd_render(&o);
     if (view) return cmd_view(&o);

@@ -47,12 +47,17 @@
  *     xyl_foliage_gather(f, lod, 1, approx, m, &m, &diag);
  *     xyl_foliage_image_error e;
  *     xyl_foliage_image_error_of(leaves, n, approx, m, NULL, &e, &diag);
+ *
+ *     // a .glb of the leaves (and, optionally, the stem mesh) with the LOD tables in extras
+ *     xyl_foliage_glb_desc gd = {0};             // zero = leaves only, no texture, cutoff 0.5
+ *     gd.stems = stem_mesh;
+ *     if (xyl_foliage_write_glb_file(f, &gd, "tree.glb", &diag)) puts(diag.message);
  *     xyl_foliage_destroy(f);
  *
- * Every call is reentrant; only xyl_foliage_build, xyl_foliage_leaves_from_obj and
- * xyl_foliage_image_error_of / _triangles allocate
- * (through their desc's allocator). A foliage is immutable once built, so threads may read it
- * at once.
+ * Every call is reentrant; only xyl_foliage_build, xyl_foliage_leaves_from_obj,
+ * xyl_foliage_image_error_of / _triangles and the GLB writers allocate (through their desc's
+ * allocator; the GLB memory writer only to split the stems' UV seams). A foliage is immutable
+ * once built, so threads may read it at once.
  * The same input (seed included) gives bit-identical leaves, arrays and tables.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
@@ -63,6 +68,7 @@
 #include <stddef.h>
 
 #include <xylem/xyl_core.h>
+#include <xylem/xyl_mesh.h>
 #include <xylem/xyl_skeleton.h>
 #include "xyl_foliage_shared.h" /* shaders/ in the source tree, next to this file once installed */
 
@@ -480,6 +486,49 @@ XYL_API xyl_result xyl_foliage_lod_resolution(const xyl_foliage *f, uint32_t sec
  * half); diag.index names the leaf, and out is untouched. Allocates nothing. */
 XYL_API xyl_result xyl_foliage_pack_gpu(const xyl_leaf *leaves, size_t count,
                                         xyl_foliage_gpu_leaf *out, xyl_diag *diag);
+
+/* ---- glTF export ----------------------------------------------------------------------------
+ *
+ * A .glb with the node "leaves": the whole array (f->leaves, sector after sector) as one
+ * primitive, leaf k as vertices 4k .. 4k + 3 and indices 6k .. 6k + 5 (two triangles), with
+ * POSITION, NORMAL and TEXCOORD_0 (the leaf's rectangle, v flipped to glTF's downward v: the tip
+ * end at the image's top), a double-sided alpha-masked material, and the LOD tables in the
+ * node's extras (docs/foliage.md, "Export", gives the schema). With stems, the stem mesh goes
+ * first as the node "stems", as xyl_mesh_write_file writes it. Drawing LOD i of a sector is
+ * then indices [6 base, 6 (base + a)) and [6 (base + b), 6 (base + b + c)). */
+#define XYL_FOLIAGE_GLB_VERTICES_PER_LEAF 4
+#define XYL_FOLIAGE_GLB_INDICES_PER_LEAF 6
+
+typedef struct xyl_foliage_glb_desc {
+    const xyl_mesh *stems;            /* optional (NULL: leaves only): written as it is by
+                                         xyl_mesh_write_file, in the same file */
+    const unsigned char *texture_png; /* optional: PNG bytes embedded as the material's base
+                                         colour texture (the library decodes no image; it
+                                         checks the signature and IHDR header); NULL: the
+                                         material has a leaf-green base colour factor */
+    size_t texture_png_size;          /* 0 with texture_png NULL */
+    float alpha_cutoff;               /* the material's alphaCutoff, [0, 1]; default (0): 0.5 */
+    xyl_allocator alloc;              /* the file variant's buffer and the stems' seam split */
+} xyl_foliage_glb_desc;
+
+/* Count-then-fill: *size = the file's bytes (out NULL is fine then); with out and capacity <
+ * *size, XYL_ERR_INVALID_ARGUMENT and out untouched. A foliage with no leaves gives a valid file
+ * whose "leaves" node has no mesh but still its extras (each sector one LOD of nothing); a
+ * texture is then left out, since no material uses it. desc may be NULL (defaults, leaves only).
+ * Errors: XYL_ERR_INVALID_ARGUMENT (NULL foliage, out and size both NULL, alpha_cutoff outside
+ * [0, 1], texture bytes and size not both given, bytes that are not a PNG, a bad stem mesh),
+ * XYL_ERR_NON_FINITE (alpha_cutoff, the stem mesh), XYL_ERR_LIMIT_EXCEEDED (a file over the
+ * 4 GiB a GLB's length fields hold), XYL_ERR_OUT_OF_MEMORY (the stems' seam split; a mesh
+ * without seams needs no memory). foliage must come from xyl_foliage_build. */
+XYL_API xyl_result xyl_foliage_write_glb_memory(const xyl_foliage *foliage,
+                                                const xyl_foliage_glb_desc *desc, void *out,
+                                                size_t capacity, size_t *size, xyl_diag *diag);
+/* The same file to path, atomically: path is either the old file or the complete new one, and
+ * on failure no file is left behind. Errors: those of the memory variant, XYL_ERR_IO (cannot
+ * write), XYL_ERR_OUT_OF_MEMORY. */
+XYL_API xyl_result xyl_foliage_write_glb_file(const xyl_foliage *foliage,
+                                              const xyl_foliage_glb_desc *desc, const char *path,
+                                              xyl_diag *diag);
 
 #ifdef __cplusplus
 }
