@@ -76,23 +76,50 @@ static double axis_distance(xyl__dvec3 x, const xyl__collapse_options *o)
     return xyl__d3_len(xyl__d3_sub(d, xyl__d3_scale(o->axis_direction, xyl__d3_dot(d, o->axis_direction))));
 }
 
-/* The weighted sum of the five terms (a term of weight 0 is not computed). Symmetric to the
- * bit: callers pass the leaf of lower index first. */
-static double pair_cost(const cost_leaf *p, const cost_leaf *q, const cost_terms *t)
+/* A pair's terms but the angle, weighted: distance, count, area, interiority (a term of
+ * weight 0 is 0 and not added). */
+typedef struct pair_terms {
+    double distance, count, area, radial;
+} pair_terms;
+
+static pair_terms pair_terms_of(const cost_leaf *p, const cost_leaf *q, const cost_terms *t)
 {
     const double *f = t->factor;
+    pair_terms r = {0.0, 0.0, 0.0, 0.0};
     double dx = (double)p->center[0] - q->center[0], dy = (double)p->center[1] - q->center[1];
     double dz = (double)p->center[2] - q->center[2];
-    double cost = f[0] * sqrt(dx * dx + dy * dy + dz * dz);
-    if (f[1] != 0.0) cost += f[1] * normals_angle(p, q);
+    r.distance = f[0] * sqrt(dx * dx + dy * dy + dz * dz);
     double kp = p->count, kq = q->count;
-    if (f[2] != 0.0) cost += f[2] * (fabs(kp - kq) / (kp + kq));
+    if (f[2] != 0.0) r.count = f[2] * (fabs(kp - kq) / (kp + kq));
     double ap = p->area, aq = q->area;
-    if (f[3] != 0.0) cost += f[3] * (fabs(ap - aq) / (ap + aq));
+    if (f[3] != 0.0) r.area = f[3] * (fabs(ap - aq) / (ap + aq));
     /* the midpoint's distance from the axis, times 2 (folded into f[4]) */
     double r0 = (double)p->radial[0] + q->radial[0], r1 = (double)p->radial[1] + q->radial[1];
-    if (f[4] != 0.0) cost += f[4] * sqrt(r0 * r0 + r1 * r1);
+    if (f[4] != 0.0) r.radial = f[4] * sqrt(r0 * r0 + r1 * r1);
+    return r;
+}
+
+/* The cost from the terms and the weighted angle, summed in one fixed order. Rounding is
+ * monotone, so with angle 0 it is a lower bound of the cost with any angle >= 0, as float
+ * too: the search skips the angle (an atan2) of a pair that cannot win. */
+static double pair_sum(const pair_terms *r, double angle, const cost_terms *t)
+{
+    const double *f = t->factor;
+    double cost = r->distance;
+    if (f[1] != 0.0) cost += angle;
+    if (f[2] != 0.0) cost += r->count;
+    if (f[3] != 0.0) cost += r->area;
+    if (f[4] != 0.0) cost += r->radial;
     return cost;
+}
+
+/* The weighted sum of the five terms. Symmetric to the bit: callers pass the leaf of lower
+ * index first. */
+static double pair_cost(const cost_leaf *p, const cost_leaf *q, const cost_terms *t)
+{
+    pair_terms r = pair_terms_of(p, q, t);
+    double angle = t->factor[1] != 0.0 ? t->factor[1] * normals_angle(p, q) : 0.0;
+    return pair_sum(&r, angle, t);
 }
 
 float xyl__collapse_cost(const xyl_leaf *p, const xyl_leaf *q, const xyl__collapse_options *o)
@@ -381,21 +408,38 @@ static void push(collapse *c, uint32_t owner, uint32_t partner, float cost)
 }
 
 /* Leaf i's best partner among its nearest (ties: lower index), pushed; with update_others,
- * each of them that prefers i to its own entry gets one for i. */
+ * each of them that prefers i to its own entry gets one for i. A pair whose cost without the
+ * angle already loses both ways gets no angle: the same choices, for fewer atan2. */
 static void find_partner(collapse *c, uint32_t i, bool update_others)
 {
     xyl__nearby nr;
     nearest(c, i, &nr);
+    node *cand[XYL__GRID_K];
+    for (uint32_t k = 0; k < nr.count; ++k) {
+        cand[k] = node_of(c, nr.idx[k]);
+        XYL__PREFETCH(cand[k]);
+    }
     const cost_leaf *ki = &node_of(c, i)->key;
+    const double f1 = c->terms.factor[1];
     float best = INFINITY;
     uint32_t partner = 0;
     for (uint32_t k = 0; k < nr.count; ++k) {
         uint32_t j = nr.idx[k];
-        node *nj = node_of(c, j);
+        node *nj = cand[k];
         /* on (lower, higher index), so that both orders give the same bits */
-        float cost = (float)(i < j ? pair_cost(ki, &nj->key, &c->terms) : pair_cost(&nj->key, ki, &c->terms));
-        if (cost < best || (cost == best && j < partner)) best = cost, partner = j;
-        if (update_others && cost < nj->best) push(c, j, i, cost);
+        const cost_leaf *lo = i < j ? ki : &nj->key, *hi = i < j ? &nj->key : ki;
+        pair_terms r = pair_terms_of(lo, hi, &c->terms);
+        float cost = (float)pair_sum(&r, 0.0, &c->terms);
+        bool wins = cost < best || (cost == best && j < partner);
+        bool offered = update_others && cost < nj->best;
+        if (!wins && !offered) continue;
+        if (f1 != 0.0) {
+            cost = (float)pair_sum(&r, f1 * normals_angle(lo, hi), &c->terms);
+            wins = cost < best || (cost == best && j < partner);
+            offered = update_others && cost < nj->best;
+        }
+        if (wins) best = cost, partner = j;
+        if (offered) push(c, j, i, cost);
     }
     c->stats.cost_evaluations += nr.count;
     if (nr.count) {
