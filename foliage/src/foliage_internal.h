@@ -59,19 +59,26 @@ typedef struct xyl__grid_item {
     uint32_t leaf; /* an extra item's is UINT32_MAX once the leaf is dead */
 } xyl__grid_item;
 
+/* A cell: its items of the last build, items[start .. end), and its first extra item (-1 for
+ * none), in one place so that a query's look at a cell is one cache miss, not two. */
 typedef struct xyl__cell_range {
     uint32_t start, end;
+    int32_t extra;
 } xyl__cell_range;
+
+/* A leaf made since the last build, in its cell's list (newest first). */
+typedef struct xyl__grid_extra {
+    xyl__grid_item item;
+    int32_t next, prev; /* -1 for none */
+} xyl__grid_extra;
 
 typedef struct xyl__grid {
     double min[3], h, inv_h; /* cubes of side h from min */
     int32_t dim[3];
     size_t cells, cell_cap, item_cap, extra_cap, bytes;
-    xyl__cell_range *range;  /* cell c's items are items[range[c].start .. range[c].end) */
+    xyl__cell_range *range;  /* per cell */
     xyl__grid_item *items;   /* the live leaves of the last build, by cell */
-    int32_t *extra_head;     /* per cell: the first extra item, -1 if none */
-    int32_t *extra_next, *extra_prev;
-    xyl__grid_item *extra;   /* leaves made since the last build */
+    xyl__grid_extra *extra;  /* leaves made since the last build */
     uint32_t *slot;          /* per leaf: its item, or its extra item | 1 << 31 */
     uint32_t *sort, *live;   /* build scratch */
     uint32_t item_count, extra_count, built_live;
