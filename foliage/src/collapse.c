@@ -165,18 +165,43 @@ static xyl__dvec3 main_axis(const xyl_leaf *p, const xyl_leaf *q, double wp, dou
     return xyl__d3_any_orthogonal(n);
 }
 
-/* Distance from x to the quad of l: the plane distance and how far x lies outside the
- * rectangle along each half-axis. */
+/* What the distance to a quad needs of it: centre, unit half-axes and normal, half-lengths. */
+typedef struct quad_frame {
+    xyl__dvec3 center, ua, us, n;
+    double la, ls;
+} quad_frame;
+
+static quad_frame quad_frame_of(const xyl_leaf *l)
+{
+    quad_frame f;
+    xyl__dvec3 a = xyl__from_f3(l->axis), s = xyl__from_f3(l->side);
+    f.la = xyl__d3_len(a), f.ls = xyl__d3_len(s);
+    f.ua = xyl__d3_scale(a, 1.0 / f.la), f.us = xyl__d3_scale(s, 1.0 / f.ls);
+    f.n = xyl__d3_normalize_or(xyl__d3_cross(f.us, f.ua), xyl__from_f3(l->normal));
+    f.center = xyl__from_f3(l->center);
+    return f;
+}
+
+static double positive_part(double v)
+{
+    return v > 0.0 ? v : 0.0;
+}
+
+/* Distance from x to the quad: the plane distance and how far x lies outside the rectangle
+ * along each half-axis. */
+static double frame_distance(xyl__dvec3 x, const quad_frame *f)
+{
+    xyl__dvec3 d = xyl__d3_sub(x, f->center);
+    double h = xyl__d3_dot(d, f->n);
+    double du = positive_part(fabs(xyl__d3_dot(d, f->ua)) - f->la);
+    double dv = positive_part(fabs(xyl__d3_dot(d, f->us)) - f->ls);
+    return sqrt(h * h + du * du + dv * dv);
+}
+
 static double quad_distance(xyl__dvec3 x, const xyl_leaf *l)
 {
-    xyl__dvec3 a = xyl__from_f3(l->axis), s = xyl__from_f3(l->side);
-    double la = xyl__d3_len(a), ls = xyl__d3_len(s);
-    xyl__dvec3 ua = xyl__d3_scale(a, 1.0 / la), us = xyl__d3_scale(s, 1.0 / ls);
-    xyl__dvec3 n = xyl__d3_normalize_or(xyl__d3_cross(us, ua), xyl__from_f3(l->normal));
-    xyl__dvec3 d = xyl__d3_sub(x, xyl__from_f3(l->center));
-    double h = xyl__d3_dot(d, n);
-    double du = fmax(0.0, fabs(xyl__d3_dot(d, ua)) - la), dv = fmax(0.0, fabs(xyl__d3_dot(d, us)) - ls);
-    return sqrt(h * h + du * du + dv * dv);
+    quad_frame f = quad_frame_of(l);
+    return frame_distance(x, &f);
 }
 
 double xyl__leaf_quad_distance(xyl__dvec3 x, const xyl_leaf *l)
@@ -207,7 +232,10 @@ xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, floa
     for (int k = 0; k < 8; ++k) {
         xyl__dvec3 d = xyl__d3_sub(project(pts[k], c, n), c);
         double u = xyl__d3_dot(d, a), v = xyl__d3_dot(d, s);
-        umin = fmin(umin, u), umax = fmax(umax, u), vmin = fmin(vmin, v), vmax = fmax(vmax, v);
+        if (u < umin) umin = u;
+        if (u > umax) umax = u;
+        if (v < vmin) vmin = v;
+        if (v > vmax) vmax = v;
     }
     /* area: the mean of the two areas' sum and the rectangle's, by scaling the width; a
        rectangle with (almost) no length (both leaves seen edge-on) scales its length instead */
@@ -233,11 +261,16 @@ xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, floa
     double e = 0.0;
     const xyl_leaf *child[2] = {p, q};
     const float child_err[2] = {err_p, err_q};
+    quad_frame frame = quad_frame_of(&m);
     for (int k = 0; k < 2; ++k) {
         double worst = 0.0;
         xyl__leaf_corners(child[k], pts);
-        for (int j = 0; j < 4; ++j) worst = fmax(worst, quad_distance(pts[j], &m));
-        e = fmax(e, (double)child_err[k] + worst);
+        for (int j = 0; j < 4; ++j) {
+            double dj = frame_distance(pts[j], &frame);
+            if (dj > worst) worst = dj;
+        }
+        double ek = (double)child_err[k] + worst;
+        if (ek > e) e = ek;
     }
     *err = xyl__round_up(e);
     return m;
