@@ -279,17 +279,33 @@ xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, floa
 /* ---- the heap of candidate pairs ------------------------------------------------------------ */
 
 /* 16 bytes, in a 4-ary heap: a node's four children share one cache line. The cost is rounded
- * to float; ties (more of them than in double, none that matter) go to the lower indices. */
+ * to float; ties (more of them than in double, none that matter) go to the lower indices. A
+ * cost is never negative, so its bits order as the costs do, and the cost and the lower index
+ * make one 64-bit key that one comparison orders (a NaN cost, from leaves too small for a
+ * float area, goes last). */
 typedef struct entry {
-    float cost;
-    uint32_t lo, hi;  /* the pair, lo < hi */
+    uint64_t key;     /* the cost's bits << 32 | lo */
+    uint32_t hi;      /* the pair is (lo, hi), lo < hi */
     uint32_t stamp;   /* the owner's version << 1, | 1 when the owner is hi */
 } entry;
 
+static entry entry_of(float cost, uint32_t lo, uint32_t hi, uint32_t stamp)
+{
+    uint32_t bits;
+    cost += 0.0f; /* -0 (a weight of -0) as +0 */
+    memcpy(&bits, &cost, sizeof bits);
+    entry e = {(uint64_t)bits << 32 | lo, hi, stamp};
+    return e;
+}
+
+static uint32_t lo_of(const entry *e)
+{
+    return (uint32_t)e->key;
+}
+
 static bool before(const entry *x, const entry *y)
 {
-    if (x->cost != y->cost) return x->cost < y->cost;
-    if (x->lo != y->lo) return x->lo < y->lo;
+    if (x->key != y->key) return x->key < y->key;
     if (x->hi != y->hi) return x->hi < y->hi;
     return x->stamp < y->stamp;
 }
@@ -395,7 +411,7 @@ static void nearest(collapse *c, uint32_t i, xyl__nearby *nr)
 
 static uint32_t owner_of(const entry *e)
 {
-    return e->stamp & 1u ? e->hi : e->lo;
+    return e->stamp & 1u ? e->hi : lo_of(e);
 }
 
 static node *node_of(const collapse *c, uint32_t leaf)
@@ -434,8 +450,8 @@ static void push(collapse *c, uint32_t owner, uint32_t partner, float cost)
     node *o = node_of(c, owner);
     o->best = cost;
     o->version++;
-    entry e = {cost, owner < partner ? owner : partner, owner < partner ? partner : owner,
-               o->version << 1 | (owner > partner)};
+    entry e = entry_of(cost, owner < partner ? owner : partner, owner < partner ? partner : owner,
+                       o->version << 1 | (owner > partner));
     c->heap[c->heap_size] = e;
     sift_up(c->heap, c->heap_size++);
 }
@@ -528,12 +544,12 @@ static void run(collapse *c)
         c->heap[0] = c->heap[--c->heap_size];
         if (c->heap_size) sift_down(c->heap, c->heap_size, 0);
         if (!current(c, &e)) continue;
-        uint32_t owner = owner_of(&e), partner = owner == e.lo ? e.hi : e.lo;
+        uint32_t owner = owner_of(&e), partner = owner == lo_of(&e) ? e.hi : lo_of(&e);
         if (!alive(c, partner)) {
             find_partner(c, owner, false); /* its partner merged with another: look again */
             continue;
         }
-        merge(c, e.lo, e.hi);
+        merge(c, lo_of(&e), e.hi);
     }
 }
 

@@ -75,6 +75,7 @@ typedef struct xyl__grid_extra {
 typedef struct xyl__grid {
     double min[3], h, inv_h; /* cubes of side h from min */
     int32_t dim[3];
+    int64_t ring1_step[26];  /* cell index offsets of the 26 neighbours, in the query's order */
     size_t cells, cell_cap, item_cap, extra_cap, bytes;
     xyl__cell_range *range;  /* per cell */
     xyl__grid_item *items;   /* the live leaves of the last build, by cell */

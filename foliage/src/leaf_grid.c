@@ -103,6 +103,15 @@ static void grid_size(xyl__grid *g, const double ext[3], uint32_t live)
     g->inv_h = 1.0 / h;
 }
 
+/* The 26 neighbours of a cell, nearest kinds first: faces, edges, corners. */
+static const int8_t ring1[26][3] = {
+    {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},   {0, 0, -1},  {0, 0, 1},
+    {-1, -1, 0}, {1, -1, 0},  {-1, 1, 0},  {1, 1, 0},   {-1, 0, -1}, {1, 0, -1},
+    {-1, 0, 1},  {1, 0, 1},   {0, -1, -1}, {0, 1, -1},  {0, -1, 1},  {0, 1, 1},
+    {-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1},
+    {-1, 1, 1},  {1, 1, 1},
+};
+
 static void build(xyl__grid *g, const xyl_leaf *leaves, const uint32_t *live, uint32_t count)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -117,6 +126,9 @@ static void build(xyl__grid *g, const xyl_leaf *leaves, const uint32_t *live, ui
         ext[d] = count ? hi[d] - lo[d] : 0.0;
     }
     grid_size(g, ext, count);
+    for (int n = 0; n < 26; ++n)
+        g->ring1_step[n] = ring1[n][0] + ring1[n][1] * (int64_t)g->dim[0] +
+                           ring1[n][2] * (int64_t)g->dim[0] * g->dim[1];
     size_t cells = (size_t)g->dim[0] * (size_t)g->dim[1] * (size_t)g->dim[2];
     g->cells = cells;
     for (size_t k = 0; k < cells; ++k) g->range[k] = (xyl__cell_range){0, 0, -1};
@@ -285,14 +297,6 @@ static bool worth(const query *q, double d2)
     return d2 <= q->limit;
 }
 
-/* The 26 neighbours of a cell, nearest kinds first: faces, edges, corners. */
-static const int8_t ring1[26][3] = {
-    {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},   {0, 0, -1},  {0, 0, 1},
-    {-1, -1, 0}, {1, -1, 0},  {-1, 1, 0},  {1, 1, 0},   {-1, 0, -1}, {1, 0, -1},
-    {-1, 0, 1},  {1, 0, 1},   {0, -1, -1}, {0, 1, -1},  {0, -1, 1},  {0, 1, 1},
-    {-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1},
-    {-1, 1, 1},  {1, 1, 1},
-};
 
 /* Ring 1 in two passes: first the cells worth a look, with their ranges and first items
  * asked for ahead (their cache misses then overlap), then the scan, which drops the cells the
@@ -312,17 +316,18 @@ static bool scan_ring1(query *q, const int32_t c0[3])
         exists[k][1] = true;
         exists[k][2] = c0[k] < g->dim[k] - 1;
     }
-    const int64_t step[3] = {1, g->dim[0], (int64_t)g->dim[0] * g->dim[1]};
+    const bool interior = exists[0][0] && exists[0][2] && exists[1][0] && exists[1][2] &&
+                          exists[2][0] && exists[2][2];
     const int64_t home = (int64_t)cell_index(g, c0);
     uint32_t cells[26];
     double dist2[26];
     int count = 0;
     for (int n = 0; n < 26; ++n) {
         const int x = ring1[n][0] + 1, y = ring1[n][1] + 1, z = ring1[n][2] + 1;
-        if (!exists[0][x] || !exists[1][y] || !exists[2][z]) continue;
+        if (!interior && (!exists[0][x] || !exists[1][y] || !exists[2][z])) continue;
         double d2 = gap[0][x] + gap[1][y] + gap[2][z];
         if (!worth(q, d2)) continue;
-        cells[count] = (uint32_t)(home + ring1[n][0] * step[0] + ring1[n][1] * step[1] + ring1[n][2] * step[2]);
+        cells[count] = (uint32_t)(home + g->ring1_step[n]);
         dist2[count++] = d2;
         XYL__PREFETCH(&g->range[cells[count - 1]]);
     }
