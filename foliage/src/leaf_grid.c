@@ -379,10 +379,11 @@ uint64_t xyl__grid_nearest(const xyl__grid *g, uint32_t self, xyl_vec3 centre, d
     double inside = INFINITY;
     for (int k = 0; k < 3; ++k) {
         double lo = g->min[k] + c0[k] * g->h, t = (double)p[k];
-        q.below[k] = fmax(0.0, t - lo);
-        q.above[k] = fmax(0.0, lo + g->h - t);
-        if (c0[k] > 0) inside = fmin(inside, q.below[k]);
-        if (c0[k] < g->dim[k] - 1) inside = fmin(inside, q.above[k]);
+        double below = t - lo, above = lo + g->h - t;
+        q.below[k] = below > 0.0 ? below : 0.0;
+        q.above[k] = above > 0.0 ? above : 0.0;
+        if (c0[k] > 0 && q.below[k] < inside) inside = q.below[k];
+        if (c0[k] < g->dim[k] - 1 && q.above[k] < inside) inside = q.above[k];
     }
     if (!(inside < INFINITY)) inside = 0.0;
     for (int32_t r = 0; r <= rmax; ++r) {
