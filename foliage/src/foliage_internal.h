@@ -145,14 +145,17 @@ void xyl__collapse_units(const xyl_leaf *leaves, uint32_t n, xyl__collapse_optio
 /* The cost of merging p and q (p the one of lower index), rounded to float as the chain
  * orders pairs. */
 float xyl__collapse_cost(const xyl_leaf *p, const xyl_leaf *q, const xyl__collapse_options *o);
-/* The leaf that replaces p and q (p the one of lower index) and, in *err, the bound of the
- * distance from the originals it stands for to it, given theirs. */
+/* The leaf that replaces p and q (p the one of lower index) and, in *err (unless NULL), a
+ * bound of the distance from the originals it stands for to it, given theirs: the larger of
+ * a child's bound plus its corners' distance from the new quad. xyl__collapse's errors are
+ * tighter (exact) and do not use it. */
 xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, float err_q, float *err);
 double xyl__leaf_quad_distance(xyl__dvec3 x, const xyl_leaf *l);
 /* Runs the chain on leaves[0 .. n) (checked and tidy), greedily in cost order. On success
  * leaves[n .. n + *merges) are the merged leaves in the order they were made, merge k joined
- * children[2k] < children[2k + 1], error[i] bounds leaf i's distance from the originals it
- * stands for (0 for these). leaves and error hold 2n - 1, children 2n - 2 (at least 1 each).
+ * children[2k] < children[2k + 1], error[i] is the farthest any point of the originals leaf i
+ * stands for lies from its quad, rounded up, or a child's error where that is larger (0 for
+ * the originals). leaves and error hold 2n - 1, children 2n - 2 (at least 1 each).
  * Errors: XYL_ERR_OUT_OF_MEMORY only. */
 xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
                          const xyl__collapse_options *o, const xyl_allocator *a, uint32_t *merges,
