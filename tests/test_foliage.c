@@ -892,6 +892,26 @@ static void collapse_error_bounds_every_original_point(void **state)
         }
         print_message("set %d: the sum bound is looser for %u of %u merged leaves\n", s, looser, c.m);
         assert_true(looser > 0);
+        /* past the work budget the sum bound takes over: with none it is the sum bound
+           throughout, with some it lies between the two and still bounds every point */
+        float *exact = malloc(2 * (size_t)n * sizeof *exact);
+        assert_non_null(exact);
+        memcpy(exact, c.error, (2 * (size_t)n - 1) * sizeof *exact);
+        assert_int_equal(xyl__collapse_errors(c.leaves, c.error, c.children, c.n, c.m, 0, NULL), XYL_OK);
+        assert_memory_equal(c.error + c.n, sum + c.n, c.m * sizeof *sum);
+        uint64_t budget = 2 * (uint64_t)n;
+        assert_true(budget < xyl__collapse_error_budget(n));
+        assert_int_equal(xyl__collapse_errors(c.leaves, c.error, c.children, c.n, c.m, budget, NULL), XYL_OK);
+        uint32_t exact_kept = 0;
+        for (uint32_t k = 0; k < c.n + c.m; ++k) {
+            assert_true(exact[k] <= c.error[k] && c.error[k] <= sum[k]);
+            exact_kept += k >= c.n && c.error[k] == exact[k];
+        }
+        for (uint32_t k = 0; k < c.m; ++k)
+            for (int h = 0; h < 2; ++h) assert_true(c.error[c.children[2 * k + h]] <= c.error[c.n + k]);
+        assert_true(exact_kept > 0 && exact_kept < c.m);
+        assert_error_bounds_hold(&c);
+        free(exact);
         free(sum);
         free_chain(&c);
         free(in);

@@ -578,17 +578,25 @@ static double corners_distance2(const corners *o, const quad_frame *f)
 
 #define NO_RUN UINT32_MAX
 
-/* Each merged leaf's error, exactly: the farthest point of the originals it stands for from
- * its quad, which is a corner of one of them (the distance to a convex quad is convex, so
- * over an original quad it peaks at a corner), and no less than its children's, so that
- * errors never decrease towards the roots (a per-leaf cut and the LODs' running maximum need
- * that). The sum bound that the merges give (a child's error plus its corners' distance)
- * grows with the depth of the forest; this one does not. The originals are copied in depth
- * first order, so that a merged leaf's are one run: time n times the mean depth. Rounded up
- * to float; errors of originals stay 0. Memory: 104 bytes an original, while the chain's
- * scratch (more) is free. */
-static xyl_result exact_errors(const xyl_leaf *leaves, float *error, const uint32_t *children,
-                               uint32_t n, uint32_t m, const xyl_allocator *a)
+/* The sum bound of merged leaf x over its children: a child's error plus the largest distance
+ * of its corners from x's quad (every point a child stands for is within its error of its
+ * quad, whose points are within that distance of x's). */
+static double sum_bound(const xyl_leaf *leaves, const float *error, uint32_t c0, uint32_t c1,
+                        const quad_frame *f)
+{
+    double e = 0.0;
+    const uint32_t child[2] = {c0, c1};
+    for (int k = 0; k < 2; ++k) {
+        corners c;
+        xyl__leaf_corners(&leaves[child[k]], c.p);
+        double ek = (double)error[child[k]] + sqrt(corners_distance2(&c, f));
+        if (ek > e) e = ek;
+    }
+    return e;
+}
+
+xyl_result xyl__collapse_errors(const xyl_leaf *leaves, float *error, const uint32_t *children,
+                                uint32_t n, uint32_t m, uint64_t budget, const xyl_allocator *a)
 {
     size_t total = (size_t)n + m;
     uint32_t *size = xyl__alloc_array(a, total, sizeof *size);
@@ -610,18 +618,24 @@ static xyl_result exact_errors(const xyl_leaf *leaves, float *error, const uint3
             if (start[x] == NO_RUN) start[x] = next++; /* never merged */
             xyl__leaf_corners(&leaves[x], run[start[x]].p);
         }
+        for (uint32_t x = 0; x < n; ++x) error[x] = 0.0f;
         for (uint32_t g = 0; g < m; ++g) {
-            uint32_t x = n + g;
+            uint32_t x = n + g, c0 = children[2 * g], c1 = children[2 * g + 1];
             quad_frame f = quad_frame_of(&leaves[x]);
-            double worst = 0.0;
-            for (uint32_t k = start[x], end = start[x] + size[x]; k < end; ++k) {
-                double d2 = corners_distance2(&run[k], &f);
-                if (d2 > worst) worst = d2;
+            double e;
+            if (size[x] <= budget) {
+                budget -= size[x];
+                double worst = 0.0;
+                for (uint32_t k = start[x], end = start[x] + size[x]; k < end; ++k) {
+                    double d2 = corners_distance2(&run[k], &f);
+                    if (d2 > worst) worst = d2;
+                }
+                e = sqrt(worst);
+                if (error[c0] > e) e = error[c0];
+                if (error[c1] > e) e = error[c1];
+            } else {
+                e = sum_bound(leaves, error, c0, c1, &f);
             }
-            double e = sqrt(worst);
-            float e0 = error[children[2 * g]], e1 = error[children[2 * g + 1]];
-            if (e0 > e) e = e0;
-            if (e1 > e) e = e1;
             error[x] = xyl__round_up(e);
         }
         r = XYL_OK;
@@ -630,6 +644,13 @@ static xyl_result exact_errors(const xyl_leaf *leaves, float *error, const uint3
     xyl__free(a, start);
     xyl__free(a, run);
     return r;
+}
+
+uint64_t xyl__collapse_error_budget(uint32_t n)
+{
+    uint64_t bits = 0;
+    for (uint32_t v = n; v; v >>= 1) ++bits;
+    return (uint64_t)n * (4 * bits + 16);
 }
 
 xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
@@ -664,7 +685,8 @@ xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uin
     xyl__free(a, c.heap_block);
     xyl__grid_free(&c.g, a);
     /* after the chain's scratch is gone: the peak stays the chain's */
-    if (r == XYL_OK && exact_errors(leaves, error, children, n, c.merges, a) != XYL_OK)
+    if (r == XYL_OK &&
+        xyl__collapse_errors(leaves, error, children, n, c.merges, xyl__collapse_error_budget(n), a) != XYL_OK)
         r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the errors of %u leaves", n);
     if (r == XYL_OK) {
         *merges = c.merges;

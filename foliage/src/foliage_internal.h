@@ -161,6 +161,22 @@ xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uin
                          const xyl__collapse_options *o, const xyl_allocator *a, uint32_t *merges,
                          xyl__collapse_stats *stats, xyl_diag *diag);
 
+/* The errors of a chain (leaves[0 .. n + m), children as xyl__collapse gives them) into
+ * error[0 .. n + m): 0 for the originals; for a merged leaf the farthest corner of the
+ * originals it stands for from its quad (the distance to a convex quad is convex, so that is
+ * the farthest point), or a child's error where that is larger, so that errors never decrease
+ * towards the roots; rounded up to float. The originals are laid out depth first, so a merged
+ * leaf measures one run of them: the work is the sum of the merged leaves' original counts, n
+ * times the mean depth of the merge forest. Once that passes budget, the merged leaves left
+ * take the sum bound instead: the larger of a child's error plus its corners' distance from
+ * the quad (sound, looser). Errors: XYL_ERR_OUT_OF_MEMORY only (nothing written). */
+xyl_result xyl__collapse_errors(const xyl_leaf *leaves, float *error, const uint32_t *children,
+                                uint32_t n, uint32_t m, uint64_t budget, const xyl_allocator *a);
+/* The budget xyl__collapse gives it: n (4 bits(n) + 16), several times the mean depth of
+ * the forests of random crowns (about 1.15 log2 n), and linear-logarithmic whatever the
+ * forest's shape. */
+uint64_t xyl__collapse_error_budget(uint32_t n);
+
 /* ---- the linear LOD array (linearize.c) ---- */
 
 /* Reorders a chain made by xyl__collapse (leaves[0 .. n + m) in cost order, children, error)
