@@ -2,11 +2,10 @@
  * smallest weighted cost, until one leaf is left or no pair passes the thresholds.
  *
  * No all-pairs search: each live leaf keeps its best partner among its K nearest live leaves,
- * found in a uniform grid by rings of cells around its own (leaf_grid.c); the pairs wait in a
- * heap (4-ary) whose entries carry their owner's version stamp, so an entry that a newer one
- * replaced, or whose leaves died, is dropped when it comes out (lazy invalidation). A merge
- * kills two leaves and makes one: the new leaf finds its K nearest, and each of them that
- * prefers it gets a new entry. A query stops after a fixed number of leaves, so even a million
+ * found in a uniform grid by rings of cells around its own (leaf_grid.c); the pairs wait in an
+ * indexed 4-ary heap that holds each live leaf's best pair once: a better offer replaces it in
+ * place, and it goes when the leaf dies. A merge kills two leaves and makes one: the new leaf
+ * finds its K nearest, and each of them that prefers it gets it as its entry. A query stops after a fixed number of leaves, so even a million
  * coincident leaves cost O(1) each. Expected O(n log n) time, O(n) memory. Ties are broken by
  * leaf index: the same input gives the same chain, bit for bit. */
 #include <string.h>
@@ -283,11 +282,13 @@ xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, floa
  * to float; ties (more of them than in double, none that matter) go to the lower indices. A
  * cost is never negative, so its bits order as the costs do, and the cost and the lower index
  * make one 64-bit key that one comparison orders (a NaN cost, from leaves too small for a
- * float area, goes last). */
+ * float area, goes last). The heap is indexed: each live leaf has at most one entry, its best
+ * pair, which a better offer replaces in place and which goes when the leaf dies, so the heap
+ * holds no stale entries and never more than the live leaves. */
 typedef struct entry {
     uint64_t key;     /* the cost's bits << 32 | lo */
     uint32_t hi;      /* the pair is (lo, hi), lo < hi */
-    uint32_t stamp;   /* the owner's version << 1, | 1 when the owner is hi */
+    uint32_t stamp;   /* the owner's node << 1, | 1 when the owner is hi */
 } entry;
 
 static entry entry_of(float cost, uint32_t lo, uint32_t hi, uint32_t stamp)
@@ -311,34 +312,6 @@ static bool before(const entry *x, const entry *y)
     return x->stamp < y->stamp;
 }
 
-static void sift_up(entry *h, size_t i)
-{
-    entry e = h[i];
-    while (i > 0) {
-        size_t p = (i - 1) / 4;
-        if (!before(&e, &h[p])) break;
-        h[i] = h[p];
-        i = p;
-    }
-    h[i] = e;
-}
-
-static void sift_down(entry *h, size_t size, size_t i)
-{
-    entry e = h[i];
-    for (;;) {
-        size_t c = 4 * i + 1;
-        if (c >= size) break;
-        size_t end = c + 4 < size ? c + 4 : size, m = c;
-        for (size_t k = c + 1; k < end; ++k)
-            if (before(&h[k], &h[m])) m = k;
-        if (!before(&h[m], &e)) break;
-        h[i] = h[m];
-        i = m;
-    }
-    h[i] = e;
-}
-
 /* ---- the collapse state ------------------------------------------------------------------ */
 
 /* What the search touches of a live leaf, in one cache line. A node is a slot that a merged
@@ -347,11 +320,10 @@ static void sift_down(entry *h, size_t size, size_t i)
  * search. */
 typedef struct node {
     cost_leaf key;
-    float best;       /* the cost of the leaf's latest entry; INFINITY if none */
-    uint32_t version; /* of its latest entry */
+    float best;       /* the cost of the leaf's entry; INFINITY if none */
     uint32_t alive;
     uint32_t leaf;    /* the leaf in the slot now */
-    uint32_t pad[2];
+    uint32_t pad[3];
 } node;
 _Static_assert(sizeof(node) == 64, "a node is one cache line");
 
@@ -365,6 +337,7 @@ typedef struct collapse {
     uint32_t *slot;   /* per leaf: its node */
     entry *heap;      /* the root at heap[0], children of k at 4k + 1 .. 4k + 4 */
     void *heap_block;
+    uint32_t *at;     /* per node: its entry's place in the heap, NOWHERE if none */
     size_t heap_size, heap_cap;
     cost_terms terms;
     xyl__grid g;
@@ -426,35 +399,69 @@ static bool alive(const collapse *c, uint32_t leaf)
     return n->leaf == leaf && n->alive;
 }
 
-static bool current(const collapse *c, const entry *e)
+#define NOWHERE UINT32_MAX
+
+static void place(collapse *c, size_t i, entry e)
 {
-    uint32_t owner = owner_of(e);
-    return alive(c, owner) && node_of(c, owner)->version == e->stamp >> 1;
+    c->heap[i] = e;
+    c->at[e.stamp >> 1] = (uint32_t)i;
 }
 
-/* Makes room for pushes: drops the entries that can no longer be taken (dead or replaced
- * owner), which leaves at most one per live leaf, and re-heapifies. */
-static void heap_compact(collapse *c)
+static void sift_up(collapse *c, size_t i)
 {
-    size_t kept = 0;
-    for (size_t k = 0; k < c->heap_size; ++k)
-        if (current(c, &c->heap[k])) c->heap[kept++] = c->heap[k];
-    c->heap_size = kept;
-    for (size_t k = kept / 4 + 1; k-- > 0;)
-        if (k < kept) sift_down(c->heap, kept, k);
-    c->stats.heap_compactions++;
+    entry *h = c->heap, e = h[i];
+    while (i > 0) {
+        size_t p = (i - 1) / 4;
+        if (!before(&e, &h[p])) break;
+        place(c, i, h[p]);
+        i = p;
+    }
+    place(c, i, e);
 }
 
+static void sift_down(collapse *c, size_t i)
+{
+    entry *h = c->heap, e = h[i];
+    size_t size = c->heap_size;
+    for (;;) {
+        size_t first = 4 * i + 1;
+        if (first >= size) break;
+        size_t end = first + 4 < size ? first + 4 : size, m = first;
+        for (size_t k = first + 1; k < end; ++k)
+            if (before(&h[k], &h[m])) m = k;
+        if (!before(&h[m], &e)) break;
+        place(c, i, h[m]);
+        i = m;
+    }
+    place(c, i, e);
+}
+
+/* Takes node s's entry out of the heap, if it has one. */
+static void heap_remove(collapse *c, uint32_t s)
+{
+    uint32_t i = c->at[s];
+    if (i == NOWHERE) return;
+    c->at[s] = NOWHERE;
+    c->nodes[s].best = INFINITY;
+    entry last = c->heap[--c->heap_size];
+    if (i == c->heap_size) return;
+    place(c, i, last);
+    sift_up(c, i);
+    sift_down(c, c->at[last.stamp >> 1]);
+}
+
+/* The owner's entry becomes (owner, partner) at cost: in place of its old one, if any. */
 static void push(collapse *c, uint32_t owner, uint32_t partner, float cost)
 {
-    if (c->heap_size == c->heap_cap) heap_compact(c);
-    node *o = node_of(c, owner);
-    o->best = cost;
-    o->version++;
+    uint32_t s = c->slot[owner];
+    c->nodes[s].best = cost;
     entry e = entry_of(cost, owner < partner ? owner : partner, owner < partner ? partner : owner,
-                       o->version << 1 | (owner > partner));
-    c->heap[c->heap_size] = e;
-    sift_up(c->heap, c->heap_size++);
+                       s << 1 | (owner > partner));
+    size_t i = c->at[s];
+    if (i == NOWHERE) i = c->heap_size++;
+    place(c, i, e);
+    sift_up(c, i);
+    sift_down(c, c->at[s]);
 }
 
 /* Leaf i's best partner among its nearest (ties: lower index), pushed; with update_others,
@@ -495,8 +502,7 @@ static void find_partner(collapse *c, uint32_t i, bool update_others)
     if (nr.count) {
         push(c, i, partner, best);
     } else {
-        node_of(c, i)->best = INFINITY;
-        node_of(c, i)->version++;
+        heap_remove(c, c->slot[i]);
     }
 }
 
@@ -519,6 +525,8 @@ static void merge(collapse *c, uint32_t p, uint32_t q)
     c->children[2 * (size_t)c->merges] = p;
     c->children[2 * (size_t)c->merges + 1] = q;
     c->merges++;
+    heap_remove(c, c->slot[p]);
+    heap_remove(c, c->slot[q]);
     node_of(c, q)->alive = 0;
     xyl__grid_remove(&c->g, p);
     xyl__grid_remove(&c->g, q);
@@ -542,9 +550,7 @@ static void run(collapse *c)
     for (uint32_t k = 0; k < c->g.item_count; ++k) find_partner(c, c->g.items[k].leaf, false);
     while (c->heap_size > 0) {
         entry e = c->heap[0];
-        c->heap[0] = c->heap[--c->heap_size];
-        if (c->heap_size) sift_down(c->heap, c->heap_size, 0);
-        if (!current(c, &e)) continue;
+        heap_remove(c, e.stamp >> 1);
         uint32_t owner = owner_of(&e), partner = owner == lo_of(&e) ? e.hi : lo_of(&e);
         if (!alive(c, partner)) {
             find_partner(c, owner, false); /* its partner merged with another: look again */
@@ -667,22 +673,25 @@ xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uin
     c.count = c.live = n;
     c.max_d2 = o->max_distance < INFINITY ? o->max_distance * o->max_distance : INFINITY;
     size_t cap = n ? 2 * (size_t)n - 1 : 1;
-    c.heap_cap = 2 * (size_t)n + 2 * XYL__GRID_K + 16;
+    c.heap_cap = n ? n : 1; /* an entry a node at most */
     xyl_result r = xyl__grid_init(&c.g, n, a);
     c.nodes = alloc_lines(a, n ? n : 1, sizeof *c.nodes, 0, &c.nodes_block);
     c.slot = xyl__alloc_array(a, cap, sizeof *c.slot);
     c.heap = alloc_lines(a, c.heap_cap, sizeof *c.heap, 1, &c.heap_block);
-    if (r != XYL_OK || !c.nodes || !c.slot || !c.heap) {
+    c.at = xyl__alloc_array(a, c.heap_cap, sizeof *c.at);
+    if (r != XYL_OK || !c.nodes || !c.slot || !c.heap || !c.at) {
         r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the collapse of %u leaves", n);
     } else {
         for (uint32_t i = 0; i < n; ++i) error[i] = 0.0f;
+        for (size_t i = 0; i < c.heap_cap; ++i) c.at[i] = NOWHERE;
         if (n) run(&c);
         c.stats.bytes = (n ? n : 1) * sizeof *c.nodes + cap * sizeof *c.slot +
-                        c.heap_cap * sizeof *c.heap + 256 + c.g.bytes;
+                        c.heap_cap * (sizeof *c.heap + sizeof *c.at) + 256 + c.g.bytes;
     }
     xyl__free(a, c.nodes_block);
     xyl__free(a, c.slot);
     xyl__free(a, c.heap_block);
+    xyl__free(a, c.at);
     xyl__grid_free(&c.g, a);
     /* after the chain's scratch is gone: the peak stays the chain's */
     if (r == XYL_OK &&
