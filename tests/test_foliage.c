@@ -700,6 +700,33 @@ static void collapse_runs_to_one_leaf_standing_for_all(void **state)
     }
 }
 
+/* The error of merged leaf n + k by its definition, found by brute force: the farthest corner
+ * of the originals under it from its quad (the distance to a convex quad is convex: an
+ * original's farthest point is a corner), or a child's error where that is larger, rounded up
+ * to float. */
+static float exact_error(const xyl_leaf *leaves, uint32_t n, const uint32_t *children, uint32_t k,
+                         const float *err)
+{
+    uint32_t *stack = malloc((2 * (size_t)n + 1) * sizeof *stack), top = 0;
+    assert_non_null(stack);
+    double worst = 0.0;
+    stack[top++] = n + k;
+    while (top) {
+        uint32_t j = stack[--top];
+        if (j >= n) {
+            stack[top++] = children[2 * (j - n)];
+            stack[top++] = children[2 * (j - n) + 1];
+            continue;
+        }
+        xyl__dvec3 c[4];
+        xyl__leaf_corners(&leaves[j], c);
+        for (int i = 0; i < 4; ++i) worst = fmax(worst, xyl__leaf_quad_distance(c[i], &leaves[n + k]));
+    }
+    free(stack);
+    worst = fmax(worst, fmax(err[children[2 * k]], err[children[2 * k + 1]]));
+    return xyl__round_up(worst);
+}
+
 /* With at most K + 1 leaves every leaf sees every other, so the chain is the exact greedy one:
  * a brute-force search for the cheapest pair (ties: lower indices) at each step. */
 static void collapse_of_few_leaves_is_the_exact_greedy_chain(void **state)
@@ -729,7 +756,8 @@ static void collapse_of_few_leaves_is_the_exact_greedy_chain(void **state)
             if (c.children[2 * k] != bp || c.children[2 * k + 1] != bq)
                 fail_msg("seed %llu, merge %u: chain joined %u and %u, greedy %u and %u",
                          (unsigned long long)seed, k, c.children[2 * k], c.children[2 * k + 1], bp, bq);
-            ref[n + k] = xyl__leaf_merge(&ref[bp], &ref[bq], err[bp], err[bq], &err[n + k]);
+            ref[n + k] = xyl__leaf_merge(&ref[bp], &ref[bq], err[bp], err[bq], NULL);
+            err[n + k] = exact_error(ref, n, c.children, k, err);
             alive[bp] = alive[bq] = 0;
             alive[n + k] = 1;
         }
@@ -854,6 +882,41 @@ static void collapse_error_bounds_every_original_point(void **state)
         xyl_leaf *in = new_leaves(n, sets[s], 21);
         chain c = run_collapse(in, n, NULL);
         assert_error_bounds_hold(&c);
+        /* each error is its definition's exact value, and never above the sum bound of the
+           merges (a child's bound plus its corners' distance), which the chain used to give */
+        float *sum = calloc(2 * (size_t)n, sizeof *sum);
+        assert_non_null(sum);
+        uint32_t looser = 0;
+        for (uint32_t k = 0; k < c.m; ++k) {
+            uint32_t p = c.children[2 * k], q = c.children[2 * k + 1];
+            xyl__leaf_merge(&c.leaves[p], &c.leaves[q], sum[p], sum[q], &sum[c.n + k]);
+            assert_true(c.error[c.n + k] == exact_error(c.leaves, c.n, c.children, k, c.error));
+            assert_true(c.error[c.n + k] <= sum[c.n + k]);
+            looser += c.error[c.n + k] < sum[c.n + k];
+        }
+        print_message("set %d: the sum bound is looser for %u of %u merged leaves\n", s, looser, c.m);
+        assert_true(looser > 0);
+        /* past the work budget the sum bound takes over: with none it is the sum bound
+           throughout, with some it lies between the two and still bounds every point */
+        float *exact = malloc(2 * (size_t)n * sizeof *exact);
+        assert_non_null(exact);
+        memcpy(exact, c.error, (2 * (size_t)n - 1) * sizeof *exact);
+        assert_int_equal(xyl__collapse_errors(c.leaves, c.error, c.children, c.n, c.m, 0, NULL), XYL_OK);
+        assert_memory_equal(c.error + c.n, sum + c.n, c.m * sizeof *sum);
+        uint64_t budget = 2 * (uint64_t)n;
+        assert_true(budget < xyl__collapse_error_budget(n));
+        assert_int_equal(xyl__collapse_errors(c.leaves, c.error, c.children, c.n, c.m, budget, NULL), XYL_OK);
+        uint32_t exact_kept = 0;
+        for (uint32_t k = 0; k < c.n + c.m; ++k) {
+            assert_true(exact[k] <= c.error[k] && c.error[k] <= sum[k]);
+            exact_kept += k >= c.n && c.error[k] == exact[k];
+        }
+        for (uint32_t k = 0; k < c.m; ++k)
+            for (int h = 0; h < 2; ++h) assert_true(c.error[c.children[2 * k + h]] <= c.error[c.n + k]);
+        assert_true(exact_kept > 0 && exact_kept < c.m);
+        assert_error_bounds_hold(&c);
+        free(exact);
+        free(sum);
         free_chain(&c);
         free(in);
     }

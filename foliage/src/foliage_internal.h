@@ -59,19 +59,27 @@ typedef struct xyl__grid_item {
     uint32_t leaf; /* an extra item's is UINT32_MAX once the leaf is dead */
 } xyl__grid_item;
 
+/* A cell: its items of the last build, items[start .. end), and its first extra item (-1 for
+ * none), in one place so that a query's look at a cell is one cache miss, not two. */
 typedef struct xyl__cell_range {
     uint32_t start, end;
+    int32_t extra;
 } xyl__cell_range;
+
+/* A leaf made since the last build, in its cell's list (newest first). */
+typedef struct xyl__grid_extra {
+    xyl__grid_item item;
+    int32_t next, prev; /* -1 for none */
+} xyl__grid_extra;
 
 typedef struct xyl__grid {
     double min[3], h, inv_h; /* cubes of side h from min */
     int32_t dim[3];
+    int64_t ring1_step[26];  /* cell index offsets of the 26 neighbours, in the query's order */
     size_t cells, cell_cap, item_cap, extra_cap, bytes;
-    xyl__cell_range *range;  /* cell c's items are items[range[c].start .. range[c].end) */
+    xyl__cell_range *range;  /* per cell */
     xyl__grid_item *items;   /* the live leaves of the last build, by cell */
-    int32_t *extra_head;     /* per cell: the first extra item, -1 if none */
-    int32_t *extra_next, *extra_prev;
-    xyl__grid_item *extra;   /* leaves made since the last build */
+    xyl__grid_extra *extra;  /* leaves made since the last build */
     uint32_t *slot;          /* per leaf: its item, or its extra item | 1 << 31 */
     uint32_t *sort, *live;   /* build scratch */
     uint32_t item_count, extra_count, built_live;
@@ -137,18 +145,37 @@ void xyl__collapse_units(const xyl_leaf *leaves, uint32_t n, xyl__collapse_optio
 /* The cost of merging p and q (p the one of lower index), rounded to float as the chain
  * orders pairs. */
 float xyl__collapse_cost(const xyl_leaf *p, const xyl_leaf *q, const xyl__collapse_options *o);
-/* The leaf that replaces p and q (p the one of lower index) and, in *err, the bound of the
- * distance from the originals it stands for to it, given theirs. */
+/* The leaf that replaces p and q (p the one of lower index) and, in *err (unless NULL), a
+ * bound of the distance from the originals it stands for to it, given theirs: the larger of
+ * a child's bound plus its corners' distance from the new quad. xyl__collapse's errors are
+ * tighter (exact) and do not use it. */
 xyl_leaf xyl__leaf_merge(const xyl_leaf *p, const xyl_leaf *q, float err_p, float err_q, float *err);
 double xyl__leaf_quad_distance(xyl__dvec3 x, const xyl_leaf *l);
 /* Runs the chain on leaves[0 .. n) (checked and tidy), greedily in cost order. On success
  * leaves[n .. n + *merges) are the merged leaves in the order they were made, merge k joined
- * children[2k] < children[2k + 1], error[i] bounds leaf i's distance from the originals it
- * stands for (0 for these). leaves and error hold 2n - 1, children 2n - 2 (at least 1 each).
+ * children[2k] < children[2k + 1], error[i] is the farthest any point of the originals leaf i
+ * stands for lies from its quad, rounded up, or a child's error where that is larger (0 for
+ * the originals). leaves and error hold 2n - 1, children 2n - 2 (at least 1 each).
  * Errors: XYL_ERR_OUT_OF_MEMORY only. */
 xyl_result xyl__collapse(xyl_leaf *leaves, float *error, uint32_t *children, uint32_t n,
                          const xyl__collapse_options *o, const xyl_allocator *a, uint32_t *merges,
                          xyl__collapse_stats *stats, xyl_diag *diag);
+
+/* The errors of a chain (leaves[0 .. n + m), children as xyl__collapse gives them) into
+ * error[0 .. n + m): 0 for the originals; for a merged leaf the farthest corner of the
+ * originals it stands for from its quad (the distance to a convex quad is convex, so that is
+ * the farthest point), or a child's error where that is larger, so that errors never decrease
+ * towards the roots; rounded up to float. The originals are laid out depth first, so a merged
+ * leaf measures one run of them: the work is the sum of the merged leaves' original counts, n
+ * times the mean depth of the merge forest. Once that passes budget, the merged leaves left
+ * take the sum bound instead: the larger of a child's error plus its corners' distance from
+ * the quad (sound, looser). Errors: XYL_ERR_OUT_OF_MEMORY only (nothing written). */
+xyl_result xyl__collapse_errors(const xyl_leaf *leaves, float *error, const uint32_t *children,
+                                uint32_t n, uint32_t m, uint64_t budget, const xyl_allocator *a);
+/* The budget xyl__collapse gives it: n (4 bits(n) + 16), several times the mean depth of
+ * the forests of random crowns (about 1.15 log2 n), and linear-logarithmic whatever the
+ * forest's shape. */
+uint64_t xyl__collapse_error_budget(uint32_t n);
 
 /* ---- the linear LOD array (linearize.c) ---- */
 

@@ -23,20 +23,15 @@ xyl_result xyl__grid_init(xyl__grid *g, uint32_t n, const xyl_allocator *a)
     g->item_cap = n ? n : 1;
     g->extra_cap = n / 4 + 8;
     g->range = xyl__alloc_array(a, g->cell_cap, sizeof *g->range);
-    g->extra_prev = xyl__alloc_array(a, g->extra_cap, sizeof *g->extra_prev);
-    g->extra_head = xyl__alloc_array(a, g->cell_cap, sizeof *g->extra_head);
     g->items = xyl__alloc_array(a, g->item_cap, sizeof *g->items);
     g->sort = xyl__alloc_array(a, g->item_cap, sizeof *g->sort);
     g->extra = xyl__alloc_array(a, g->extra_cap, sizeof *g->extra);
-    g->extra_next = xyl__alloc_array(a, g->extra_cap, sizeof *g->extra_next);
     g->slot = xyl__alloc_array(a, leaves, sizeof *g->slot);
     g->live = xyl__alloc_array(a, g->item_cap, sizeof *g->live);
-    g->bytes = g->cell_cap * (sizeof *g->range + sizeof *g->extra_head) +
+    g->bytes = g->cell_cap * sizeof *g->range +
                g->item_cap * (sizeof *g->items + sizeof *g->sort + sizeof *g->live) +
-               g->extra_cap * (sizeof *g->extra + sizeof *g->extra_next + sizeof *g->extra_prev) +
-               leaves * sizeof *g->slot;
-    if (g->range && g->extra_head && g->items && g->sort && g->extra && g->extra_next &&
-        g->extra_prev && g->slot && g->live)
+               g->extra_cap * sizeof *g->extra + leaves * sizeof *g->slot;
+    if (g->range && g->items && g->sort && g->extra && g->slot && g->live)
         return XYL_OK;
     xyl__grid_free(g, a);
     return XYL_ERR_OUT_OF_MEMORY;
@@ -45,12 +40,9 @@ xyl_result xyl__grid_init(xyl__grid *g, uint32_t n, const xyl_allocator *a)
 void xyl__grid_free(xyl__grid *g, const xyl_allocator *a)
 {
     xyl__free(a, g->range);
-    xyl__free(a, g->extra_prev);
-    xyl__free(a, g->extra_head);
     xyl__free(a, g->items);
     xyl__free(a, g->sort);
     xyl__free(a, g->extra);
-    xyl__free(a, g->extra_next);
     xyl__free(a, g->slot);
     xyl__free(a, g->live);
     memset(g, 0, sizeof *g);
@@ -111,6 +103,15 @@ static void grid_size(xyl__grid *g, const double ext[3], uint32_t live)
     g->inv_h = 1.0 / h;
 }
 
+/* The 26 neighbours of a cell, nearest kinds first: faces, edges, corners. */
+static const int8_t ring1[26][3] = {
+    {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},   {0, 0, -1},  {0, 0, 1},
+    {-1, -1, 0}, {1, -1, 0},  {-1, 1, 0},  {1, 1, 0},   {-1, 0, -1}, {1, 0, -1},
+    {-1, 0, 1},  {1, 0, 1},   {0, -1, -1}, {0, 1, -1},  {0, -1, 1},  {0, 1, 1},
+    {-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1},
+    {-1, 1, 1},  {1, 1, 1},
+};
+
 static void build(xyl__grid *g, const xyl_leaf *leaves, const uint32_t *live, uint32_t count)
 {
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
@@ -125,10 +126,12 @@ static void build(xyl__grid *g, const xyl_leaf *leaves, const uint32_t *live, ui
         ext[d] = count ? hi[d] - lo[d] : 0.0;
     }
     grid_size(g, ext, count);
+    for (int n = 0; n < 26; ++n)
+        g->ring1_step[n] = ring1[n][0] + ring1[n][1] * (int64_t)g->dim[0] +
+                           ring1[n][2] * (int64_t)g->dim[0] * g->dim[1];
     size_t cells = (size_t)g->dim[0] * (size_t)g->dim[1] * (size_t)g->dim[2];
     g->cells = cells;
-    memset(g->range, 0, cells * sizeof *g->range);
-    for (size_t k = 0; k < cells; ++k) g->extra_head[k] = -1;
+    for (size_t k = 0; k < cells; ++k) g->range[k] = (xyl__cell_range){0, 0, -1};
     /* counting sort by cell; within a cell, the order of live[] */
     for (uint32_t k = 0; k < count; ++k) {
         const xyl_vec3 c = leaves[live[k]].center;
@@ -164,7 +167,7 @@ void xyl__grid_rebuild(xyl__grid *g, const xyl_leaf *leaves)
     for (size_t c = 0; c < g->cells; ++c)
         for (uint32_t k = g->range[c].start; k < g->range[c].end; ++k) g->live[count++] = g->items[k].leaf;
     for (uint32_t k = 0; k < g->extra_count; ++k)
-        if (g->extra[k].leaf != DEAD) g->live[count++] = g->extra[k].leaf;
+        if (g->extra[k].item.leaf != DEAD) g->live[count++] = g->extra[k].item.leaf;
     build(g, leaves, g->live, count);
 }
 
@@ -178,12 +181,10 @@ void xyl__grid_insert(xyl__grid *g, const xyl_leaf *leaves, uint32_t leaf)
     const xyl_vec3 c = leaves[leaf].center;
     const float p[3] = {c.x, c.y, c.z};
     uint32_t cell = cell_of(g, p), at = g->extra_count++;
-    int32_t first = g->extra_head[cell];
-    g->extra[at] = (xyl__grid_item){{c.x, c.y, c.z}, leaf};
-    g->extra_next[at] = first;
-    g->extra_prev[at] = -1;
-    if (first >= 0) g->extra_prev[first] = (int32_t)at;
-    g->extra_head[cell] = (int32_t)at;
+    int32_t first = g->range[cell].extra;
+    g->extra[at] = (xyl__grid_extra){{{c.x, c.y, c.z}, leaf}, first, -1};
+    if (first >= 0) g->extra[first].prev = (int32_t)at;
+    g->range[cell].extra = (int32_t)at;
     g->slot[leaf] = at | EXTRA_BIT;
 }
 
@@ -192,11 +193,11 @@ void xyl__grid_remove(xyl__grid *g, uint32_t leaf)
     uint32_t s = g->slot[leaf];
     if (s & EXTRA_BIT) {
         uint32_t at = s & ~EXTRA_BIT;
-        int32_t prev = g->extra_prev[at], next = g->extra_next[at];
-        if (prev >= 0) g->extra_next[prev] = next;
-        else g->extra_head[cell_of(g, g->extra[at].p)] = next;
-        if (next >= 0) g->extra_prev[next] = prev;
-        g->extra[at].leaf = DEAD;
+        xyl__grid_extra *x = &g->extra[at];
+        if (x->prev >= 0) g->extra[x->prev].next = x->next;
+        else g->range[cell_of(g, x->item.p)].extra = x->next;
+        if (x->next >= 0) g->extra[x->next].prev = x->prev;
+        x->item.leaf = DEAD;
         return;
     }
     uint32_t cell = cell_of(g, g->items[s].p), last = --g->range[cell].end;
@@ -214,8 +215,8 @@ typedef struct query {
     double below[3], above[3]; /* from the point to its cell's lower and upper faces */
     xyl__accept_fn accept;
     void *ctx;
-    xyl__nearby *out;
     uint64_t cells;
+    xyl__nearby nr;            /* the answer so far, here rather than behind a pointer */
 } query;
 
 static void keep(xyl__nearby *nr, uint32_t j, double d2)
@@ -239,22 +240,24 @@ static void keep(xyl__nearby *nr, uint32_t j, double d2)
 static XYL__ALWAYS_INLINE bool look(query *q, const xyl__grid_item *it)
 {
     uint32_t j = it->leaf;
+    if (j == q->self) return true;
     double dx = it->p[0] - q->p[0], dy = it->p[1] - q->p[1], dz = it->p[2] - q->p[2];
     double d2 = dx * dx + dy * dy + dz * dz;
-    if (j == q->self) return true;
     if (d2 <= q->limit && (!q->accept || q->accept(q->ctx, j))) {
-        xyl__nearby *nr = q->out;
-        keep(nr, j, d2);
-        if (nr->count == XYL__GRID_K) q->limit = fmin(q->max_d2, nr->d2[XYL__GRID_K - 1]);
+        keep(&q->nr, j, d2);
+        if (q->nr.count == XYL__GRID_K) {
+            double kth = q->nr.d2[XYL__GRID_K - 1];
+            q->limit = kth < q->max_d2 ? kth : q->max_d2;
+        }
     }
-    return ++q->out->scanned < XYL__GRID_SCAN_CAP;
+    return ++q->nr.scanned < XYL__GRID_SCAN_CAP;
 }
 
 /* A cell's items from a place that depends on the asking leaf, wrapping round: where more
  * leaves than a query looks at share a cell (coincident leaves), each leaf then sees its own
  * part of them, and they do not all choose the same partner, which would make every one of
  * them look again once that partner is gone. */
-static bool scan_cell(query *q, uint32_t cell)
+static XYL__ALWAYS_INLINE bool scan_cell(query *q, uint32_t cell)
 {
     const xyl__grid *g = q->g;
     q->cells++;
@@ -264,8 +267,8 @@ static bool scan_cell(query *q, uint32_t cell)
         if (!look(q, &g->items[begin + k])) return false;
     for (uint32_t k = 0; k < first; ++k)
         if (!look(q, &g->items[begin + k])) return false;
-    for (int32_t k = g->extra_head[cell]; k >= 0; k = g->extra_next[k])
-        if (!look(q, &g->extra[k])) return false;
+    for (int32_t k = g->range[cell].extra; k >= 0; k = g->extra[k].next)
+        if (!look(q, &g->extra[k].item)) return false;
     return true;
 }
 
@@ -294,14 +297,6 @@ static bool worth(const query *q, double d2)
     return d2 <= q->limit;
 }
 
-/* The 26 neighbours of a cell, nearest kinds first: faces, edges, corners. */
-static const int8_t ring1[26][3] = {
-    {-1, 0, 0},  {1, 0, 0},   {0, -1, 0},  {0, 1, 0},   {0, 0, -1},  {0, 0, 1},
-    {-1, -1, 0}, {1, -1, 0},  {-1, 1, 0},  {1, 1, 0},   {-1, 0, -1}, {1, 0, -1},
-    {-1, 0, 1},  {1, 0, 1},   {0, -1, -1}, {0, 1, -1},  {0, -1, 1},  {0, 1, 1},
-    {-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1}, {-1, -1, 1}, {1, -1, 1},
-    {-1, 1, 1},  {1, 1, 1},
-};
 
 /* Ring 1 in two passes: first the cells worth a look, with their ranges and first items
  * asked for ahead (their cache misses then overlap), then the scan, which drops the cells the
@@ -309,20 +304,30 @@ static const int8_t ring1[26][3] = {
 static bool scan_ring1(query *q, const int32_t c0[3])
 {
     const xyl__grid *g = q->g;
+    /* per axis and offset -1, 0, 1: the squared gap to those cells (gap2's values), whether
+       they exist, and the step of the cell index */
+    double gap[3][3];
+    bool exists[3][3];
+    for (int k = 0; k < 3; ++k) {
+        gap[k][0] = q->below[k] * q->below[k];
+        gap[k][1] = 0.0;
+        gap[k][2] = q->above[k] * q->above[k];
+        exists[k][0] = c0[k] > 0;
+        exists[k][1] = true;
+        exists[k][2] = c0[k] < g->dim[k] - 1;
+    }
+    const bool interior = exists[0][0] && exists[0][2] && exists[1][0] && exists[1][2] &&
+                          exists[2][0] && exists[2][2];
+    const int64_t home = (int64_t)cell_index(g, c0);
     uint32_t cells[26];
     double dist2[26];
     int count = 0;
     for (int n = 0; n < 26; ++n) {
-        int32_t cc[3];
-        double d2 = 0.0;
-        bool inside = true;
-        for (int k = 0; k < 3; ++k) {
-            cc[k] = c0[k] + ring1[n][k];
-            inside = inside && cc[k] >= 0 && cc[k] < g->dim[k];
-            d2 += gap2(q, k, cc[k], c0[k]);
-        }
-        if (!inside || !worth(q, d2)) continue;
-        cells[count] = cell_index(g, cc);
+        const int x = ring1[n][0] + 1, y = ring1[n][1] + 1, z = ring1[n][2] + 1;
+        if (!interior && (!exists[0][x] || !exists[1][y] || !exists[2][z])) continue;
+        double d2 = gap[0][x] + gap[1][y] + gap[2][z];
+        if (!worth(q, d2)) continue;
+        cells[count] = (uint32_t)(home + g->ring1_step[n]);
         dist2[count++] = d2;
         XYL__PREFETCH(&g->range[cells[count - 1]]);
     }
@@ -361,8 +366,7 @@ static bool scan_ring(query *q, const int32_t c0[3], int32_t r)
 uint64_t xyl__grid_nearest(const xyl__grid *g, uint32_t self, xyl_vec3 centre, double max_d2,
                            xyl__accept_fn accept, void *ctx, xyl__nearby *out)
 {
-    query q = {g, self, {centre.x, centre.y, centre.z}, max_d2, max_d2, {0}, {0}, accept, ctx, out, 0};
-    out->count = out->scanned = 0;
+    query q = {g, self, {centre.x, centre.y, centre.z}, max_d2, max_d2, {0}, {0}, accept, ctx, 0, {0}};
     const float p[3] = {centre.x, centre.y, centre.z};
     int32_t c0[3];
     cell_coords(g, p, c0);
@@ -375,18 +379,20 @@ uint64_t xyl__grid_nearest(const xyl__grid *g, uint32_t self, xyl_vec3 centre, d
     double inside = INFINITY;
     for (int k = 0; k < 3; ++k) {
         double lo = g->min[k] + c0[k] * g->h, t = (double)p[k];
-        q.below[k] = fmax(0.0, t - lo);
-        q.above[k] = fmax(0.0, lo + g->h - t);
-        if (c0[k] > 0) inside = fmin(inside, q.below[k]);
-        if (c0[k] < g->dim[k] - 1) inside = fmin(inside, q.above[k]);
+        double below = t - lo, above = lo + g->h - t;
+        q.below[k] = below > 0.0 ? below : 0.0;
+        q.above[k] = above > 0.0 ? above : 0.0;
+        if (c0[k] > 0 && q.below[k] < inside) inside = q.below[k];
+        if (c0[k] < g->dim[k] - 1 && q.above[k] < inside) inside = q.above[k];
     }
     if (!(inside < INFINITY)) inside = 0.0;
     for (int32_t r = 0; r <= rmax; ++r) {
         if (!scan_ring(&q, c0, r)) break;
         /* every cell left is at least that far away */
         double reach = (double)r * g->h + inside;
-        if (out->count == XYL__GRID_K && out->d2[XYL__GRID_K - 1] <= reach * reach) break;
+        if (q.nr.count == XYL__GRID_K && q.nr.d2[XYL__GRID_K - 1] <= reach * reach) break;
         if (reach * reach > max_d2) break;
     }
+    *out = q.nr;
     return q.cells;
 }
