@@ -169,6 +169,10 @@ static xyl_result build_sector(build *b, xyl_foliage_sector *s, const uint32_t *
     uint32_t n = s->original_count, m = 0;
     xyl_result r = vo ? xyl__collapse_viewpoint(leaves, b->error, b->children, n, vo, a, &m, NULL, diag)
                       : xyl__collapse(leaves, b->error, b->children, n, o, a, &m, NULL, diag);
+    /* the viewpoint chain's merges carry the sum bound: make them exact as the other chain's */
+    if (r == XYL_OK && vo &&
+        xyl__collapse_errors(leaves, b->error, b->children, n, m, xyl__collapse_error_budget(n), a) != XYL_OK)
+        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the errors of %u leaves", n);
     if (r == XYL_OK)
         r = xyl__linearize(leaves, b->error, b->children, n, m, s->base, source,
                            b->f->links + s->base, lods, a, diag);
