@@ -60,6 +60,9 @@ typedef struct foliage_options {
     double aspect;            /* 0: the library's 0.5 */
     const char *table;        /* --table FILE.csv */
     const char *leaf_texture; /* --leaf-texture FILE.png; NULL: the procedural leaf */
+    const char *leaf_mesh;    /* --leaf-mesh FILE.obj: the leaves are its components */
+    const char *leaf_template;/* --leaf-template FILE.obj: its one leaf at every attachment */
+    xyl_foliage_cost cost;    /* --cost hidalgo|viewpoint */
 } foliage_options;
 
 typedef struct options {
@@ -97,10 +100,12 @@ static const char usage_text[] =
     "                               checked (default): laterals whose joints intersect\n"
     "                               start later or are left out; --foliage (.glb only): the\n"
     "                               leaves of 'foliage' too, in the same file\n"
-    "  foliage  [source | --skeleton FILE.skel] [--seed N] [--sectors N] [--aspect A]\n"
+    "  foliage  [source | --skeleton FILE.skel | --leaf-mesh FILE.obj] [--seed N] [--sectors N]\n"
+    "           [--aspect A | --leaf-template FILE.obj] [--cost hidalgo|viewpoint]\n"
     "           [--leaf-texture FILE.png] [--table FILE.csv] --out FILE.glb\n"
-    "                               quads for the skeleton's leaves, their leaf-collapse LODs\n"
-    "                               (per sector) and a .glb of them; --table: the LOD table\n"
+    "                               quads for the skeleton's leaves (or the components of a\n"
+    "                               leaf mesh), their leaf-collapse LODs (per sector) and a\n"
+    "                               .glb of them; --table: the LOD table\n"
     "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
@@ -293,6 +298,17 @@ static int parse_foliage_option(options *o, const char *opt, const char *val)
         if (!ends_with(val, ".png"))
             return usage_error("--leaf-texture takes FILE.png, not '%s'", val);
         f->leaf_texture = val;
+    } else if (strcmp(opt, "--leaf-mesh") == 0 || strcmp(opt, "--leaf-template") == 0) {
+        bool mesh = strcmp(opt, "--leaf-mesh") == 0;
+        if (!ends_with(val, ".obj"))
+            return usage_error(mesh ? "--leaf-mesh takes FILE.obj, not '%s'"
+                                    : "--leaf-template takes FILE.obj, not '%s'", val);
+        if (mesh) f->leaf_mesh = val;
+        else f->leaf_template = val;
+    } else if (strcmp(opt, "--cost") == 0) {
+        if (strcmp(val, "hidalgo") == 0) f->cost = XYL_FOLIAGE_COST_HIDALGO;
+        else if (strcmp(val, "viewpoint") == 0) f->cost = XYL_FOLIAGE_COST_VIEWPOINT;
+        else return usage_error("--cost takes hidalgo or viewpoint, not '%s'", val);
     } else {
         return parse_turtle_option(o, opt, val);
     }
@@ -628,7 +644,46 @@ static void leaf_job_free(leaf_job *j)
     free(j->png);
 }
 
-/* Quads for the skeleton's leaf attachments, and their chain and LOD tables. */
+/* The leaves of an OBJ leaf mesh, one per component (count, then fill); *leaves malloc'd. */
+static int leaves_from_obj_file(const char *path, xyl_leaf **leaves, size_t *n)
+{
+    int rc = 0;
+    size_t size = 0;
+    char *text = read_all(path, &size, &rc);
+    if (!text) return rc;
+    xyl_diag d = {0};
+    xyl_result r = xyl_foliage_leaves_from_obj(text, size, NULL, NULL, 0, n, &d);
+    if (r == XYL_OK && !(*leaves = malloc((*n ? *n : 1) * sizeof **leaves))) {
+        r = XYL_ERR_OUT_OF_MEMORY;
+        snprintf(d.message, sizeof d.message, "out of memory for %zu leaves", *n);
+    }
+    if (r == XYL_OK) r = xyl_foliage_leaves_from_obj(text, size, NULL, *leaves, *n, n, &d);
+    free(text);
+    return r ? report(path, r, &d) : 0;
+}
+
+/* --leaf-template: the one leaf of the file as the shape of every attachment. */
+static int template_shape(const char *path, xyl_leaf_shape *shape)
+{
+    xyl_leaf *t = NULL;
+    size_t n = 0;
+    int rc = leaves_from_obj_file(path, &t, &n);
+    if (!rc && n != 1) {
+        fprintf(stderr, "xylem: %s: a leaf template holds one leaf (one connected component), not "
+                        "%zu\n", path, n);
+        rc = EXIT_DATA;
+    }
+    if (!rc) {
+        xyl_diag d = {0};
+        xyl_result r = xyl_leaf_shape_from_template(t, NULL, shape, &d);
+        if (r) rc = report(path, r, &d);
+    }
+    free(t);
+    return rc;
+}
+
+/* The leaves (the skeleton's attachments, shaped by --aspect or --leaf-template, or the
+ * components of --leaf-mesh), and their chain and LOD tables. */
 static int build_foliage(const options *o, const xyl_skeleton *sk, const char *source, leaf_job *j)
 {
     double t0 = now_seconds();
@@ -638,16 +693,28 @@ static int build_foliage(const options *o, const xyl_skeleton *sk, const char *s
     xyl_diag d = {0};
     size_t n = 0;
     xyl_leaf *leaves = NULL;
-    xyl_result r = xyl_foliage_leaves_from_skeleton(sk, &ld, NULL, 0, &n, &d);
-    if (r == XYL_OK && !(leaves = malloc((n ? n : 1) * sizeof *leaves))) {
-        r = XYL_ERR_OUT_OF_MEMORY;
-        snprintf(d.message, sizeof d.message, "out of memory for %zu leaves", n);
+    xyl_result r = XYL_OK;
+    if (o->foliage.leaf_mesh) {
+        int rc = leaves_from_obj_file(o->foliage.leaf_mesh, &leaves, &n);
+        if (rc) return rc;
+        source = o->foliage.leaf_mesh;
+    } else {
+        if (o->foliage.leaf_template) {
+            int rc = template_shape(o->foliage.leaf_template, &ld.shape);
+            if (rc) return rc;
+        }
+        r = xyl_foliage_leaves_from_skeleton(sk, &ld, NULL, 0, &n, &d);
+        if (r == XYL_OK && !(leaves = malloc((n ? n : 1) * sizeof *leaves))) {
+            r = XYL_ERR_OUT_OF_MEMORY;
+            snprintf(d.message, sizeof d.message, "out of memory for %zu leaves", n);
+        }
+        if (r == XYL_OK) r = xyl_foliage_leaves_from_skeleton(sk, &ld, leaves, n, &n, &d);
     }
-    if (r == XYL_OK) r = xyl_foliage_leaves_from_skeleton(sk, &ld, leaves, n, &n, &d);
     xyl_foliage_desc fd = {0};
     fd.leaves = leaves;
     fd.leaf_count = n;
     fd.sectors = o->foliage.sectors;
+    fd.cost = o->foliage.cost;
     if (r == XYL_OK) r = xyl_foliage_build(&fd, &j->foliage, &d);
     free(leaves);
     j->build_ms = (now_seconds() - t0) * 1e3;
@@ -728,12 +795,15 @@ static int cmd_foliage(const options *o)
     if (!o->out || !ends_with(o->out, ".glb")) return usage_error("%s", "'foliage' needs --out FILE.glb");
     if (o->skeleton_path && (o->preset || o->grammar_path))
         return usage_error("%s", "give --skeleton or a grammar source, not both");
+    if (o->foliage.leaf_mesh && (o->skeleton_path || o->preset || o->grammar_path))
+        return usage_error("%s", "'foliage --leaf-mesh' takes its leaves from the mesh: give no "
+                                 "source or --skeleton (mesh --foliage puts them on a tree)");
     double t0 = now_seconds();
     xyl_skeleton *sk = NULL;
-    const char *source = NULL;
+    const char *source = o->foliage.leaf_mesh;
     leaf_job j;
     memset(&j, 0, sizeof j);
-    int rc = load_skeleton(o, &sk, &source);
+    int rc = o->foliage.leaf_mesh ? 0 : load_skeleton(o, &sk, &source);
     double t1 = now_seconds();
     if (!rc) rc = build_foliage(o, sk, source, &j);
     double t2 = now_seconds();
@@ -1136,8 +1206,12 @@ int main(int argc, char **argv)
     if (rc) return rc;
     if (o.foliage.enabled && !mesh) return usage_error("%s", "--foliage is an option of 'mesh'");
     if (o.foliage.given && !foliage && !o.foliage.enabled)
-        return usage_error("%s", "--sectors, --aspect, --table and --leaf-texture go with "
-                                 "'foliage' or 'mesh --foliage'");
+        return usage_error("%s", "--sectors, --aspect, --table, --leaf-texture, --leaf-mesh, "
+                                 "--leaf-template and --cost go with 'foliage' or 'mesh --foliage'");
+    if (o.foliage.leaf_mesh && o.foliage.leaf_template)
+        return usage_error("%s", "give --leaf-mesh or --leaf-template, not both");
+    if (o.foliage.leaf_template && o.foliage.aspect > 0.0)
+        return usage_error("%s", "--leaf-template sets the leaves' shape: it takes no --aspect");
     if (foliage) {
         o.foliage.enabled = true;
         return cmd_foliage(&o);
