@@ -193,10 +193,12 @@ int bench_foliage_peer(const char *name, const xyl_leaf *leaves, size_t n, bool 
         print_measured(&sloppy);
         if (isfinite(ratio)) printf("  | %6.3f\n", ratio);
         else printf("  | %6s\n", "-");
-        if (in_range && isfinite(ratio)) {
+        summary->in_range += in_range;
+        if (isfinite(ratio)) {
             summary->rows++;
             summary->rows_met += ratio <= 0.5;
             summary->worst_ratio = fmax(summary->worst_ratio, ratio);
+            summary->best_ratio = summary->rows == 1 ? ratio : fmin(summary->best_ratio, ratio);
         }
         if (dat)
             fprintf(dat, "%s %zu %zu %g %u %zu %.6g %.6g %zu %.6g %.6g %zu %.6g %.6g\n", tag, n, count, radii,

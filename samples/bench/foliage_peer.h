@@ -11,9 +11,11 @@
 /* What the comparison of one leaf set found, for the targets block. */
 typedef struct peer_summary {
     bool measured;      /* false when meshoptimizer is not built in or a call failed */
-    int rows;           /* LODs compared in the scene's range */
+    int rows;           /* LODs compared (50 % down to 1 % of the leaves) */
     int rows_met;       /* of them, where xylem's RMSE is at most half of meshoptimizer's best */
-    double worst_ratio; /* the largest xylem RMSE / best meshoptimizer RMSE there */
+    double worst_ratio; /* the largest and smallest xylem RMSE / best meshoptimizer RMSE */
+    double best_ratio;
+    int in_range;       /* rows whose LOD the pick uses 2 to 64 crown radii away */
 } peer_summary;
 
 /* Builds the leaf-collapse chain of leaves[0 .. n), picks the LODs that keep the fractions of
