@@ -17,7 +17,6 @@ static const uint32_t LEAF_TRIANGLES[XYL_FOLIAGE_GLB_INDICES_PER_LEAF] = {0, 1, 
 #define GL_LINEAR_MIPMAP_LINEAR 9987
 #define GL_CLAMP_TO_EDGE 33071
 /* A normal this close to unit (squared length) is written bit for bit, as the stem writer does. */
-#define NORMAL_UNIT_TOLERANCE_SQ 1e-5
 
 typedef struct leaf_doc {
     const xyl_foliage *f;
@@ -53,18 +52,11 @@ static void emit_positions(const void *ctx, xyl__sink *s)
     }
 }
 
-static xyl_vec3 unit_normal(xyl_vec3 n)
-{
-    xyl__dvec3 d = xyl__from_f3(n);
-    if (fabs(xyl__d3_dot(d, d) - 1.0) <= NORMAL_UNIT_TOLERANCE_SQ) return n;
-    return xyl__to_f3(xyl__d3_normalize_or(d, xyl__d3(0, 1, 0)));
-}
-
 static void emit_normals(const void *ctx, xyl__sink *s)
 {
     const xyl_foliage *f = ctx;
     for (size_t i = 0; i < f->leaf_count; ++i) {
-        xyl_vec3 n = unit_normal(f->leaves[i].normal);
+        xyl_vec3 n = xyl__glb_unit_normal(f->leaves[i].normal);
         for (int k = 0; k < 4; ++k) {
             xyl__put_f32le(s, n.x);
             xyl__put_f32le(s, n.y);

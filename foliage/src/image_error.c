@@ -522,8 +522,7 @@ xyl_result xyl_foliage_image_error_of(const xyl_leaf *reference, size_t referenc
                                       const xyl_foliage_image_desc *desc,
                                       xyl_foliage_image_error *out, xyl_diag *diag)
 {
-    xyl_foliage_image_desc zero;
-    memset(&zero, 0, sizeof zero);
+    static const xyl_foliage_image_desc zero;
     const xyl_foliage_image_desc *d = desc ? desc : &zero;
     options o;
     xyl_result r = check_input(reference, reference_count, approx, approx_count, d, out, &o, diag);
@@ -583,8 +582,7 @@ xyl_result xyl_foliage_image_error_triangles(const xyl_leaf *reference, size_t r
                                              const xyl_foliage_image_desc *desc,
                                              xyl_foliage_image_error *out, xyl_diag *diag)
 {
-    xyl_foliage_image_desc zero;
-    memset(&zero, 0, sizeof zero);
+    static const xyl_foliage_image_desc zero;
     const xyl_foliage_image_desc *d = desc ? desc : &zero;
     options o;
     xyl_result r = check_input(reference, reference_count, NULL, 0, d, out, &o, diag);

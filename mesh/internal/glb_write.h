@@ -42,6 +42,10 @@ void xyl__put_f32le(xyl__sink *s, float v);
 void xyl__put_padding(xyl__sink *s, size_t n, char byte);
 /* key (with its quotes, colon and any leading comma) then [x,y,z]. */
 void xyl__put_json_vec3(xyl__sink *s, const char *key, xyl_vec3 v);
+/* A NORMAL for glTF: a normal whose squared length is within 1e-5 of 1 passes bit for bit,
+ * others are renormalised (a zero one becomes +Y), because the glTF-Validator rejects NORMAL
+ * elements that are not unit (it allows about 5e-4 in the length; this keeps far inside it). */
+xyl_vec3 xyl__glb_unit_normal(xyl_vec3 n);
 
 /* ---- the document --------------------------------------------------------------------------- */
 

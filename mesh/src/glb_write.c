@@ -83,6 +83,13 @@ void xyl__put_padding(xyl__sink *s, size_t n, char byte)
     for (size_t i = 0; i < n; ++i) xyl__put(s, &byte, 1);
 }
 
+xyl_vec3 xyl__glb_unit_normal(xyl_vec3 n)
+{
+    xyl__dvec3 d = xyl__from_f3(n);
+    if (fabs(xyl__d3_dot(d, d) - 1.0) <= 1e-5) return n;
+    return xyl__to_f3(xyl__d3_normalize_or(d, xyl__d3(0, 1, 0)));
+}
+
 void xyl__put_json_vec3(xyl__sink *s, const char *key, xyl_vec3 v)
 {
     xyl__put_str(s, key);

@@ -17,11 +17,6 @@
 /* Branch ids travel as float: glTF allows UNSIGNED_INT only for indices, and a float holds every
  * integer up to 2^24 exactly. */
 #define MAX_FLOAT_EXACT_ID (UINT32_C(1) << 24)
-/* A normal whose squared length is this close to 1 is written bit for bit; others are
- * renormalised, because the glTF-Validator rejects NORMAL elements that are not unit (it allows
- * about 5e-4 in the length; this keeps far inside that). */
-#define NORMAL_UNIT_TOLERANCE_SQ 1e-5
-
 typedef xyl__sink sink;
 
 /* ==== checking a view ======================================================================== */
@@ -123,13 +118,6 @@ static void render_obj(const xyl_mesh *m, const xyl_mesh *uvm, sink *s)
 
 /* Unit normals pass bit for bit; others are renormalised (a zero one becomes +Y), since glTF
  * requires NORMAL to be unit. */
-static xyl_vec3 unit_normal(xyl_vec3 n)
-{
-    xyl__dvec3 d = xyl__from_f3(n);
-    if (fabs(xyl__d3_dot(d, d) - 1.0) <= NORMAL_UNIT_TOLERANCE_SQ) return n;
-    return xyl__to_f3(xyl__d3_normalize_or(d, xyl__d3(0, 1, 0)));
-}
-
 static void emit_positions(const void *ctx, sink *s)
 {
     const xyl_mesh *m = ctx;
@@ -144,7 +132,7 @@ static void emit_normals(const void *ctx, sink *s)
 {
     const xyl_mesh *m = ctx;
     for (size_t v = 0; v < m->vertex_count; ++v) {
-        xyl_vec3 n = unit_normal(m->normals[v]);
+        xyl_vec3 n = xyl__glb_unit_normal(m->normals[v]);
         xyl__put_f32le(s, n.x);
         xyl__put_f32le(s, n.y);
         xyl__put_f32le(s, n.z);
