@@ -53,8 +53,8 @@ typedef struct parser {
 static xyl_result need_token(parser *p, xyl__token *t, const char *what)
 {
     if (xyl__text_next_token(&p->txt, t)) return XYL_OK;
-    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, xyl__to_u32(p->txt.last_end + 1), "the line ends where %s was expected",
-                   what);
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, xyl__to_u32(p->txt.last_end + 1),
+                          "the line ends where %s was expected", what);
 }
 
 static xyl_result need_record_end(parser *p)
@@ -62,11 +62,12 @@ static xyl_result need_record_end(parser *p)
     xyl__token t = {0};
     char buf[40];
     if (!xyl__text_next_token(&p->txt, &t)) return XYL_OK;
-    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "unexpected '%s' after the end of the record",
-                   xyl__text_show(&t, SHOW_CHARS, buf));
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col,
+                          "unexpected '%s' after the end of the record",
+                          xyl__text_show(&t, SHOW_CHARS, buf));
 }
 
-/* The first xyl__token of the next line that has one; *eof at the end of the text. */
+/* The first token of the next line that has one; *eof at the end of the text. */
 static xyl_result next_record(parser *p, xyl__token *keyword, bool *eof)
 {
     for (;;) {
@@ -76,8 +77,9 @@ static xyl_result next_record(parser *p, xyl__token *keyword, bool *eof)
         }
         const char *nul = memchr(p->txt.line, '\0', p->txt.len);
         if (nul)
-            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, xyl__to_u32((size_t)(nul - p->txt.line) + 1),
-                           "a NUL byte; .skel files are text");
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE,
+                                  xyl__to_u32((size_t)(nul - p->txt.line) + 1),
+                                  "a NUL byte; .skel files are text");
         if (xyl__text_next_token(&p->txt, keyword)) {
             *eof = false;
             return XYL_OK;
@@ -122,13 +124,16 @@ static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *
     case NUM_OK:
         return XYL_OK;
     case NUM_NON_FINITE:
-        return xyl__text_fail(&p->txt, XYL_ERR_NON_FINITE, t.col, "%s is '%s'; numbers must be finite", what,
-                       xyl__text_show(&t, SHOW_CHARS, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_NON_FINITE, t.col,
+                              "%s is '%s'; numbers must be finite", what,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     case NUM_TOO_LARGE:
-        return xyl__text_fail(&p->txt, XYL_ERR_NON_FINITE, t.col, "%s '%s' is too large for a float", what,
-                       xyl__text_show(&t, SHOW_CHARS, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_NON_FINITE, t.col,
+                              "%s '%s' is too large for a float", what,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     default:
-        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s '%s' is not a number", what, xyl__text_show(&t, SHOW_CHARS, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s '%s' is not a number", what,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     }
 }
 
@@ -152,7 +157,8 @@ static xyl_result int_field(parser *p, const char *what, int64_t *out, uint32_t 
     if (r != XYL_OK) return r;
     *col = t.col;
     if (xyl__text_i64(t.s, t.n, out)) return XYL_OK;
-    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s '%s' is not an integer", what, xyl__text_show(&t, SHOW_CHARS, buf));
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s '%s' is not an integer", what,
+                          xyl__text_show(&t, SHOW_CHARS, buf));
 }
 
 static xyl_result node_id(parser *p)
@@ -163,12 +169,14 @@ static xyl_result node_id(parser *p)
     xyl_result r = need_token(p, &t, "the node id");
     if (r != XYL_OK) return r;
     if (!xyl__text_u64(t.s, t.n, &id))
-        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "node id '%s' is not an unsigned integer",
-                       xyl__text_show(&t, SHOW_CHARS, buf));
-    if (id != (uint64_t)p->node_count)
         return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col,
-                       "node id %s is out of order: ids count 0, 1, 2, ... so %zu belongs here",
-                       xyl__text_show(&t, SHOW_CHARS, buf), p->node_count);
+                              "node id '%s' is not an unsigned integer",
+                              xyl__text_show(&t, SHOW_CHARS, buf));
+    if (id != (uint64_t)p->node_count)
+        return xyl__text_fail(
+            &p->txt, XYL_ERR_PARSE, t.col,
+            "node id %s is out of order: ids count 0, 1, 2, ... so %zu belongs here",
+            xyl__text_show(&t, SHOW_CHARS, buf), p->node_count);
     return XYL_OK;
 }
 
@@ -176,7 +184,8 @@ static xyl_result push_node(parser *p, const xyl_skel_node *n)
 {
     void *arr = p->nodes;
     if (!xyl__grow(&p->alloc, &arr, &p->node_cap, p->node_count, p->node_count + 1, sizeof *n))
-        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu nodes", p->node_total);
+        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu nodes",
+                              p->node_total);
     p->nodes = arr;
     p->nodes[p->node_count++] = *n;
     return XYL_OK;
@@ -186,7 +195,8 @@ static xyl_result push_leaf(parser *p, const xyl_skel_leaf *l)
 {
     void *arr = p->leaves;
     if (!xyl__grow(&p->alloc, &arr, &p->leaf_cap, p->leaf_count, p->leaf_count + 1, sizeof *l))
-        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu leaves", p->leaf_total);
+        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu leaves",
+                              p->leaf_total);
     p->leaves = arr;
     p->leaves[p->leaf_count++] = *l;
     return XYL_OK;
@@ -205,16 +215,17 @@ static xyl_result parse_node(parser *p)
     if (r != XYL_OK) return r;
     if (parent < -1 || parent >= (int64_t)p->node_count)
         return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
-                       "node %zu has parent %lld; a parent must come before its child "
-                       "(or be -1 for a root)",
-                       p->node_count, (long long)parent);
+                              "node %zu has parent %lld; a parent must come before its child "
+                              "(or be -1 for a root)",
+                              p->node_count, (long long)parent);
     n.parent = (int32_t)parent;
     r = vec3_field(p, "the node position", &n.pos);
     if (r == XYL_OK) r = real_field(p, "the node radius", &n.radius, &col);
     if (r != XYL_OK) return r;
     if (!(n.radius > 0.0f))
-        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col, "node %zu has radius %g; radii must be > 0",
-                       p->node_count, (double)n.radius);
+        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
+                              "node %zu has radius %g; radii must be > 0", p->node_count,
+                              (double)n.radius);
     r = need_record_end(p);
     return r == XYL_OK ? push_node(p, &n) : r;
 }
@@ -231,8 +242,8 @@ static xyl_result parse_leaf(parser *p)
     if (r != XYL_OK) return r;
     if (node < -1 || node >= (int64_t)p->node_count)
         return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
-                       "leaf %zu hangs from node %lld, which does not exist", p->leaf_count,
-                       (long long)node);
+                              "leaf %zu hangs from node %lld, which does not exist", p->leaf_count,
+                              (long long)node);
     l.node = (int32_t)node;
     r = vec3_field(p, "the leaf position", &l.pos);
     if (r == XYL_OK) r = vec3_field(p, "the leaf heading", &l.heading);
@@ -241,8 +252,9 @@ static xyl_result parse_leaf(parser *p)
     if (r == XYL_OK) r = real_field(p, "the leaf size", &l.size, &col);
     if (r != XYL_OK) return r;
     if (!(l.size > 0.0f))
-        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col, "leaf %zu has size %g; sizes must be > 0",
-                       p->leaf_count, (double)l.size);
+        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
+                              "leaf %zu has size %g; sizes must be > 0", p->leaf_count,
+                              (double)l.size);
     r = need_record_end(p);
     return r == XYL_OK ? push_leaf(p, &l) : r;
 }
@@ -255,18 +267,19 @@ static xyl_result parse_header(parser *p, const xyl__token *kw)
     char buf[40];
     uint64_t version;
     if (!xyl__token_is(kw, "xylem-skeleton"))
-        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
-                       "not a .skel file: found '%s' where 'xylem-skeleton %d' must come first",
-                       xyl__text_show(kw, SHOW_CHARS, buf), SKEL_VERSION);
+        return xyl__text_fail(
+            &p->txt, XYL_ERR_PARSE, kw->col,
+            "not a .skel file: found '%s' where 'xylem-skeleton %d' must come first",
+            xyl__text_show(kw, SHOW_CHARS, buf), SKEL_VERSION);
     xyl_result r = need_token(p, &t, "the format version");
     if (r != XYL_OK) return r;
     if (!xyl__text_u64(t.s, t.n, &version))
         return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "format version '%s' is not a number",
-                       xyl__text_show(&t, SHOW_CHARS, buf));
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     if (version != SKEL_VERSION)
         return xyl__text_fail(&p->txt, XYL_ERR_UNSUPPORTED, t.col,
-                       "format version %s is not supported; this build reads version %d",
-                       xyl__text_show(&t, SHOW_CHARS, buf), SKEL_VERSION);
+                              "format version %s is not supported; this build reads version %d",
+                              xyl__text_show(&t, SHOW_CHARS, buf), SKEL_VERSION);
     return need_record_end(p);
 }
 
@@ -278,16 +291,18 @@ static xyl_result parse_count(parser *p, const xyl__token *kw, const char *word,
     char buf[40];
     uint64_t v;
     if (!xyl__token_is(kw, word))
-        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "expected '%s <count>', found '%s'", word,
-                       xyl__text_show(kw, SHOW_CHARS, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "expected '%s <count>', found '%s'",
+                              word, xyl__text_show(kw, SHOW_CHARS, buf));
     xyl_result r = need_token(p, &t, "a count");
     if (r != XYL_OK) return r;
     if (!xyl__text_u64(t.s, t.n, &v))
-        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s count '%s' is not an unsigned integer", word,
-                       xyl__text_show(&t, SHOW_CHARS, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col,
+                              "%s count '%s' is not an unsigned integer", word,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     if (v > max)
-        return xyl__text_fail(&p->txt, XYL_ERR_LIMIT_EXCEEDED, t.col, "%s %s exceeds the limit of %llu", word,
-                       xyl__text_show(&t, SHOW_CHARS, buf), (unsigned long long)max);
+        return xyl__text_fail(&p->txt, XYL_ERR_LIMIT_EXCEEDED, t.col,
+                              "%s %s exceeds the limit of %llu", word,
+                              xyl__text_show(&t, SHOW_CHARS, buf), (unsigned long long)max);
     *out = (size_t)v;
     return need_record_end(p);
 }
@@ -328,29 +343,30 @@ static xyl_result parse_body_record(parser *p, const xyl__token *kw)
     char buf[40];
     if (xyl__token_is(kw, "n")) {
         if (p->stage != STAGE_NODES)
-            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "more node records than the %zu announced",
-                           p->node_total);
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                                  "more node records than the %zu announced", p->node_total);
         return parse_node(p);
     }
     if (xyl__token_is(kw, "l")) {
         if (p->stage == STAGE_NODES)
             return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
-                           "a leaf record after %zu of the %zu nodes; all nodes come first",
-                           p->node_count, p->node_total);
+                                  "a leaf record after %zu of the %zu nodes; all nodes come first",
+                                  p->node_count, p->node_total);
         if (p->stage != STAGE_LEAVES)
-            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "more leaf records than the %zu announced",
-                           p->leaf_total);
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                                  "more leaf records than the %zu announced", p->leaf_total);
         return parse_leaf(p);
     }
     if (xyl__token_is(kw, "end")) {
         if (p->stage != STAGE_END)
             return xyl__text_fail(&p->txt, XYL_ERR_TRUNCATED, kw->col,
-                           "'end' after %zu of %zu nodes and %zu of %zu leaves", p->node_count,
-                           p->node_total, p->leaf_count, p->leaf_total);
+                                  "'end' after %zu of %zu nodes and %zu of %zu leaves",
+                                  p->node_count, p->node_total, p->leaf_count, p->leaf_total);
         return need_record_end(p);
     }
-    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "unknown record '%s'; expected 'n', 'l' or 'end'",
-                   xyl__text_show(kw, SHOW_CHARS, buf));
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                          "unknown record '%s'; expected 'n', 'l' or 'end'",
+                          xyl__text_show(kw, SHOW_CHARS, buf));
 }
 
 static xyl_result parse_record(parser *p, const xyl__token *kw)
@@ -394,12 +410,16 @@ static xyl_result fail_at_eof(parser *p)
         [STAGE_DONE] = "",
     };
     uint32_t col = 1;
-    if (p->txt.size > 0 && p->txt.text[p->txt.size - 1] != '\n') col = xyl__to_u32(p->txt.len + 1);
-    else if (p->txt.line_no < UINT32_MAX) ++p->txt.line_no;
+    if (p->txt.size > 0 && p->txt.text[p->txt.size - 1] != '\n')
+        col = xyl__to_u32(p->txt.len + 1);
+    else if (p->txt.line_no < UINT32_MAX)
+        ++p->txt.line_no;
     p->txt.index = -1;
-    return xyl__text_fail(&p->txt, XYL_ERR_TRUNCATED, col, "the text ends %s (%zu of %zu nodes, %zu of %zu "
-                   "leaves read)", what[p->stage], p->node_count, p->node_total, p->leaf_count,
-                   p->leaf_total);
+    return xyl__text_fail(&p->txt, XYL_ERR_TRUNCATED, col,
+                          "the text ends %s (%zu of %zu nodes, %zu of %zu "
+                          "leaves read)",
+                          what[p->stage], p->node_count, p->node_total, p->leaf_count,
+                          p->leaf_total);
 }
 
 static xyl_result parse_all(parser *p)
