@@ -127,8 +127,10 @@ xyl__num_status xyl__text_real(const char *s, size_t n, double *out)
 {
     size_t i = n > 0 && (s[0] == '-' || s[0] == '+') ? 1 : 0;
     bool neg = i == 1 && s[0] == '-';
-    if (xyl__text_ieq(s + i, n - i, "nan") || xyl__text_ieq(s + i, n - i, "inf") ||
-        xyl__text_ieq(s + i, n - i, "infinity"))
+    /* Only a letter can start a word; a .skel reader parses millions of numbers. */
+    bool letter = i < n && ((s[i] >= 'a' && s[i] <= 'z') || (s[i] >= 'A' && s[i] <= 'Z'));
+    if (letter && (xyl__text_ieq(s + i, n - i, "nan") || xyl__text_ieq(s + i, n - i, "inf") ||
+                   xyl__text_ieq(s + i, n - i, "infinity")))
         return XYL__NUM_NON_FINITE;
     decimal d = {0, 0, 0, false};
     if (!parse_decimal(s, n, &i, &d) || !d.any || i != n) return XYL__NUM_BAD;
