@@ -50,6 +50,16 @@ static const bad_case skel_cases[] = {
      XYL_ERR_PARSE, 4, 12, 0, "the node position z '.e5' is not a number"},
     {"xylem-skeleton 1\nnodes 1\nleaves 0\nn 0 -1 0 0 0 -0.0\nend\n",
      XYL_ERR_INVALID_SKELETON, 4, 14, 0, "node 0 has radius -0; radii must be > 0"},
+    {"xylem-skeleton 1\nnodes 1\nleaves 1\nn 0 -1 0 0 0 1\nl 0 0 0 x 0 0 1 1 0 0 0 1 0 1\nend\n",
+     XYL_ERR_PARSE, 5, 9, 0, "the leaf position z 'x' is not a number"},
+    {"xylem-skeleton 1\nnodes 1\nleaves 1\nn 0 -1 0 0 0 1\nl 0 0 0 0 0 0 y 1 0 0 0 1 0 1\nend\n",
+     XYL_ERR_PARSE, 5, 15, 0, "the leaf heading z 'y' is not a number"},
+    {"xylem-skeleton 1\nnodes 1\nleaves 1\nn 0 -1 0 0 0 1\nl 0 0 0 0 0 0 1 inf 0 0 0 1 0 1\nend\n",
+     XYL_ERR_NON_FINITE, 5, 17, 0, "the leaf left vector x is 'inf'; numbers must be finite"},
+    {"xylem-skeleton 1\nnodes 1\nleaves 1\nn 0 -1 0 0 0 1\nl 0 0 0 0 0 0 1 1 0 0 0 1e39 0 1\nend\n",
+     XYL_ERR_NON_FINITE, 5, 25, 0, "the leaf up vector y '1e39' is too large for a float"},
+    {"xylem-skeleton 1\nnodes 1\nleaves 1\nn 0 -1 0 0 0 1\nl 0 0 0 0 0 0 1 1 0 0 0 1 0\nend\n",
+     XYL_ERR_PARSE, 5, 28, 0, "the line ends where the leaf size was expected"},
 };
 
 static const bad_case obj_cases[] = {
