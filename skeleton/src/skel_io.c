@@ -137,13 +137,25 @@ static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *
     }
 }
 
-static xyl_result vec3_field(parser *p, const char *what, xyl_vec3 *v)
+/* The names of a vector's three fields, in messages: fixed text, so that reading a number costs
+ * no formatting. */
+typedef const char *const vec3_names[3];
+static vec3_names NODE_POSITION = {"the node position x", "the node position y",
+                                   "the node position z"};
+static vec3_names LEAF_POSITION = {"the leaf position x", "the leaf position y",
+                                   "the leaf position z"};
+static vec3_names LEAF_HEADING = {"the leaf heading x", "the leaf heading y",
+                                  "the leaf heading z"};
+static vec3_names LEAF_LEFT = {"the leaf left vector x", "the leaf left vector y",
+                               "the leaf left vector z"};
+static vec3_names LEAF_UP = {"the leaf up vector x", "the leaf up vector y",
+                             "the leaf up vector z"};
+
+static xyl_result vec3_field(parser *p, vec3_names names, xyl_vec3 *v)
 {
     float *c[3] = {&v->x, &v->y, &v->z};
-    char name[48];
     for (int k = 0; k < 3; ++k) {
-        snprintf(name, sizeof name, "%s %c", what, "xyz"[k]);
-        xyl_result r = real_field(p, name, c[k], NULL);
+        xyl_result r = real_field(p, names[k], c[k], NULL);
         if (r != XYL_OK) return r;
     }
     return XYL_OK;
@@ -219,7 +231,7 @@ static xyl_result parse_node(parser *p)
                               "(or be -1 for a root)",
                               p->node_count, (long long)parent);
     n.parent = (int32_t)parent;
-    r = vec3_field(p, "the node position", &n.pos);
+    r = vec3_field(p, NODE_POSITION, &n.pos);
     if (r == XYL_OK) r = real_field(p, "the node radius", &n.radius, &col);
     if (r != XYL_OK) return r;
     if (!(n.radius > 0.0f))
@@ -245,10 +257,10 @@ static xyl_result parse_leaf(parser *p)
                               "leaf %zu hangs from node %lld, which does not exist", p->leaf_count,
                               (long long)node);
     l.node = (int32_t)node;
-    r = vec3_field(p, "the leaf position", &l.pos);
-    if (r == XYL_OK) r = vec3_field(p, "the leaf heading", &l.heading);
-    if (r == XYL_OK) r = vec3_field(p, "the leaf left vector", &l.left);
-    if (r == XYL_OK) r = vec3_field(p, "the leaf up vector", &l.up);
+    r = vec3_field(p, LEAF_POSITION, &l.pos);
+    if (r == XYL_OK) r = vec3_field(p, LEAF_HEADING, &l.heading);
+    if (r == XYL_OK) r = vec3_field(p, LEAF_LEFT, &l.left);
+    if (r == XYL_OK) r = vec3_field(p, LEAF_UP, &l.up);
     if (r == XYL_OK) r = real_field(p, "the leaf size", &l.size, &col);
     if (r != XYL_OK) return r;
     if (!(l.size > 0.0f))
