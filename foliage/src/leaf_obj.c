@@ -3,22 +3,18 @@
  * area-weighted least-squares plane, the long axis of the area in it from the stalk end to the
  * tip end, and the bounding rectangle along that axis.
  *
- * Numbers are parsed here rather than with strtod, whose radix character depends on the C
- * locale. */
+ * Lines, tokens and numbers are read with core's text_reader.h: no strtod, whose radix character
+ * depends on the C locale. */
 #include <float.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "foliage_internal.h"
+#include "text_reader.h"
 
 #define DEFAULT_PLANARITY 0.1
-/* Significant digits kept when parsing a number: exact in a uint64_t and far more than the
- * double the value becomes needs. */
-#define MAX_SIGNIFICANT_DIGITS 19
-/* |decimal exponent| beyond which every non-zero double is 0 or infinite. */
-#define MAX_DECIMAL_EXPONENT 400
-/* Written exponents saturate here, so that adding a digit count cannot overflow. */
-#define MAX_EXPONENT_VALUE (INT64_C(1) << 56)
+/* Characters of a token quoted in a message. */
+#define SHOW_CHARS 20
 /* Vertex and face indices are uint32_t; UINT32_MAX marks "none". */
 #define MAX_VERTICES ((size_t)UINT32_MAX - 1)
 #define NONE UINT32_MAX
@@ -35,20 +31,8 @@
 
 /* ==== reader ================================================================================ */
 
-typedef struct token {
-    const char *s;
-    size_t n;
-    uint32_t col; /* 1-based */
-} token;
-
 typedef struct reader {
-    const char *text;
-    size_t size, next;
-    uint32_t line_no;   /* saturates */
-    const char *line;   /* the current line without its LF / CRLF */
-    size_t len, cur;
-    bool open_end;      /* the current line ends the text without a line break */
-    xyl_diag *diag;
+    xyl__text_reader txt;
     const xyl_allocator *alloc;
     double max_coordinate;
     xyl__dvec3 *v;
@@ -65,181 +49,25 @@ static size_t face_end(const reader *r, size_t f)
     return f + 1 < r->face_count ? r->face_start[f + 1] : r->corner_count;
 }
 
-static uint32_t to_u32(size_t v)
-{
-    return v > UINT32_MAX ? UINT32_MAX : (uint32_t)v;
-}
-
-static bool is_blank(char c)
-{
-    return c == ' ' || c == '\t';
-}
-
-static bool is_digit(char c)
-{
-    return c >= '0' && c <= '9';
-}
-
-static bool tok_is(const token *t, const char *word)
-{
-    size_t n = strlen(word);
-    return t->n == n && memcmp(t->s, word, n) == 0;
-}
-
-/* A token for a message: non-printable bytes shown as '?', long tokens cut. */
-static const char *show(const token *t, char out[32])
-{
-    size_t n = t->n > 20 ? 20 : t->n;
-    for (size_t i = 0; i < n; ++i) {
-        unsigned char c = (unsigned char)t->s[i];
-        out[i] = c >= 0x20 && c < 0x7f ? (char)c : '?';
-    }
-    strcpy(out + n, t->n > n ? "..." : "");
-    return out;
-}
-
-static xyl_result fail_at(reader *r, xyl_result code, uint32_t col, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
-static xyl_result fail_at(reader *r, xyl_result code, uint32_t col, const char *fmt, ...)
-{
-    char msg[XYL_DIAG_MESSAGE_SIZE];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    return xyl__fail(r->diag, code, r->line_no, col, -1, "%s", msg);
-}
-
-/* Moves to the next line; false at the end of the text. A trailing LF opens no empty line. */
-static bool next_line(reader *r)
-{
-    if (r->next >= r->size) return false;
-    const char *start = r->text + r->next;
-    size_t left = r->size - r->next;
-    const char *lf = memchr(start, '\n', left);
-    size_t len = lf ? (size_t)(lf - start) : left;
-    r->next += lf ? len + 1 : len;
-    r->open_end = lf == NULL;
-    if (len > 0 && start[len - 1] == '\r') --len;
-    r->line = start;
-    r->len = len;
-    r->cur = 0;
-    if (r->line_no < UINT32_MAX) ++r->line_no;
-    return true;
-}
-
-/* The next token of the line; '#' starts a comment that runs to the line's end. */
-static bool next_token(reader *r, token *t)
-{
-    while (r->cur < r->len && is_blank(r->line[r->cur])) ++r->cur;
-    if (r->cur >= r->len || r->line[r->cur] == '#') {
-        r->cur = r->len;
-        return false;
-    }
-    size_t start = r->cur;
-    while (r->cur < r->len && !is_blank(r->line[r->cur]) && r->line[r->cur] != '#') ++r->cur;
-    t->s = r->line + start;
-    t->n = r->cur - start;
-    t->col = to_u32(start + 1);
-    return true;
-}
-
 /* A record with too few fields: cut short by the end of the text, or malformed. */
 static xyl_result missing(reader *r, const char *what)
 {
-    if (r->open_end)
-        return fail_at(r, XYL_ERR_TRUNCATED, to_u32(r->len + 1),
-                       "the text ends inside a record: %s expected", what);
-    return fail_at(r, XYL_ERR_PARSE, to_u32(r->len + 1), "the line ends where %s was expected",
-                   what);
+    if (r->txt.open_end)
+        return xyl__text_fail(&r->txt, XYL_ERR_TRUNCATED, xyl__to_u32(r->txt.len + 1),
+                              "the text ends inside a record: %s expected", what);
+    return xyl__text_fail(&r->txt, XYL_ERR_PARSE, xyl__to_u32(r->txt.len + 1),
+                          "the line ends where %s was expected", what);
 }
 
 /* ---- numbers ------------------------------------------------------------------------------- */
 
-typedef enum num_status { NUM_OK, NUM_BAD, NUM_NON_FINITE } num_status;
-
-/* ASCII-only on purpose: tolower() would depend on the locale. */
-static bool ieq(const char *s, size_t n, const char *lower_word)
+/* A number as xyl__text_real reads it; beyond the double range +-DBL_MAX, which every limit
+ * refuses. */
+static xyl__num_status parse_real(const char *s, size_t n, double *out)
 {
-    if (n != strlen(lower_word)) return false;
-    for (size_t i = 0; i < n; ++i) {
-        char c = s[i] >= 'A' && s[i] <= 'Z' ? (char)(s[i] - 'A' + 'a') : s[i];
-        if (c != lower_word[i]) return false;
-    }
-    return true;
-}
-
-/* [+-] (digits [. digits*] | . digits) [(e|E) [+-] digits] to the nearest double within a few
- * ulps; beyond the double range +-DBL_MAX, which every limit refuses. */
-static num_status parse_real(const char *s, size_t n, double *out)
-{
-    size_t i = n > 0 && (s[0] == '-' || s[0] == '+');
-    bool neg = i == 1 && s[0] == '-';
-    if (ieq(s + i, n - i, "nan") || ieq(s + i, n - i, "inf") || ieq(s + i, n - i, "infinity"))
-        return NUM_NON_FINITE;
-    uint64_t mant = 0;
-    int digits = 0;
-    int64_t exp10 = 0;
-    bool any = false;
-    for (int part = 0; part < 2; ++part) {
-        for (; i < n && is_digit(s[i]); ++i) {
-            unsigned d = (unsigned)(s[i] - '0');
-            any = true;
-            if (digits < MAX_SIGNIFICANT_DIGITS && (mant != 0 || d != 0)) {
-                mant = mant * 10 + d;
-                ++digits;
-                exp10 -= part; /* a fraction digit */
-            } else if (mant == 0) {
-                exp10 -= part; /* a leading zero of the fraction */
-            } else {
-                exp10 += 1 - part; /* a dropped integer digit still scales the value */
-            }
-        }
-        if (part == 0 && !(i < n && s[i] == '.')) break;
-        if (part == 0) ++i;
-    }
-    if (!any) return NUM_BAD;
-    if (i < n && (s[i] == 'e' || s[i] == 'E')) {
-        ++i;
-        bool eneg = i < n && s[i] == '-';
-        if (i < n && (s[i] == '-' || s[i] == '+')) ++i;
-        if (i >= n || !is_digit(s[i])) return NUM_BAD;
-        int64_t e = 0;
-        for (; i < n && is_digit(s[i]); ++i)
-            if (e < MAX_EXPONENT_VALUE) e = e * 10 + (s[i] - '0');
-        exp10 += eneg ? -e : e;
-    }
-    if (i != n) return NUM_BAD;
-    double v = 0.0;
-    if (mant != 0 && exp10 > MAX_DECIMAL_EXPONENT) {
-        v = DBL_MAX;
-    } else if (mant != 0 && exp10 >= -MAX_DECIMAL_EXPONENT) {
-        /* dividing by the exact 10^k rounds once; multiplying by an inexact 10^-k twice */
-        v = exp10 < 0 ? (double)mant / pow(10.0, (double)-exp10)
-                      : (double)mant * pow(10.0, (double)exp10);
-        if (!isfinite(v)) v = DBL_MAX;
-    }
-    *out = neg ? -v : v;
-    return NUM_OK;
-}
-
-/* An optional '-' and decimal digits, saturating at +-INT64_MAX. */
-static bool parse_index(const char *s, size_t n, int64_t *out)
-{
-    size_t i = n > 0 && s[0] == '-';
-    if (i == n) return false;
-    uint64_t v = 0;
-    for (; i < n; ++i) {
-        if (!is_digit(s[i])) return false;
-        unsigned d = (unsigned)(s[i] - '0');
-        v = v > ((uint64_t)INT64_MAX - d) / 10 ? (uint64_t)INT64_MAX : v * 10 + d;
-    }
-    *out = s[0] == '-' ? -(int64_t)v : (int64_t)v;
-    return true;
+    xyl__num_status st = xyl__text_real(s, n, out);
+    if (st == XYL__NUM_OK && isinf(*out)) *out = *out < 0 ? -DBL_MAX : DBL_MAX;
+    return st;
 }
 
 /* ---- records ------------------------------------------------------------------------------- */
@@ -250,73 +78,80 @@ static xyl_result vertex_record(reader *r)
     static const char *const names[3] = {"x", "y", "z"};
     double c[3] = {0, 0, 0};
     int fields = 0;
-    token t;
+    xyl__token t;
     char buf[32];
-    while (next_token(r, &t)) {
+    while (xyl__text_next_token(&r->txt, &t)) {
         double v;
-        num_status st = parse_real(t.s, t.n, &v);
-        if (st == NUM_NON_FINITE)
-            return fail_at(r, XYL_ERR_NON_FINITE, t.col, "vertex coordinate '%s' is not finite",
-                           show(&t, buf));
-        if (st != NUM_OK)
-            return fail_at(r, XYL_ERR_PARSE, t.col, "'%s' is not a number", show(&t, buf));
+        xyl__num_status st = parse_real(t.s, t.n, &v);
+        if (st == XYL__NUM_NON_FINITE)
+            return xyl__text_fail(&r->txt, XYL_ERR_NON_FINITE, t.col,
+                                  "vertex coordinate '%s' is not finite",
+                                  xyl__text_show(&t, SHOW_CHARS, buf));
+        if (st != XYL__NUM_OK)
+            return xyl__text_fail(&r->txt, XYL_ERR_PARSE, t.col, "'%s' is not a number",
+                                  xyl__text_show(&t, SHOW_CHARS, buf));
         if (fields == 7)
-            return fail_at(r, XYL_ERR_PARSE, t.col,
-                           "a vertex has at most 7 numbers (x y z [w], or x y z r g b [a])");
+            return xyl__text_fail(&r->txt, XYL_ERR_PARSE, t.col,
+                                  "a vertex has at most 7 numbers (x y z [w], or x y z r g b [a])");
         if (fields < 3) {
             if (!(fabs(v) <= r->max_coordinate))
-                return fail_at(r, XYL_ERR_LIMIT_EXCEEDED, t.col,
-                               "vertex %s '%s' is beyond limits.max_coordinate (%g)",
-                               names[fields], show(&t, buf), r->max_coordinate);
+                return xyl__text_fail(&r->txt, XYL_ERR_LIMIT_EXCEEDED, t.col,
+                                      "vertex %s '%s' is beyond limits.max_coordinate (%g)",
+                                      names[fields], xyl__text_show(&t, SHOW_CHARS, buf),
+                                      r->max_coordinate);
             c[fields] = v;
         }
         ++fields;
     }
     if (fields < 3) return missing(r, names[fields]);
     if (fields == 5)
-        return fail_at(r, XYL_ERR_PARSE, to_u32(r->len + 1),
-                       "a vertex with 5 numbers: x y z [w], or x y z r g b [a]");
+        return xyl__text_fail(&r->txt, XYL_ERR_PARSE, xyl__to_u32(r->txt.len + 1),
+                              "a vertex with 5 numbers: x y z [w], or x y z r g b [a]");
     if (r->v_count == MAX_VERTICES)
-        return fail_at(r, XYL_ERR_LIMIT_EXCEEDED, 1, "more than 2^32 - 2 vertices");
+        return xyl__text_fail(&r->txt, XYL_ERR_LIMIT_EXCEEDED, 1, "more than 2^32 - 2 vertices");
     void *p = r->v;
     if (!xyl__grow(r->alloc, &p, &r->v_cap, r->v_count, r->v_count + 1, sizeof *r->v))
-        return fail_at(r, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu vertices", r->v_count + 1);
+        return xyl__text_fail(&r->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu vertices",
+                              r->v_count + 1);
     r->v = p;
     r->v[r->v_count++] = xyl__d3(c[0], c[1], c[2]);
     return XYL_OK;
 }
 
 /* One face corner, i, i/t, i//n or i/t/n, to a 0-based vertex index. */
-static xyl_result corner_field(reader *r, const token *t, uint32_t *vertex)
+static xyl_result corner_field(reader *r, const xyl__token *t, uint32_t *vertex)
 {
     char buf[32];
     const char *slash1 = memchr(t->s, '/', t->n);
     size_t in = slash1 ? (size_t)(slash1 - t->s) : t->n;
     int64_t i = 0, other;
-    if (!parse_index(t->s, in, &i) || i == 0)
-        return fail_at(r, XYL_ERR_PARSE, t->col, "face corner '%s' has no vertex index%s",
-                       show(t, buf), i == 0 && in > 0 ? " (indices count from 1)" : "");
+    if (!xyl__text_i64(t->s, in, &i) || i == 0)
+        return xyl__text_fail(
+            &r->txt, XYL_ERR_PARSE, t->col, "face corner '%s' has no vertex index%s",
+            xyl__text_show(t, SHOW_CHARS, buf), i == 0 && in > 0 ? " (indices count from 1)" : "");
     if (slash1) {
         const char *rest = slash1 + 1, *end = t->s + t->n;
         const char *slash2 = memchr(rest, '/', (size_t)(end - rest));
         size_t tn = slash2 ? (size_t)(slash2 - rest) : (size_t)(end - rest);
-        bool ok = slash2 ? (tn == 0 || (parse_index(rest, tn, &other) && other != 0))
-                         : parse_index(rest, tn, &other) && other != 0;
+        bool ok = slash2 ? (tn == 0 || (xyl__text_i64(rest, tn, &other) && other != 0))
+                         : xyl__text_i64(rest, tn, &other) && other != 0;
         if (ok && slash2) {
             size_t nn = (size_t)(end - slash2 - 1);
-            ok = parse_index(slash2 + 1, nn, &other) && other != 0;
+            ok = xyl__text_i64(slash2 + 1, nn, &other) && other != 0;
         }
         if (!ok)
-            return fail_at(r, XYL_ERR_PARSE, t->col,
-                           "face corner '%s' is not i, i/t, i//n or i/t/n (indices non-zero)",
-                           show(t, buf));
+            return xyl__text_fail(
+                &r->txt, XYL_ERR_PARSE, t->col,
+                "face corner '%s' is not i, i/t, i//n or i/t/n (indices non-zero)",
+                xyl__text_show(t, SHOW_CHARS, buf));
     }
     int64_t n = (int64_t)r->v_count;
     int64_t at = i > 0 ? i - 1 : n + i;
     if (at < 0 || at >= n)
-        return fail_at(r, XYL_ERR_PARSE, t->col,
-                       "face corner '%s' names a vertex that does not exist (%zu defined so far)",
-                       show(t, buf), r->v_count);
+        return xyl__text_fail(
+            &r->txt, XYL_ERR_PARSE, t->col,
+            "face corner '%s' names a vertex that does not exist (%zu defined so far)",
+            xyl__text_show(t, SHOW_CHARS, buf), r->v_count);
     *vertex = (uint32_t)at;
     return XYL_OK;
 }
@@ -324,63 +159,68 @@ static xyl_result corner_field(reader *r, const token *t, uint32_t *vertex)
 static xyl_result face_record(reader *r)
 {
     size_t first = r->corner_count;
-    token t;
+    xyl__token t;
     void *p;
-    while (next_token(r, &t)) {
+    while (xyl__text_next_token(&r->txt, &t)) {
         uint32_t vertex = 0;
         xyl_result res = corner_field(r, &t, &vertex);
         if (res != XYL_OK) return res;
         p = r->corner;
         if (!xyl__grow(r->alloc, &p, &r->corner_cap, r->corner_count, r->corner_count + 1,
                        sizeof *r->corner))
-            return fail_at(r, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the face corners");
+            return xyl__text_fail(&r->txt, XYL_ERR_OUT_OF_MEMORY, 0,
+                                  "out of memory for the face corners");
         r->corner = p;
         r->corner[r->corner_count++] = vertex;
     }
     if (r->corner_count - first < 3) return missing(r, "a face corner (a face has 3 or more)");
     if (r->face_count == MAX_VERTICES)
-        return fail_at(r, XYL_ERR_LIMIT_EXCEEDED, 1, "more than 2^32 - 2 faces");
+        return xyl__text_fail(&r->txt, XYL_ERR_LIMIT_EXCEEDED, 1, "more than 2^32 - 2 faces");
     p = r->face_start;
     if (!xyl__grow(r->alloc, &p, &r->face_cap, r->face_count, r->face_count + 1,
                    sizeof *r->face_start))
-        return fail_at(r, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the faces");
+        return xyl__text_fail(&r->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the faces");
     r->face_start = p;
     p = r->face_line;
     if (!xyl__grow(r->alloc, &p, &r->line_cap, r->face_count, r->face_count + 1,
                    sizeof *r->face_line))
-        return fail_at(r, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the faces");
+        return xyl__text_fail(&r->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the faces");
     r->face_line = p;
     r->face_start[r->face_count] = first;
-    r->face_line[r->face_count++] = r->line_no;
+    r->face_line[r->face_count++] = r->txt.line_no;
     return XYL_OK;
 }
 
 /* Records read for what they say and skipped: texture coordinates, normals, names, groups,
  * smoothing, materials, polylines, points. */
-static bool skipped(const token *t)
+static bool skipped(const xyl__token *t)
 {
     static const char *const words[] = {"vt", "vn", "vp", "o", "g", "s", "l", "p", "usemtl",
                                         "mtllib"};
     for (size_t k = 0; k < sizeof words / sizeof words[0]; ++k)
-        if (tok_is(t, words[k])) return true;
+        if (xyl__token_is(t, words[k])) return true;
     return false;
 }
 
 static xyl_result read_obj(reader *r)
 {
-    token kw;
+    xyl__token kw;
     char buf[32];
-    while (next_line(r)) {
-        const char *nul = memchr(r->line, '\0', r->len);
+    while (xyl__text_next_line(&r->txt)) {
+        const char *nul = memchr(r->txt.line, '\0', r->txt.len);
         if (nul)
-            return fail_at(r, XYL_ERR_PARSE, to_u32((size_t)(nul - r->line) + 1),
-                           "a NUL byte; OBJ files are text");
-        if (!next_token(r, &kw)) continue;
+            return xyl__text_fail(&r->txt, XYL_ERR_PARSE,
+                                  xyl__to_u32((size_t)(nul - r->txt.line) + 1),
+                                  "a NUL byte; OBJ files are text");
+        if (!xyl__text_next_token(&r->txt, &kw)) continue;
         xyl_result res = XYL_OK;
-        if (tok_is(&kw, "v")) res = vertex_record(r);
-        else if (tok_is(&kw, "f")) res = face_record(r);
+        if (xyl__token_is(&kw, "v"))
+            res = vertex_record(r);
+        else if (xyl__token_is(&kw, "f"))
+            res = face_record(r);
         else if (!skipped(&kw))
-            res = fail_at(r, XYL_ERR_PARSE, kw.col, "unknown record '%s'", show(&kw, buf));
+            res = xyl__text_fail(&r->txt, XYL_ERR_PARSE, kw.col, "unknown record '%s'",
+                                 xyl__text_show(&kw, SHOW_CHARS, buf));
         if (res != XYL_OK) return res;
     }
     return XYL_OK;
@@ -808,9 +648,7 @@ xyl_result xyl_foliage_leaves_from_obj(const char *text, size_t size,
     if (res != XYL_OK) return res;
     reader r;
     memset(&r, 0, sizeof r);
-    r.text = text;
-    r.size = size;
-    r.diag = diag;
+    xyl__text_init(&r.txt, text, size, diag);
     r.alloc = &desc->alloc;
     r.max_coordinate = lim.max_coordinate;
     res = read_obj(&r);

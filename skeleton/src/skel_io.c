@@ -1,14 +1,15 @@
 /* The .skel text format (docs/skeleton-format.md) and the OBJ polyline export.
  *
  * The reader is strict and line based: every error names a 1-based line and column. Neither
- * direction depends on the C locale: numbers are parsed here rather than with strtod, and the
- * writer prints them with float_text.h. */
+ * direction depends on the C locale: the reader parses numbers with text_reader.h rather than
+ * strtod, and the writer prints them with float_text.h. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "float_text.h"
+#include "text_reader.h"
 #include "skeleton_internal.h"
 #include "xylem/xyl_skeleton.h"
 
@@ -21,22 +22,10 @@
  * how many records it can hold, so an announced count never reserves more memory than that. */
 #define MIN_NODE_RECORD_BYTES 14
 #define MIN_LEAF_RECORD_BYTES 30
-/* Significant digits kept when parsing a number: exact in a uint64_t, and ten more than a
- * float needs, so dropping the rest cannot change the nearest float. */
-#define MAX_SIGNIFICANT_DIGITS 19
-/* |decimal exponent| beyond which every non-zero float is 0 or infinite. */
-#define MAX_DECIMAL_EXPONENT 400
-/* Written exponents saturate here: far beyond MAX_DECIMAL_EXPONENT, yet adding the digit
- * count of any text that fits in memory cannot overflow an int64_t. */
-#define MAX_EXPONENT_DIGITS_VALUE (INT64_C(1) << 56)
+/* Characters of a token quoted in a message. */
+#define SHOW_CHARS 24
 
 /* ==== reader ================================================================================ */
-
-typedef struct token {
-    const char *s;
-    size_t n;
-    uint32_t col; /* 1-based */
-} token;
 
 typedef enum stage {
     STAGE_HEADER,
@@ -49,17 +38,8 @@ typedef enum stage {
 } stage;
 
 typedef struct parser {
-    const char *text;
-    size_t length;
-    size_t next;          /* offset of the next line */
-    uint32_t line_no;     /* 1-based number of the current line (saturates) */
-    const char *line;     /* the current line without its LF / CRLF */
-    size_t line_len;
-    size_t cur;           /* cursor in the current line */
-    size_t last_end;      /* offset just past the last token of the current line */
-    int64_t index;        /* the node or leaf being read, -1 outside records */
+    xyl__text_reader txt; /* txt.index: the node or leaf being read, -1 outside records */
     stage stage;
-    xyl_diag *diag;
     xyl_allocator alloc;
     xyl_skeleton_limits limits;
     uint64_t max_nodes, max_leaves;
@@ -70,133 +50,37 @@ typedef struct parser {
     size_t leaf_cap, leaf_count;
 } parser;
 
-static uint32_t to_u32(size_t v)
+static xyl_result need_token(parser *p, xyl__token *t, const char *what)
 {
-    return v > UINT32_MAX ? UINT32_MAX : (uint32_t)v;
-}
-
-static bool is_blank(char c)
-{
-    return c == ' ' || c == '\t';
-}
-
-static bool is_digit(char c)
-{
-    return c >= '0' && c <= '9';
-}
-
-static bool tok_is(const token *t, const char *word)
-{
-    size_t n = strlen(word);
-    return t->n == n && memcmp(t->s, word, n) == 0;
-}
-
-/* ASCII-only on purpose: tolower() would depend on the locale. */
-static bool ieq(const char *s, size_t n, const char *lower_word)
-{
-    size_t k = strlen(lower_word);
-    if (n != k) return false;
-    for (size_t i = 0; i < n; ++i) {
-        char c = s[i] >= 'A' && s[i] <= 'Z' ? (char)(s[i] - 'A' + 'a') : s[i];
-        if (c != lower_word[i]) return false;
-    }
-    return true;
-}
-
-/* A token for a message: non-printable bytes shown as '?', long tokens cut. */
-static const char *show(const token *t, char out[40])
-{
-    size_t n = t->n > 24 ? 24 : t->n;
-    for (size_t i = 0; i < n; ++i) {
-        unsigned char c = (unsigned char)t->s[i];
-        out[i] = c >= 0x20 && c < 0x7f ? (char)c : '?';
-    }
-    strcpy(out + n, t->n > n ? "..." : "");
-    return out;
-}
-
-static xyl_result fail_at(parser *p, xyl_result code, uint32_t col, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 4, 5)))
-#endif
-    ;
-
-static xyl_result fail_at(parser *p, xyl_result code, uint32_t col, const char *fmt, ...)
-{
-    char msg[XYL_DIAG_MESSAGE_SIZE];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    xyl__fail(p->diag, code, p->line_no, col, p->index, "%s", msg);
-    return code;
-}
-
-/* Moves to the next line; false at the end of the text. A final line without a line break
- * counts, and a trailing LF does not open an empty last line. */
-static bool next_line(parser *p)
-{
-    if (p->next >= p->length) return false;
-    const char *start = p->text + p->next;
-    size_t left = p->length - p->next;
-    const char *lf = memchr(start, '\n', left);
-    size_t len = lf ? (size_t)(lf - start) : left;
-    p->next += lf ? len + 1 : len;
-    if (len > 0 && start[len - 1] == '\r') --len;
-    p->line = start;
-    p->line_len = len;
-    p->cur = 0;
-    p->last_end = 0;
-    if (p->line_no < UINT32_MAX) ++p->line_no;
-    return true;
-}
-
-/* The next token of the current line; '#' starts a comment that runs to the line's end. */
-static bool next_token(parser *p, token *t)
-{
-    while (p->cur < p->line_len && is_blank(p->line[p->cur])) ++p->cur;
-    if (p->cur >= p->line_len || p->line[p->cur] == '#') {
-        p->cur = p->line_len;
-        return false;
-    }
-    size_t start = p->cur;
-    while (p->cur < p->line_len && !is_blank(p->line[p->cur]) && p->line[p->cur] != '#') ++p->cur;
-    t->s = p->line + start;
-    t->n = p->cur - start;
-    t->col = to_u32(start + 1);
-    p->last_end = p->cur;
-    return true;
-}
-
-static xyl_result need_token(parser *p, token *t, const char *what)
-{
-    if (next_token(p, t)) return XYL_OK;
-    return fail_at(p, XYL_ERR_PARSE, to_u32(p->last_end + 1), "the line ends where %s was expected",
-                   what);
+    if (xyl__text_next_token(&p->txt, t)) return XYL_OK;
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, xyl__to_u32(p->txt.last_end + 1),
+                          "the line ends where %s was expected", what);
 }
 
 static xyl_result need_record_end(parser *p)
 {
-    token t = {0};
+    xyl__token t = {0};
     char buf[40];
-    if (!next_token(p, &t)) return XYL_OK;
-    return fail_at(p, XYL_ERR_PARSE, t.col, "unexpected '%s' after the end of the record",
-                   show(&t, buf));
+    if (!xyl__text_next_token(&p->txt, &t)) return XYL_OK;
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col,
+                          "unexpected '%s' after the end of the record",
+                          xyl__text_show(&t, SHOW_CHARS, buf));
 }
 
 /* The first token of the next line that has one; *eof at the end of the text. */
-static xyl_result next_record(parser *p, token *keyword, bool *eof)
+static xyl_result next_record(parser *p, xyl__token *keyword, bool *eof)
 {
     for (;;) {
-        if (!next_line(p)) {
+        if (!xyl__text_next_line(&p->txt)) {
             *eof = true;
             return XYL_OK;
         }
-        const char *nul = memchr(p->line, '\0', p->line_len);
+        const char *nul = memchr(p->txt.line, '\0', p->txt.len);
         if (nul)
-            return fail_at(p, XYL_ERR_PARSE, to_u32((size_t)(nul - p->line) + 1),
-                           "a NUL byte; .skel files are text");
-        if (next_token(p, keyword)) {
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE,
+                                  xyl__to_u32((size_t)(nul - p->txt.line) + 1),
+                                  "a NUL byte; .skel files are text");
+        if (xyl__text_next_token(&p->txt, keyword)) {
             *eof = false;
             return XYL_OK;
         }
@@ -205,102 +89,25 @@ static xyl_result next_record(parser *p, token *keyword, bool *eof)
 
 /* ---- numbers ------------------------------------------------------------------------------- */
 
-/* Decimal digits only. Saturates at UINT64_MAX so an absurd count reads as "too many". */
-static bool parse_u64(const char *s, size_t n, uint64_t *out)
-{
-    if (n == 0) return false;
-    uint64_t v = 0;
-    for (size_t i = 0; i < n; ++i) {
-        if (!is_digit(s[i])) return false;
-        unsigned d = (unsigned)(s[i] - '0');
-        v = v > (UINT64_MAX - d) / 10 ? UINT64_MAX : v * 10 + d;
-    }
-    *out = v;
-    return true;
-}
-
-/* An optional '-' and decimal digits, saturating at the int64_t range. */
-static bool parse_i64(const token *t, int64_t *out)
-{
-    size_t skip = t->n > 0 && t->s[0] == '-' ? 1 : 0;
-    bool neg = skip == 1;
-    uint64_t v;
-    if (!parse_u64(t->s + skip, t->n - skip, &v)) return false;
-    if (v > (uint64_t)INT64_MAX) *out = neg ? INT64_MIN : INT64_MAX;
-    else *out = neg ? -(int64_t)v : (int64_t)v;
-    return true;
-}
-
 typedef enum num_status { NUM_OK, NUM_BAD, NUM_NON_FINITE, NUM_TOO_LARGE } num_status;
 
-typedef struct decimal {
-    uint64_t mant;   /* significant digits */
-    int digits;      /* how many are in mant */
-    int64_t exp10;   /* value = mant * 10^exp10 */
-    bool any;        /* a digit was seen */
-} decimal;
-
-static void add_digit(decimal *d, char c, bool fraction)
+/* A number as xyl__text_real reads it (NaN payloads "nan(...)" are non-finite too), to the nearest
+ * float. Every value the writer or "%.9g" prints comes back as the same float. */
+static num_status parse_real(const xyl__token *t, float *out)
 {
-    unsigned v = (unsigned)(c - '0');
-    d->any = true;
-    if (d->mant == 0 && v == 0) {
-        d->exp10 -= fraction; /* leading zeros are not significant */
-    } else if (d->digits < MAX_SIGNIFICANT_DIGITS) {
-        d->mant = d->mant * 10 + v;
-        d->digits++;
-        d->exp10 -= fraction;
-    } else {
-        d->exp10 += !fraction; /* a dropped integer digit still scales the value */
-    }
-}
-
-/* Parses digits [. digits] [e [+-] digits] from s[*i]; false on a malformed exponent. */
-static bool parse_decimal(const char *s, size_t n, size_t *i, decimal *d)
-{
-    for (; *i < n && is_digit(s[*i]); ++*i) add_digit(d, s[*i], false);
-    if (*i < n && s[*i] == '.')
-        for (++*i; *i < n && is_digit(s[*i]); ++*i) add_digit(d, s[*i], true);
-    if (*i >= n || (s[*i] != 'e' && s[*i] != 'E')) return true;
-    ++*i;
-    bool neg = *i < n && s[*i] == '-';
-    if (*i < n && (s[*i] == '-' || s[*i] == '+')) ++*i;
-    if (*i >= n || !is_digit(s[*i])) return false;
-    int64_t e = 0;
-    for (; *i < n && is_digit(s[*i]); ++*i)
-        if (e < MAX_EXPONENT_DIGITS_VALUE) e = e * 10 + (s[*i] - '0');
-    d->exp10 += neg ? -e : e;
-    return true;
-}
-
-static bool is_non_finite_word(const char *s, size_t n)
-{
-    return ieq(s, n, "nan") || ieq(s, n, "inf") || ieq(s, n, "infinity") ||
-           (n >= 4 && ieq(s, 4, "nan(") && s[n - 1] == ')');
-}
-
-/* [+-] (digits [. digits*] | . digits) [(e|E) [+-] digits], nearest float. Accurate enough
- * (a few double ulps) that every value the writer or "%.9g" prints comes back as the same float. */
-static num_status parse_real(const token *t, float *out)
-{
-    size_t i = 0;
-    bool neg = t->n > 0 && t->s[0] == '-';
-    if (t->n > 0 && (t->s[0] == '-' || t->s[0] == '+')) i = 1;
-    if (is_non_finite_word(t->s + i, t->n - i)) return NUM_NON_FINITE;
-    decimal d = {0, 0, 0, false};
-    if (!parse_decimal(t->s, t->n, &i, &d) || !d.any || i != t->n) return NUM_BAD;
-    double v = 0.0;
-    if (d.mant != 0 && d.exp10 > MAX_DECIMAL_EXPONENT) return NUM_TOO_LARGE;
-    if (d.mant != 0 && d.exp10 >= -MAX_DECIMAL_EXPONENT) {
-        /* 10^k is exact up to k = 22: dividing by it rounds once, multiplying by the inexact
-         * 10^-k would round twice. */
-        v = d.exp10 < 0 ? (double)d.mant / pow(10.0, (double)-d.exp10)
-                        : (double)d.mant * pow(10.0, (double)d.exp10);
+    double v;
+    xyl__num_status st = xyl__text_real(t->s, t->n, &v);
+    if (st == XYL__NUM_NON_FINITE) return NUM_NON_FINITE;
+    if (st != XYL__NUM_OK) {
+        size_t i = t->n > 0 && (t->s[0] == '-' || t->s[0] == '+') ? 1 : 0;
+        size_t n = t->n - i;
+        bool nan_payload = n >= 4 && xyl__text_ieq(t->s + i, 4, "nan(") && t->s[t->n - 1] == ')';
+        return nan_payload ? NUM_NON_FINITE : NUM_BAD;
     }
     /* A double up to FLT_MAX + half an ulp still rounds to FLT_MAX; from there on to inf. */
-    if (!(v < (double)FLT_MAX + ldexp(1.0, 103))) return NUM_TOO_LARGE;
-    if (v > FLT_MAX) v = FLT_MAX;
-    *out = (float)(neg ? -v : v);
+    if (!(fabs(v) < (double)FLT_MAX + ldexp(1.0, 103))) return NUM_TOO_LARGE;
+    if (fabs(v) > FLT_MAX) v = v < 0 ? -(double)FLT_MAX : (double)FLT_MAX;
+    *out = (float)v;
     return NUM_OK;
 }
 
@@ -308,7 +115,7 @@ static num_status parse_real(const token *t, float *out)
 
 static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *col)
 {
-    token t = {0};
+    xyl__token t = {0};
     char buf[40];
     xyl_result r = need_token(p, &t, what);
     if (r != XYL_OK) return r;
@@ -317,23 +124,38 @@ static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *
     case NUM_OK:
         return XYL_OK;
     case NUM_NON_FINITE:
-        return fail_at(p, XYL_ERR_NON_FINITE, t.col, "%s is '%s'; numbers must be finite", what,
-                       show(&t, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_NON_FINITE, t.col,
+                              "%s is '%s'; numbers must be finite", what,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     case NUM_TOO_LARGE:
-        return fail_at(p, XYL_ERR_NON_FINITE, t.col, "%s '%s' is too large for a float", what,
-                       show(&t, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_NON_FINITE, t.col,
+                              "%s '%s' is too large for a float", what,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     default:
-        return fail_at(p, XYL_ERR_PARSE, t.col, "%s '%s' is not a number", what, show(&t, buf));
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s '%s' is not a number", what,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     }
 }
 
-static xyl_result vec3_field(parser *p, const char *what, xyl_vec3 *v)
+/* The names of a vector's three fields, in messages: fixed text, so that reading a number costs
+ * no formatting. */
+typedef const char *const vec3_names[3];
+static vec3_names NODE_POSITION = {"the node position x", "the node position y",
+                                   "the node position z"};
+static vec3_names LEAF_POSITION = {"the leaf position x", "the leaf position y",
+                                   "the leaf position z"};
+static vec3_names LEAF_HEADING = {"the leaf heading x", "the leaf heading y",
+                                  "the leaf heading z"};
+static vec3_names LEAF_LEFT = {"the leaf left vector x", "the leaf left vector y",
+                               "the leaf left vector z"};
+static vec3_names LEAF_UP = {"the leaf up vector x", "the leaf up vector y",
+                             "the leaf up vector z"};
+
+static xyl_result vec3_field(parser *p, vec3_names names, xyl_vec3 *v)
 {
     float *c[3] = {&v->x, &v->y, &v->z};
-    char name[48];
     for (int k = 0; k < 3; ++k) {
-        snprintf(name, sizeof name, "%s %c", what, "xyz"[k]);
-        xyl_result r = real_field(p, name, c[k], NULL);
+        xyl_result r = real_field(p, names[k], c[k], NULL);
         if (r != XYL_OK) return r;
     }
     return XYL_OK;
@@ -341,29 +163,32 @@ static xyl_result vec3_field(parser *p, const char *what, xyl_vec3 *v)
 
 static xyl_result int_field(parser *p, const char *what, int64_t *out, uint32_t *col)
 {
-    token t = {0};
+    xyl__token t = {0};
     char buf[40];
     xyl_result r = need_token(p, &t, what);
     if (r != XYL_OK) return r;
     *col = t.col;
-    if (parse_i64(&t, out)) return XYL_OK;
-    return fail_at(p, XYL_ERR_PARSE, t.col, "%s '%s' is not an integer", what, show(&t, buf));
+    if (xyl__text_i64(t.s, t.n, out)) return XYL_OK;
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "%s '%s' is not an integer", what,
+                          xyl__text_show(&t, SHOW_CHARS, buf));
 }
 
 static xyl_result node_id(parser *p)
 {
-    token t = {0};
+    xyl__token t = {0};
     char buf[40];
     uint64_t id;
     xyl_result r = need_token(p, &t, "the node id");
     if (r != XYL_OK) return r;
-    if (!parse_u64(t.s, t.n, &id))
-        return fail_at(p, XYL_ERR_PARSE, t.col, "node id '%s' is not an unsigned integer",
-                       show(&t, buf));
+    if (!xyl__text_u64(t.s, t.n, &id))
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col,
+                              "node id '%s' is not an unsigned integer",
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     if (id != (uint64_t)p->node_count)
-        return fail_at(p, XYL_ERR_PARSE, t.col,
-                       "node id %s is out of order: ids count 0, 1, 2, ... so %zu belongs here",
-                       show(&t, buf), p->node_count);
+        return xyl__text_fail(
+            &p->txt, XYL_ERR_PARSE, t.col,
+            "node id %s is out of order: ids count 0, 1, 2, ... so %zu belongs here",
+            xyl__text_show(&t, SHOW_CHARS, buf), p->node_count);
     return XYL_OK;
 }
 
@@ -371,7 +196,8 @@ static xyl_result push_node(parser *p, const xyl_skel_node *n)
 {
     void *arr = p->nodes;
     if (!xyl__grow(&p->alloc, &arr, &p->node_cap, p->node_count, p->node_count + 1, sizeof *n))
-        return fail_at(p, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu nodes", p->node_total);
+        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu nodes",
+                              p->node_total);
     p->nodes = arr;
     p->nodes[p->node_count++] = *n;
     return XYL_OK;
@@ -381,7 +207,8 @@ static xyl_result push_leaf(parser *p, const xyl_skel_leaf *l)
 {
     void *arr = p->leaves;
     if (!xyl__grow(&p->alloc, &arr, &p->leaf_cap, p->leaf_count, p->leaf_count + 1, sizeof *l))
-        return fail_at(p, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu leaves", p->leaf_total);
+        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu leaves",
+                              p->leaf_total);
     p->leaves = arr;
     p->leaves[p->leaf_count++] = *l;
     return XYL_OK;
@@ -394,22 +221,23 @@ static xyl_result parse_node(parser *p)
     xyl_skel_node n = {{0, 0, 0}, 0, 0, 0, 0};
     int64_t parent = 0;
     uint32_t col = 0;
-    p->index = (int64_t)p->node_count;
+    p->txt.index = (int64_t)p->node_count;
     xyl_result r = node_id(p);
     if (r == XYL_OK) r = int_field(p, "the parent id", &parent, &col);
     if (r != XYL_OK) return r;
     if (parent < -1 || parent >= (int64_t)p->node_count)
-        return fail_at(p, XYL_ERR_INVALID_SKELETON, col,
-                       "node %zu has parent %lld; a parent must come before its child "
-                       "(or be -1 for a root)",
-                       p->node_count, (long long)parent);
+        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
+                              "node %zu has parent %lld; a parent must come before its child "
+                              "(or be -1 for a root)",
+                              p->node_count, (long long)parent);
     n.parent = (int32_t)parent;
-    r = vec3_field(p, "the node position", &n.pos);
+    r = vec3_field(p, NODE_POSITION, &n.pos);
     if (r == XYL_OK) r = real_field(p, "the node radius", &n.radius, &col);
     if (r != XYL_OK) return r;
     if (!(n.radius > 0.0f))
-        return fail_at(p, XYL_ERR_INVALID_SKELETON, col, "node %zu has radius %g; radii must be > 0",
-                       p->node_count, (double)n.radius);
+        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
+                              "node %zu has radius %g; radii must be > 0", p->node_count,
+                              (double)n.radius);
     r = need_record_end(p);
     return r == XYL_OK ? push_node(p, &n) : r;
 }
@@ -421,68 +249,72 @@ static xyl_result parse_leaf(parser *p)
     memset(&l, 0, sizeof l);
     int64_t node = 0;
     uint32_t col = 0;
-    p->index = (int64_t)p->leaf_count;
+    p->txt.index = (int64_t)p->leaf_count;
     xyl_result r = int_field(p, "the leaf's node", &node, &col);
     if (r != XYL_OK) return r;
     if (node < -1 || node >= (int64_t)p->node_count)
-        return fail_at(p, XYL_ERR_INVALID_SKELETON, col,
-                       "leaf %zu hangs from node %lld, which does not exist", p->leaf_count,
-                       (long long)node);
+        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
+                              "leaf %zu hangs from node %lld, which does not exist", p->leaf_count,
+                              (long long)node);
     l.node = (int32_t)node;
-    r = vec3_field(p, "the leaf position", &l.pos);
-    if (r == XYL_OK) r = vec3_field(p, "the leaf heading", &l.heading);
-    if (r == XYL_OK) r = vec3_field(p, "the leaf left vector", &l.left);
-    if (r == XYL_OK) r = vec3_field(p, "the leaf up vector", &l.up);
+    r = vec3_field(p, LEAF_POSITION, &l.pos);
+    if (r == XYL_OK) r = vec3_field(p, LEAF_HEADING, &l.heading);
+    if (r == XYL_OK) r = vec3_field(p, LEAF_LEFT, &l.left);
+    if (r == XYL_OK) r = vec3_field(p, LEAF_UP, &l.up);
     if (r == XYL_OK) r = real_field(p, "the leaf size", &l.size, &col);
     if (r != XYL_OK) return r;
     if (!(l.size > 0.0f))
-        return fail_at(p, XYL_ERR_INVALID_SKELETON, col, "leaf %zu has size %g; sizes must be > 0",
-                       p->leaf_count, (double)l.size);
+        return xyl__text_fail(&p->txt, XYL_ERR_INVALID_SKELETON, col,
+                              "leaf %zu has size %g; sizes must be > 0", p->leaf_count,
+                              (double)l.size);
     r = need_record_end(p);
     return r == XYL_OK ? push_leaf(p, &l) : r;
 }
 
 /* ---- header and counts --------------------------------------------------------------------- */
 
-static xyl_result parse_header(parser *p, const token *kw)
+static xyl_result parse_header(parser *p, const xyl__token *kw)
 {
-    token t = {0};
+    xyl__token t = {0};
     char buf[40];
     uint64_t version;
-    if (!tok_is(kw, "xylem-skeleton"))
-        return fail_at(p, XYL_ERR_PARSE, kw->col,
-                       "not a .skel file: found '%s' where 'xylem-skeleton %d' must come first",
-                       show(kw, buf), SKEL_VERSION);
+    if (!xyl__token_is(kw, "xylem-skeleton"))
+        return xyl__text_fail(
+            &p->txt, XYL_ERR_PARSE, kw->col,
+            "not a .skel file: found '%s' where 'xylem-skeleton %d' must come first",
+            xyl__text_show(kw, SHOW_CHARS, buf), SKEL_VERSION);
     xyl_result r = need_token(p, &t, "the format version");
     if (r != XYL_OK) return r;
-    if (!parse_u64(t.s, t.n, &version))
-        return fail_at(p, XYL_ERR_PARSE, t.col, "format version '%s' is not a number",
-                       show(&t, buf));
+    if (!xyl__text_u64(t.s, t.n, &version))
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col, "format version '%s' is not a number",
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     if (version != SKEL_VERSION)
-        return fail_at(p, XYL_ERR_UNSUPPORTED, t.col,
-                       "format version %s is not supported; this build reads version %d",
-                       show(&t, buf), SKEL_VERSION);
+        return xyl__text_fail(&p->txt, XYL_ERR_UNSUPPORTED, t.col,
+                              "format version %s is not supported; this build reads version %d",
+                              xyl__text_show(&t, SHOW_CHARS, buf), SKEL_VERSION);
     return need_record_end(p);
 }
 
 /* "<word> <count>"; the limit is checked here, before anything is allocated. */
-static xyl_result parse_count(parser *p, const token *kw, const char *word, uint64_t max,
+static xyl_result parse_count(parser *p, const xyl__token *kw, const char *word, uint64_t max,
                               size_t *out)
 {
-    token t = {0};
+    xyl__token t = {0};
     char buf[40];
     uint64_t v;
-    if (!tok_is(kw, word))
-        return fail_at(p, XYL_ERR_PARSE, kw->col, "expected '%s <count>', found '%s'", word,
-                       show(kw, buf));
+    if (!xyl__token_is(kw, word))
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "expected '%s <count>', found '%s'",
+                              word, xyl__text_show(kw, SHOW_CHARS, buf));
     xyl_result r = need_token(p, &t, "a count");
     if (r != XYL_OK) return r;
-    if (!parse_u64(t.s, t.n, &v))
-        return fail_at(p, XYL_ERR_PARSE, t.col, "%s count '%s' is not an unsigned integer", word,
-                       show(&t, buf));
+    if (!xyl__text_u64(t.s, t.n, &v))
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, t.col,
+                              "%s count '%s' is not an unsigned integer", word,
+                              xyl__text_show(&t, SHOW_CHARS, buf));
     if (v > max)
-        return fail_at(p, XYL_ERR_LIMIT_EXCEEDED, t.col, "%s %s exceeds the limit of %llu", word,
-                       show(&t, buf), (unsigned long long)max);
+        return xyl__text_fail(&p->txt, XYL_ERR_LIMIT_EXCEEDED, t.col,
+                              "%s %s exceeds the limit of %llu", word,
+                              xyl__text_show(&t, SHOW_CHARS, buf), (unsigned long long)max);
     *out = (size_t)v;
     return need_record_end(p);
 }
@@ -491,7 +323,7 @@ static xyl_result parse_count(parser *p, const token *kw, const char *word, uint
  * a short text announcing millions of nodes must not allocate for them. */
 static xyl_result reserve(parser *p)
 {
-    size_t left = p->length - p->next;
+    size_t left = p->txt.size - p->txt.next;
     size_t nodes = left / MIN_NODE_RECORD_BYTES + 1;
     size_t leaves = left / MIN_LEAF_RECORD_BYTES + 1;
     void *n = NULL, *l = NULL;
@@ -501,7 +333,7 @@ static xyl_result reserve(parser *p)
         !xyl__grow(&p->alloc, &l, &p->leaf_cap, 0, leaves, sizeof *p->leaves)) {
         xyl__free(&p->alloc, n);
         p->node_cap = p->leaf_cap = 0;
-        return fail_at(p, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the skeleton");
+        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for the skeleton");
     }
     p->nodes = n;
     p->leaves = l;
@@ -518,40 +350,41 @@ static stage body_stage(const parser *p)
     return STAGE_END;
 }
 
-static xyl_result parse_body_record(parser *p, const token *kw)
+static xyl_result parse_body_record(parser *p, const xyl__token *kw)
 {
     char buf[40];
-    if (tok_is(kw, "n")) {
+    if (xyl__token_is(kw, "n")) {
         if (p->stage != STAGE_NODES)
-            return fail_at(p, XYL_ERR_PARSE, kw->col, "more node records than the %zu announced",
-                           p->node_total);
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                                  "more node records than the %zu announced", p->node_total);
         return parse_node(p);
     }
-    if (tok_is(kw, "l")) {
+    if (xyl__token_is(kw, "l")) {
         if (p->stage == STAGE_NODES)
-            return fail_at(p, XYL_ERR_PARSE, kw->col,
-                           "a leaf record after %zu of the %zu nodes; all nodes come first",
-                           p->node_count, p->node_total);
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                                  "a leaf record after %zu of the %zu nodes; all nodes come first",
+                                  p->node_count, p->node_total);
         if (p->stage != STAGE_LEAVES)
-            return fail_at(p, XYL_ERR_PARSE, kw->col, "more leaf records than the %zu announced",
-                           p->leaf_total);
+            return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                                  "more leaf records than the %zu announced", p->leaf_total);
         return parse_leaf(p);
     }
-    if (tok_is(kw, "end")) {
+    if (xyl__token_is(kw, "end")) {
         if (p->stage != STAGE_END)
-            return fail_at(p, XYL_ERR_TRUNCATED, kw->col,
-                           "'end' after %zu of %zu nodes and %zu of %zu leaves", p->node_count,
-                           p->node_total, p->leaf_count, p->leaf_total);
+            return xyl__text_fail(&p->txt, XYL_ERR_TRUNCATED, kw->col,
+                                  "'end' after %zu of %zu nodes and %zu of %zu leaves",
+                                  p->node_count, p->node_total, p->leaf_count, p->leaf_total);
         return need_record_end(p);
     }
-    return fail_at(p, XYL_ERR_PARSE, kw->col, "unknown record '%s'; expected 'n', 'l' or 'end'",
-                   show(kw, buf));
+    return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col,
+                          "unknown record '%s'; expected 'n', 'l' or 'end'",
+                          xyl__text_show(kw, SHOW_CHARS, buf));
 }
 
-static xyl_result parse_record(parser *p, const token *kw)
+static xyl_result parse_record(parser *p, const xyl__token *kw)
 {
     xyl_result r;
-    p->index = -1;
+    p->txt.index = -1;
     switch (p->stage) {
     case STAGE_HEADER:
         r = parse_header(p, kw);
@@ -564,7 +397,7 @@ static xyl_result parse_record(parser *p, const token *kw)
         if (r == XYL_OK) r = reserve(p);
         break;
     case STAGE_DONE:
-        return fail_at(p, XYL_ERR_PARSE, kw->col, "text after 'end'");
+        return xyl__text_fail(&p->txt, XYL_ERR_PARSE, kw->col, "text after 'end'");
     default:
         r = parse_body_record(p, kw);
         if (r == XYL_OK && p->stage == STAGE_END) p->stage = STAGE_DONE;
@@ -589,18 +422,22 @@ static xyl_result fail_at_eof(parser *p)
         [STAGE_DONE] = "",
     };
     uint32_t col = 1;
-    if (p->length > 0 && p->text[p->length - 1] != '\n') col = to_u32(p->line_len + 1);
-    else if (p->line_no < UINT32_MAX) ++p->line_no;
-    p->index = -1;
-    return fail_at(p, XYL_ERR_TRUNCATED, col, "the text ends %s (%zu of %zu nodes, %zu of %zu "
-                   "leaves read)", what[p->stage], p->node_count, p->node_total, p->leaf_count,
-                   p->leaf_total);
+    if (p->txt.size > 0 && p->txt.text[p->txt.size - 1] != '\n')
+        col = xyl__to_u32(p->txt.len + 1);
+    else if (p->txt.line_no < UINT32_MAX)
+        ++p->txt.line_no;
+    p->txt.index = -1;
+    return xyl__text_fail(&p->txt, XYL_ERR_TRUNCATED, col,
+                          "the text ends %s (%zu of %zu nodes, %zu of %zu "
+                          "leaves read)",
+                          what[p->stage], p->node_count, p->node_total, p->leaf_count,
+                          p->leaf_total);
 }
 
 static xyl_result parse_all(parser *p)
 {
     for (;;) {
-        token kw = {NULL, 0, 0};
+        xyl__token kw = {NULL, 0, 0};
         bool eof = false;
         xyl_result r = next_record(p, &kw, &eof);
         if (r != XYL_OK) return r;
@@ -614,10 +451,7 @@ static void init_parser(parser *p, const char *text, size_t length,
                         const xyl_skeleton_read_desc *desc, xyl_diag *diag)
 {
     memset(p, 0, sizeof *p);
-    p->text = text;
-    p->length = length;
-    p->diag = diag;
-    p->index = -1;
+    xyl__text_init(&p->txt, text, length, diag);
     p->stage = STAGE_HEADER;
     if (desc) {
         p->alloc = desc->alloc;
@@ -643,14 +477,14 @@ static xyl_result build(parser *p, xyl_skeleton **out)
     d.leaf_count = p->leaf_count;
     d.limits = p->limits;
     d.alloc = p->alloc;
-    xyl_result r = xyl__skeleton_validate(&d, p->diag);
+    xyl_result r = xyl__skeleton_validate(&d, p->txt.diag);
     if (r != XYL_OK) {
         xyl__free(&p->alloc, p->nodes);
         xyl__free(&p->alloc, p->leaves);
         return r;
     }
     return xyl__skeleton_adopt(p->nodes, p->node_count, p->leaves, p->leaf_count, &p->alloc, out,
-                               p->diag);
+                               p->txt.diag);
 }
 
 xyl_result xyl_skeleton_read_text(const char *text, size_t length,
