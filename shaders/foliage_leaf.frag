@@ -26,7 +26,7 @@ void main()
     float through = u_translucency * max(-facing, 0.0);
     float hemi = 0.5 + 0.5 * n.y;
     vec3 base = texel.rgb * u_color.rgb;
-    vec3 rgb = base * (0.65 * diffuse + 0.35 * mix(0.45, 1.0, hemi)) +
+    vec3 rgb = base * (0.65 * diffuse + 0.35 * mix(0.6, 1.0, hemi)) +
                base * vec3(1.1, 1.2, 0.55) * through;
     out_color = vec4(min(rgb, vec3(1.0)), 1.0);
 }

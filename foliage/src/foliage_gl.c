@@ -374,7 +374,7 @@ static xyl_result resolve_frame(const xyl_foliage_gl_frame *f, resolved_frame *o
     out->cutoff = f->alpha_cutoff > 0.0f ? f->alpha_cutoff : 0.5f;
     out->translucency = f->translucency > 0.0f   ? f->translucency
                         : f->translucency < 0.0f ? 0.0f
-                                                 : 0.35f;
+                                                 : 0.5f;
     return XYL_OK;
 }
 

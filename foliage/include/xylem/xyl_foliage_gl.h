@@ -54,7 +54,7 @@ typedef struct xyl_foliage_gl_frame {
                              0.25, 1 (a leaf green; white texture: the leaf's own colour) */
     float alpha_cutoff;   /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5 */
     float translucency;   /* how much light from behind a blade shines through it, [0, 1];
-                             default (0): 0.35; negative: none */
+                             default (0): 0.5; negative: none */
 } xyl_foliage_gl_frame;
 
 /* Compiles the leaf program and makes the buffers, with a 1 x 1 opaque white texture until
