@@ -1252,7 +1252,8 @@ static void print_render(const options *o, const render_job *j, const char *path
     printf("patches: %zu (%zu quads), levels %u..%u, %llu triangles drawn\n", j->drawn->count,
            j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
-           "GPU timer %.3f ms\n", j->select_ms, j->render_ms, j->gpu_ms);
+           "GPU timer %.3f ms%s\n", j->select_ms, j->render_ms, j->gpu_ms,
+           j->draw_leaves ? " (stems)" : "");
     printf("wrote %s\n", path);
 }
 
