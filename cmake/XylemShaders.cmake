@@ -9,9 +9,17 @@ file(MAKE_DIRECTORY ${XYL_SHADER_OUT})
 set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_tess_debug.h
     ${XYL_SHADER_DIR}/xyl_tess_eval.glsl ${XYL_SHADER_DIR}/xyl_tess_io.glsl)
 
-# xyl_shader(<name> <stage file> <gl|vulkan> [DEFINE...]): appends the generated C file to
-# XYL_GL_SHADER_SOURCES or XYL_VK_SHADER_SOURCES; the symbol is xyl__shader_<name>.
+# The foliage module's GL shaders read the leaf record only (foliage/ does not see tessellate/).
+set(XYL_FOLIAGE_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_foliage_shared.h)
+
+# xyl_shader(<name> <stage file> <gl|vulkan|gl_foliage> [DEFINE...]): appends the generated C
+# file to XYL_GL_SHADER_SOURCES, XYL_VK_SHADER_SOURCES or (gl_foliage: GLSL text assembled with
+# the leaf record's header) XYL_FOLIAGE_GL_SHADER_SOURCES; the symbol is xyl__shader_<name>.
 function(xyl_shader name stage api)
+  set(common ${XYL_SHADER_COMMON})
+  if(api STREQUAL "gl_foliage")
+    set(common ${XYL_FOLIAGE_SHADER_COMMON})
+  endif()
   get_filename_component(ext ${stage} LAST_EXT)
   string(SUBSTRING ${ext} 1 -1 ext)
   set(prefix_text "#version 450\n#define XYL_GLSL 1\n")
@@ -24,7 +32,7 @@ function(xyl_shader name stage api)
   set(prefix ${XYL_SHADER_OUT}/${name}.prefix)
   file(CONFIGURE OUTPUT ${prefix} CONTENT "${prefix_text}" @ONLY)
   set(src ${XYL_SHADER_OUT}/${name}.${ext})
-  set(inputs ${XYL_SHADER_COMMON} ${XYL_SHADER_DIR}/${stage})
+  set(inputs ${common} ${XYL_SHADER_DIR}/${stage})
   string(REPLACE ";" "\\;" inputs_arg "${inputs}")
   add_custom_command(OUTPUT ${src}
     COMMAND ${CMAKE_COMMAND} -DOUT=${src} -DPREFIX_FILE=${prefix} -DIN=${inputs_arg}
@@ -32,15 +40,18 @@ function(xyl_shader name stage api)
     DEPENDS ${inputs} ${prefix} ${PROJECT_SOURCE_DIR}/cmake/xyl_concat.cmake
     COMMENT "Assembling shader ${name}.${ext}" VERBATIM)
   set(c_out ${XYL_SHADER_OUT}/xyl_shader_${name}.c)
-  if(api STREQUAL "gl")
-    set(stamp ${XYL_SHADER_OUT}/${name}.checked)
+  if(api STREQUAL "gl" OR api STREQUAL "gl_foliage")
     add_custom_command(OUTPUT ${c_out}
       COMMAND ${XYL_GLSLANG} --quiet ${src}
       COMMAND ${CMAKE_COMMAND} -DOUT=${c_out} -DNAME=xyl__shader_${name} -DIN=${src}
               -P ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
       DEPENDS ${src} ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
       COMMENT "Validating and embedding GLSL ${name}" VERBATIM)
-    set(XYL_GL_SHADER_SOURCES ${XYL_GL_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    if(api STREQUAL "gl")
+      set(XYL_GL_SHADER_SOURCES ${XYL_GL_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    else()
+      set(XYL_FOLIAGE_GL_SHADER_SOURCES ${XYL_FOLIAGE_GL_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    endif()
   else()
     set(spv ${XYL_SHADER_OUT}/${name}.spv)
     add_custom_command(OUTPUT ${c_out}
@@ -58,6 +69,7 @@ endfunction()
 set(XYL_GL_SHADER_SOURCES)
 set(XYL_VK_SHADER_SOURCES)
 set(XYL_VK_SPIRV)
+set(XYL_FOLIAGE_GL_SHADER_SOURCES)
 xyl_shader(gl_instanced_vert tess_instanced.vert gl)
 xyl_shader(gl_instanced_capture_vert tess_instanced.vert gl XYL_CAPTURE)
 xyl_shader(gl_shade_frag tess_shade.frag gl)
@@ -70,3 +82,5 @@ xyl_shader(gl_hw_edges_geom tess_hw_edges.geom gl)
 xyl_shader(vk_instanced_vert tess_instanced.vert vulkan)
 xyl_shader(vk_instanced_capture_vert tess_instanced.vert vulkan XYL_CAPTURE)
 xyl_shader(vk_shade_frag tess_shade.frag vulkan)
+xyl_shader(gl_foliage_leaf_vert foliage_leaf.vert gl_foliage)
+xyl_shader(gl_foliage_leaf_frag foliage_leaf.frag gl_foliage)

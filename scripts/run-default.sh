@@ -3,7 +3,8 @@
 # binary: its closed stem mesh and its leaves, textured, alpha-masked quads in leaf-collapse LOD
 # order in 4 sectors, with the LOD tables in the leaves node's extras), out/foliage.csv (that LOD
 # table: one row per LOD per sector), out/tree.png (the stem mesh refined by PN tessellation on
-# the GPU, headless: EGL, llvmpipe where there is no GPU), out/tree.skel (the skeleton text
+# the GPU and its leaves at the LOD the pixel budget allows, headless: EGL, llvmpipe where there
+# is no GPU), out/tree.skel (the skeleton text
 # format) and out/tree.obj (skeleton polylines for any viewer).
 set -euo pipefail
 cd "$(dirname "$0")/.."

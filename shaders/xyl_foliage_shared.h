@@ -25,6 +25,17 @@
 
 #define XYL_FOLIAGE_GPU_LEAF_SIZE 32
 
+/* The GL leaf renderer's resources (foliage_leaf.vert / .frag, xylem/xyl_foliage_gl.h): the
+ * storage buffer of records, the leaf texture's unit and the uniforms' locations. */
+#define XYL_FOLIAGE_GL_BINDING_LEAVES 0
+#define XYL_FOLIAGE_GL_BINDING_TEXTURE 0
+#define XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ 0
+#define XYL_FOLIAGE_GL_UNIFORM_BASE 1
+#define XYL_FOLIAGE_GL_UNIFORM_LIGHT 2
+#define XYL_FOLIAGE_GL_UNIFORM_COLOR 3
+#define XYL_FOLIAGE_GL_UNIFORM_CUTOFF 4
+#define XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY 5
+
 #ifdef XYL_GLSL
 
 struct xyl_foliage_gpu_leaf {

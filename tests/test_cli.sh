@@ -214,6 +214,38 @@ expect 65 "render truncated mesh" -- "$XYLEM" render --mesh "$tmp/trunc.glb" --o
 [ ! -e "$tmp/x.png" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: a failed render left x.png"; }
 expect 73 "render unwritable output" -- "$XYLEM" render --size 16x16 --out "$tmp/no/dir/x.png"
 
+# render with leaves: the default tree's leaves are drawn unless --foliage none; the picture
+# then has leaf-green pixels (tests/png_pixels.mjs counts them) where the bare tree has none
+pixels="$(cd "$(dirname "$0")" && pwd)/png_pixels.mjs"
+expect 0 "render leaves (default: lod)" -- "$XYLEM" render --size 96x96 --out "$tmp/leafy.png"
+contains "leaves: --foliage lod: LOD " "render names the leaf LOD"
+contains "leaves drawn" "render counts the leaves drawn"
+expect 0 "render all leaves" -- "$XYLEM" render --foliage full --size 96x96 --out "$tmp/full.png"
+contains "LOD 0 of 0..5102, 5103 of 5103 leaves drawn" "--foliage full draws every leaf"
+expect 0 "render bare stems" -- "$XYLEM" render --foliage none --size 96x96 --out "$tmp/bare.png"
+grep -q "^leaves:" "$tmp/out" && bad "--foliage none still drew leaves" || ok
+if command -v node >/dev/null; then
+  read -r n_leafy g_leafy < <(node "$pixels" "$tmp/leafy.png")
+  read -r n_bare g_bare < <(node "$pixels" "$tmp/bare.png")
+  [ "$n_leafy" -eq 9216 ] && [ "$g_leafy" -gt 500 ] && [ "$g_bare" -eq 0 ] && ok ||
+    bad "leaf-green pixels: $g_leafy of $n_leafy with leaves, $g_bare of $n_bare without"
+else
+  bad "node (scripts/setup.sh installs it) is needed to read the rendered leaves back"
+fi
+cmp -s "$tmp/leafy.png" "$tmp/bare.png" && bad "leaves changed nothing" || ok
+expect 0 "render leaves, hardware path, wireframe" -- "$XYLEM" render --tess hardware --wireframe --camera 40,20,0.5 --size 64x64 --out "$tmp/hl.png"
+expect 0 "render a leafless preset" -- "$XYLEM" render --preset abop-1.24a --size 32x32 --out "$tmp/nl.png"
+grep -q "^leaves:" "$tmp/out" && bad "a leafless tree reported leaves" || ok
+expect 64 "render bad --foliage" -- "$XYLEM" render --foliage billboard --out "$tmp/x.png"
+contains "takes full, lod or none" "bad --foliage names the values"
+expect 64 "render --foliage without a value" -- "$XYLEM" render --out "$tmp/x.png" --foliage
+expect 64 "--foliage is not view's" -- "$XYLEM" view --foliage
+expect 64 "render bad camera distance" -- "$XYLEM" render --camera 10,10,0 --out "$tmp/x.png"
+expect 0 "render leaves on Vulkan: stems only" -- "$XYLEM" render --backend vulkan --size 32x32 --out "$tmp/vl.png"
+[ "$(grep -c "Vulkan backend does not draw leaves yet" "$tmp/out")" -eq 1 ] && ok ||
+  bad "Vulkan says once that it draws no leaves"
+grep -q "^leaves:" "$tmp/out" && bad "Vulkan reported leaves drawn" || ok
+
 # view: the same in a GLFW window, on an X server of its own (Xvfb)
 expect 64 "view writes no --out" -- "$XYLEM" view --out "$tmp/x.png"
 expect 64 "view screenshot needs --frames" -- "$XYLEM" view --screenshot "$tmp/x.png"

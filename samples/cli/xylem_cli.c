@@ -18,6 +18,10 @@
 #include <xylem/xyl_lsystem.h>
 #include <xylem/xyl_stems.h>
 #include <xylem/xyl_tess_gl.h>
+#ifdef XYL_HAVE_GL
+#include <epoxy/gl.h>
+#include <xylem/xyl_foliage_gl.h>
+#endif
 #ifdef XYL_HAVE_VULKAN
 #include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
 #endif
@@ -36,6 +40,8 @@ enum {
 };
 
 typedef enum tess_mode { TESS_INSTANCED, TESS_HARDWARE, TESS_CPU } tess_mode;
+/* render --foliage: the LOD the pixel budget picks (default), the finest, or none. */
+typedef enum leaf_mode { LEAVES_LOD, LEAVES_FULL, LEAVES_NONE } leaf_mode;
 
 typedef struct render_options {
     bool vulkan;
@@ -44,12 +50,14 @@ typedef struct render_options {
     uint32_t level;          /* 0: adaptive from error_px */
     double error_px;         /* 0: the library default (0.5 px) */
     double azimuth, elevation; /* degrees */
+    double zoom;               /* render: the eye at this times the framing distance */
     bool has_camera;
     uint32_t width, height;
     bool wireframe;
     uint32_t samples;        /* MSAA samples; 0: 4 */
     uint32_t frames;         /* view: close after N frames (0: when the window closes) */
     const char *screenshot;  /* view: PNG of the last frame */
+    leaf_mode leaves;        /* render --foliage full|lod|none */
 } render_options;
 
 /* The leaves of 'foliage' and 'mesh --foliage'. */
@@ -109,9 +117,12 @@ static const char usage_text[] =
     "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
-    "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
-    "           [--wireframe] [--samples N] --out FILE.png\n"
-    "                               refine the stem mesh (PN patches) and render it headless\n"
+    "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION[,DISTANCE]]\n"
+    "           [--size WxH] [--wireframe] [--samples N] [--foliage full|lod|none]\n"
+    "           --out FILE.png\n"
+    "                               refine the stem mesh (PN patches) and render it headless,\n"
+    "                               with the source's leaves (GL): lod (default) the leaf LOD\n"
+    "                               within the pixel budget, full all of them, none bare stems\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -220,10 +231,13 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
             return usage_error("--error-px takes a positive number of pixels, not '%s'", val);
     } else if (strcmp(opt, "--camera") == 0) {
         char extra;
-        if (sscanf(val, "%lf,%lf%c", &r->azimuth, &r->elevation, &extra) != 2 ||
-            !(fabs(r->azimuth) <= 3600.0) || !(fabs(r->elevation) < 90.0))
-            return usage_error("--camera takes AZIMUTH,ELEVATION in degrees (|elevation| < 90), "
-                               "not '%s'", val);
+        r->zoom = 1.0;
+        int n = sscanf(val, "%lf,%lf,%lf%c", &r->azimuth, &r->elevation, &r->zoom, &extra);
+        if ((n != 2 && n != 3) || !(fabs(r->azimuth) <= 3600.0) || !(fabs(r->elevation) < 90.0) ||
+            !(r->zoom > 0.0 && r->zoom <= 100.0))
+            return usage_error("--camera takes AZIMUTH,ELEVATION[,DISTANCE] in degrees "
+                               "(|elevation| < 90) and a distance factor in (0, 100], not '%s'",
+                               val);
         r->has_camera = true;
     } else if (strcmp(opt, "--frames") == 0) {
         if (!parse_u64(val, UINT32_MAX, &u) || u < 1)
@@ -350,6 +364,14 @@ static int parse_options(int argc, char **argv, options *o)
         }
         if (strcmp(opt, "--wireframe") == 0) {
             o->render.wireframe = true;
+            continue;
+        }
+        if (strcmp(opt, "--foliage") == 0 && strcmp(argv[1], "render") == 0) {
+            const char *val = i + 1 < argc ? argv[++i] : "";
+            if (strcmp(val, "lod") == 0) o->render.leaves = LEAVES_LOD;
+            else if (strcmp(val, "full") == 0) o->render.leaves = LEAVES_FULL;
+            else if (strcmp(val, "none") == 0) o->render.leaves = LEAVES_NONE;
+            else return usage_error("render --foliage takes full, lod or none, not '%s'", val);
             continue;
         }
         if (strcmp(opt, "--foliage") == 0) {
@@ -892,6 +914,10 @@ typedef struct render_job {
     double select_ms, render_ms, gpu_ms; /* gpu_ms: the API's timer query (a CPU rasterizer's
                                             misses its deferred work) */
     const char *device;
+    leaf_job leaves;      /* the source's leaves (foliage NULL: none, or --foliage none) */
+    bool draw_leaves;     /* leaves and a backend that draws them */
+    uint32_t *lods;       /* one per sector: the LOD drawn */
+    size_t leaves_drawn;
 } render_job;
 
 static void render_job_free(render_job *j)
@@ -903,17 +929,40 @@ static void render_job_free(render_job *j)
     xyl_mesh_destroy(j->refined);
     xyl_mesh_destroy(j->mesh);
     free(j->rgba);
+    leaf_job_free(&j->leaves);
+    free(j->lods);
 }
 
 static void frame_camera(const options *o, render_job *j)
 {
     float lo[3], hi[3];
     xyl_mesh_bounds(j->mesh, lo, hi);
+    const xyl_foliage *f = j->draw_leaves ? j->leaves.foliage : NULL;
+    for (uint32_t s = 0; f && s < f->sector_count; ++s) { /* leaves reach out past the twigs */
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        for (uint32_t i = 0; i < sec->original_count; ++i) {
+            const xyl_leaf *l = &f->leaves[sec->base + i];
+            const float c[3] = {l->center.x, l->center.y, l->center.z};
+            const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x),
+                                fabsf(l->side.y) + fabsf(l->axis.y),
+                                fabsf(l->side.z) + fabsf(l->axis.z)};
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = fminf(lo[k], c[k] - e[k]);
+                hi[k] = fmaxf(hi[k], c[k] + e[k]);
+            }
+        }
+    }
     double deg = 3.14159265358979323846 / 180.0;
     double az = o->render.has_camera ? o->render.azimuth : 30.0;
     double el = o->render.has_camera ? o->render.elevation : 10.0;
     xyl_tess_camera_frame(lo, hi, (float)(az * deg), (float)(el * deg), 0.8f,
                           (float)j->image.width / (float)j->image.height, &j->camera);
+    if (o->render.has_camera && o->render.zoom != 1.0) {
+        xyl_tess_camera *c = &j->camera;
+        for (int k = 0; k < 3; ++k)
+            c->eye[k] = c->target[k] + (float)o->render.zoom * (c->eye[k] - c->target[k]);
+        c->near_plane *= (float)o->render.zoom;
+    }
 }
 
 /* Levels for the view (or the fixed level), timed: the per-frame CPU cost of the technique. */
@@ -942,6 +991,26 @@ static xyl_result refine_on_cpu(render_job *j, xyl_diag *d)
     return r;
 }
 
+/* --foliage full: LOD 0 of every sector; lod: the coarsest within the pixel budget the stems'
+ * levels use, from the same eye. */
+static xyl_result pick_leaves(const options *o, render_job *j, xyl_diag *d)
+{
+    const xyl_foliage *f = j->leaves.foliage;
+    j->lods = calloc(f->sector_count, sizeof *j->lods);
+    if (!j->lods) return XYL_ERR_OUT_OF_MEMORY;
+    xyl_result r = XYL_OK;
+    if (o->render.leaves == LEAVES_LOD) {
+        xyl_foliage_view v = {0};
+        memcpy(v.eye, j->camera.eye, sizeof v.eye);
+        v.fovy = j->camera.fovy;
+        v.viewport_height = j->image.height;
+        v.error_px = (float)o->render.error_px;
+        r = xyl_foliage_pick(f, &v, j->lods, f->sector_count, d);
+    }
+    if (r == XYL_OK) r = xyl_foliage_gather(f, j->lods, f->sector_count, NULL, 0, &j->leaves_drawn, d);
+    return r;
+}
+
 static xyl_result prepare_render(const options *o, render_job *j, xyl_diag *d)
 {
     const render_options *ro = &o->render;
@@ -953,7 +1022,8 @@ static xyl_result prepare_render(const options *o, render_job *j, xyl_diag *d)
     if (r != XYL_OK) return r;
     j->drawn = j->patches;
     frame_camera(o, j);
-    r = select_levels(o, j, j->patches, ro->level, d);
+    if (j->draw_leaves) r = pick_leaves(o, j, d);
+    if (r == XYL_OK) r = select_levels(o, j, j->patches, ro->level, d);
     if (r == XYL_OK && ro->tess == TESS_CPU) {
         r = refine_on_cpu(j, d);
         if (r == XYL_OK) r = select_levels(o, j, j->drawn, 1, d);
@@ -981,22 +1051,138 @@ static void fill_frame(const render_job *j, xyl_tess_variant variant, xyl_tess_f
 }
 
 #ifdef XYL_HAVE_GL
+/* Stems and leaves in one framebuffer of the CLI's own (multisampled, then resolved): the
+ * renderers draw into whatever is bound, as into an engine's. */
+typedef struct own_target {
+    GLuint fbo, rb[2], resolve_fbo, resolve_rb;
+} own_target;
+
+static void own_target_free(own_target *t)
+{
+    glDeleteFramebuffers(1, &t->fbo);
+    glDeleteFramebuffers(1, &t->resolve_fbo);
+    glDeleteRenderbuffers(2, t->rb);
+    glDeleteRenderbuffers(1, &t->resolve_rb);
+}
+
+static xyl_result own_target_make(own_target *t, uint32_t w, uint32_t h, uint32_t samples,
+                                  xyl_diag *d)
+{
+    GLint max_samples = 1;
+    glGetIntegerv(GL_MAX_SAMPLES, &max_samples);
+    if (samples > (uint32_t)max_samples) {
+        snprintf(d->message, sizeof d->message, "%u samples asked, the driver has %d", samples,
+                 max_samples);
+        return XYL_ERR_UNSUPPORTED;
+    }
+    GLsizei n = samples > 1 ? (GLsizei)samples : 0;
+    glCreateRenderbuffers(2, t->rb);
+    glNamedRenderbufferStorageMultisample(t->rb[0], n, GL_RGBA8, (GLsizei)w, (GLsizei)h);
+    glNamedRenderbufferStorageMultisample(t->rb[1], n, GL_DEPTH_COMPONENT24, (GLsizei)w, (GLsizei)h);
+    glCreateFramebuffers(1, &t->fbo);
+    glNamedFramebufferRenderbuffer(t->fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->rb[0]);
+    glNamedFramebufferRenderbuffer(t->fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->rb[1]);
+    glCreateRenderbuffers(1, &t->resolve_rb);
+    glNamedRenderbufferStorage(t->resolve_rb, GL_RGBA8, (GLsizei)w, (GLsizei)h);
+    glCreateFramebuffers(1, &t->resolve_fbo);
+    glNamedFramebufferRenderbuffer(t->resolve_fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                                   t->resolve_rb);
+    if (glCheckNamedFramebufferStatus(t->fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE ||
+        glCheckNamedFramebufferStatus(t->resolve_fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE ||
+        glGetError() != GL_NO_ERROR) {
+        snprintf(d->message, sizeof d->message, "a %ux%u framebuffer with %u samples is incomplete",
+                 w, h, samples);
+        return XYL_ERR_UNSUPPORTED;
+    }
+    return XYL_OK;
+}
+
+/* The resolved image, top row first, into j->rgba. */
+static void read_image(const own_target *t, render_job *j)
+{
+    GLint w = (GLint)j->image.width, h = (GLint)j->image.height;
+    glBlitNamedFramebuffer(t->fbo, t->resolve_fbo, 0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT,
+                           GL_NEAREST);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, t->resolve_fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, j->rgba);
+    size_t row = 4u * (size_t)w;
+    for (GLint y = 0; y < h / 2; ++y) {
+        uint8_t *a = j->rgba + (size_t)y * row, *b = j->rgba + (size_t)(h - 1 - y) * row;
+        for (size_t i = 0; i < row; ++i) {
+            uint8_t c = a[i];
+            a[i] = b[i];
+            b[i] = c;
+        }
+    }
+}
+
+static xyl_result leaf_renderer(const render_job *j, xyl_foliage_gl **out, xyl_diag *d)
+{
+    uint32_t w = XYL_LEAF_TEXTURE_WIDTH, h = XYL_LEAF_TEXTURE_HEIGHT;
+    uint8_t *tex = malloc((size_t)w * h * 4);
+    if (!tex) return XYL_ERR_OUT_OF_MEMORY;
+    xyl_leaf_texture(tex, w, h);
+    xyl_result r = xyl_foliage_gl_create(NULL, out, d);
+    if (r == XYL_OK) r = xyl_foliage_gl_set_foliage(*out, j->leaves.foliage, d);
+    if (r == XYL_OK) r = xyl_foliage_gl_set_texture(*out, tex, w, h, d);
+    free(tex);
+    return r;
+}
+
+/* The stems, then the leaves, with one camera and light. */
+static xyl_result draw_tree(render_job *j, xyl_tess_gl *gl, xyl_foliage_gl *leaves,
+                            xyl_tess_path path, xyl_diag *d)
+{
+    own_target t;
+    memset(&t, 0, sizeof t);
+    xyl_result r = own_target_make(&t, j->image.width, j->image.height, j->image.samples, d);
+    if (r == XYL_OK) {
+        glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+        glViewport(0, 0, (GLsizei)j->image.width, (GLsizei)j->image.height);
+        const float *bg = j->image.background;
+        glClearColor(bg[0], bg[1], bg[2], bg[3]);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        xyl_tess_frame stems = j->frame;
+        if (j->image.wireframe) stems.flags |= XYL_TESS_FLAG_WIREFRAME;
+        r = xyl_tess_gl_draw(gl, j->batches, &stems, path, d);
+    }
+    if (r == XYL_OK) {
+        xyl_foliage_gl_frame lf = {0};
+        memcpy(lf.view_proj, j->frame.view_proj, sizeof lf.view_proj);
+        memcpy(lf.light_dir, j->frame.light_dir, sizeof lf.light_dir);
+        lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
+        r = xyl_foliage_gl_draw(leaves, &lf, j->lods, j->leaves.foliage->sector_count, d);
+    }
+    if (r == XYL_OK) {
+        read_image(&t, j);
+        j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl); /* the stems' share */
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    own_target_free(&t);
+    return r;
+}
+
 static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
 {
     xyl_gl_context *ctx = NULL;
     xyl_tess_gl *gl = NULL;
+    xyl_foliage_gl *leaves = NULL;
     xyl_result r = xyl_gl_context_create_headless(NULL, &ctx, d);
     if (r == XYL_OK) r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, d);
     if (r == XYL_OK) r = xyl_tess_gl_create(NULL, j->patterns, &gl, d);
     if (r == XYL_OK) r = xyl_tess_gl_set_patches(gl, j->drawn, d);
+    if (r == XYL_OK && j->draw_leaves) r = leaf_renderer(j, &leaves, d);
     xyl_tess_path path = o->render.tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE
                                                          : XYL_TESS_PATH_INSTANCED;
     double t0 = now_seconds();
-    if (r == XYL_OK)
+    if (r == XYL_OK && leaves) r = draw_tree(j, gl, leaves, path, d);
+    else if (r == XYL_OK)
         r = xyl_tess_gl_render_rgba(gl, j->batches, &j->frame, path, &j->image, j->rgba, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
+    if (leaves) xyl_foliage_gl_destroy(leaves);
     if (r == XYL_OK) {
-        j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl);
+        if (!leaves) j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl);
         printf("device: %s (OpenGL)\n", xyl_gl_context_renderer(ctx));
     }
     xyl_tess_gl_destroy(gl);
@@ -1041,8 +1227,23 @@ static xyl_result render_vk(render_job *j, xyl_diag *d)
 }
 #endif
 
-static void print_render(const render_job *j, const char *path)
+static void print_render(const options *o, const render_job *j, const char *path)
 {
+    if (j->draw_leaves) {
+        const xyl_foliage *f = j->leaves.foliage;
+        uint32_t lo = UINT32_MAX, hi = 0, top = 0;
+        for (uint32_t s = 0; s < f->sector_count; ++s) {
+            lo = j->lods[s] < lo ? j->lods[s] : lo;
+            hi = j->lods[s] > hi ? j->lods[s] : hi;
+            top = f->sectors[s].merged_count > top ? f->sectors[s].merged_count : top;
+        }
+        char which[64];
+        if (lo == hi) snprintf(which, sizeof which, "LOD %u", lo);
+        else snprintf(which, sizeof which, "LODs %u..%u", lo, hi);
+        printf("leaves: --foliage %s: %s of 0..%u, %zu of %zu leaves drawn (LOD array built in "
+               "%.3f ms)\n", o->render.leaves == LEAVES_FULL ? "full" : "lod", which, top,
+               j->leaves_drawn, f->original_count, j->leaves.build_ms);
+    }
     uint32_t lo = 64, hi = 0;
     for (size_t c = 0; c < j->batches->cmd_count; ++c) {
         lo = j->batches->batches[c].level < lo ? j->batches->batches[c].level : lo;
@@ -1051,7 +1252,8 @@ static void print_render(const render_job *j, const char *path)
     printf("patches: %zu (%zu quads), levels %u..%u, %llu triangles drawn\n", j->drawn->count,
            j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
-           "GPU timer %.3f ms\n", j->select_ms, j->render_ms, j->gpu_ms);
+           "GPU timer %.3f ms%s\n", j->select_ms, j->render_ms, j->gpu_ms,
+           j->draw_leaves ? " (stems)" : "");
     printf("wrote %s\n", path);
 }
 
@@ -1068,8 +1270,9 @@ static int load_glb(const char *path, xyl_mesh **mesh)
     return r ? report(path, r, &d) : 0;
 }
 
-/* The mesh to refine: a .glb, or the stems of a skeleton (file or grammar). */
-static int load_mesh(const options *o, xyl_mesh **mesh, const char **source)
+/* The mesh to refine: a .glb, or the stems of a skeleton (file or grammar), whose skeleton
+ * goes to *keep when keep is not NULL (it has the leaf attachments). */
+static int load_mesh(const options *o, xyl_mesh **mesh, const char **source, xyl_skeleton **keep)
 {
     if (o->mesh_path) {
         *source = o->mesh_path;
@@ -1080,8 +1283,24 @@ static int load_mesh(const options *o, xyl_mesh **mesh, const char **source)
     if (rc) return rc;
     xyl_diag d = {0};
     xyl_result r = xyl_stems_build(sk, &o->stems, mesh, NULL, &d);
-    xyl_skeleton_destroy(sk);
+    if (keep && r == XYL_OK) *keep = sk;
+    else xyl_skeleton_destroy(sk);
     return r ? report(*source, r, &d) : 0;
+}
+
+/* The source's leaves and their LODs; the Vulkan backend does not draw leaves yet. */
+static int prepare_leaves(const options *o, render_job *j, const xyl_skeleton *sk,
+                          const char *source)
+{
+    if (sk->leaf_count == 0) return 0;
+    if (o->render.vulkan) {
+        fprintf(stderr, "xylem: the Vulkan backend does not draw leaves yet: drawing the stems "
+                        "only (use --backend gl for the leaves)\n");
+        return 0;
+    }
+    int rc = build_foliage(o, sk, source, &j->leaves);
+    if (!rc) j->draw_leaves = j->leaves.foliage->leaf_count > 0;
+    return rc;
 }
 
 static int cmd_render(const options *o)
@@ -1105,7 +1324,10 @@ static int cmd_render(const options *o)
     const char *source = NULL;
     xyl_diag d = {0};
     xyl_result r = XYL_OK;
-    int rc = load_mesh(o, &j.mesh, &source);
+    xyl_skeleton *sk = NULL;
+    int rc = load_mesh(o, &j.mesh, &source, ro->leaves == LEAVES_NONE ? NULL : &sk);
+    if (!rc && sk) rc = prepare_leaves(o, &j, sk, source);
+    xyl_skeleton_destroy(sk);
     if (!rc && r == XYL_OK) r = prepare_render(o, &j, &d);
     if (!rc && r == XYL_OK) {
         j.rgba = malloc((size_t)j.image.width * j.image.height * 4);
@@ -1123,7 +1345,7 @@ static int cmd_render(const options *o)
             rc = EXIT_CANTCREAT;
         }
     }
-    if (!rc) print_render(&j, o->out);
+    if (!rc) print_render(o, &j, o->out);
     render_job_free(&j);
     return rc;
 }
@@ -1138,11 +1360,13 @@ static int cmd_view(const options *o)
     if (ro->level && ro->error_px > 0.0) return usage_error("%s", "give --level or --error-px, not both");
     if (ro->vulkan || ro->tess == TESS_CPU)
         return usage_error("%s", "'view' draws with the GL backend: --tess instanced or hardware");
+    if (ro->has_camera && ro->zoom != 1.0)
+        return usage_error("%s", "'view' zooms with the mouse wheel: --camera AZIMUTH,ELEVATION");
     if (ro->screenshot && (!ends_with(ro->screenshot, ".png") || !ro->frames))
         return usage_error("%s", "--screenshot takes FILE.png and needs --frames N");
     xyl_mesh *mesh = NULL;
     const char *source = NULL;
-    int rc = load_mesh(o, &mesh, &source);
+    int rc = load_mesh(o, &mesh, &source, NULL);
     if (rc) return rc;
     double deg = 3.14159265358979323846 / 180.0;
     xyl_view_request req;
@@ -1204,7 +1428,8 @@ int main(int argc, char **argv)
         return usage_error("unknown command '%s'", cmd);
     int rc = parse_options(argc, argv, &o);
     if (rc) return rc;
-    if (o.foliage.enabled && !mesh) return usage_error("%s", "--foliage is an option of 'mesh'");
+    if (o.foliage.enabled && !mesh)
+        return usage_error("%s", "--foliage is an option of 'mesh' and 'render'");
     if (o.foliage.given && !foliage && !o.foliage.enabled)
         return usage_error("%s", "--sectors, --aspect, --table, --leaf-texture, --leaf-mesh, "
                                  "--leaf-template and --cost go with 'foliage' or 'mesh --foliage'");

@@ -1,0 +1,525 @@
+/* The GL 4.5 leaf renderer: the species' packed leaves in one storage buffer, each LOD drawn as
+ * its two ranges (per sector) of instanced 4-vertex strips, and the transform feedback capture
+ * of those draws for the tests. Every entry point validates all of its input before its first
+ * GL call: a bad LOD or matrix must not reach the driver, which reads the buffer unchecked. */
+#include <epoxy/gl.h>
+#include <math.h>
+#include <string.h>
+
+#include "foliage_gl_debug.h"
+#include "foliage_internal.h"
+
+extern const unsigned char xyl__shader_gl_foliage_leaf_vert[];
+extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
+
+#define XFB_VERTEX_BYTES 28u /* gl_Position, v_st, v_leaf */
+#define VERTICES_PER_LEAF_CAPTURED 6u /* a strip of 4 is two triangles */
+#define MAX_READBACK_BYTES ((size_t)1 << 31)
+
+_Static_assert(sizeof(xyl__foliage_captured) == XFB_VERTEX_BYTES, "captured = xfb record");
+_Static_assert(offsetof(xyl__foliage_captured, leaf) == 24, "v_leaf follows vec4 and vec2");
+
+typedef struct gl_sector {
+    uint32_t base, first_lod, lod_count;
+} gl_sector;
+
+typedef struct gl_range {
+    uint32_t a, b, c;
+} gl_range;
+
+struct xyl_foliage_gl {
+    GLuint program, vao, leaf_buf, texture, capture_fbo, xfb_buf;
+    GLuint generated_query, written_query;
+    GLint64 max_ssbo_bytes;
+    GLint max_texture_side;
+    size_t leaf_count; /* 0: nothing uploaded */
+    gl_sector *sectors;
+    gl_range *ranges;
+    uint32_t sector_count;
+    xyl_allocator alloc;
+};
+
+/* The frame with its defaults filled in. */
+typedef struct resolved_frame {
+    float view_proj[16], light[3], color[4], cutoff, translucency;
+} resolved_frame;
+
+/* ---- errors and context ------------------------------------------------------------------- */
+
+/* Errors left by the caller's own GL code would otherwise be reported as ours. */
+static void drain_errors(void)
+{
+    for (int i = 0; i < 32 && glGetError() != GL_NO_ERROR; ++i) {}
+}
+
+static xyl_result gl_check(xyl_diag *diag, const char *what)
+{
+    GLenum e = glGetError();
+    if (e == GL_NO_ERROR) return XYL_OK;
+    drain_errors();
+    if (e == GL_OUT_OF_MEMORY)
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "GL out of memory while %s", what);
+    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "GL error 0x%04x while %s", (unsigned)e,
+                     what);
+}
+
+static xyl_result need_context(xyl_diag *diag)
+{
+    int v = epoxy_gl_version(); /* 0 without a current context */
+    if (v == 0)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no current OpenGL context");
+    if (!epoxy_is_desktop_gl() || v < 45)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "OpenGL 4.5 is needed, the current context is %s %d.%d",
+                         epoxy_is_desktop_gl() ? "OpenGL" : "OpenGL ES", v / 10, v % 10);
+    return XYL_OK;
+}
+
+/* ---- program ------------------------------------------------------------------------------ */
+
+static GLuint compile(GLenum stage, const unsigned char *text, char *log, GLsizei log_size)
+{
+    GLuint sh = glCreateShader(stage);
+    const GLchar *src = (const GLchar *)text;
+    glShaderSource(sh, 1, &src, NULL);
+    glCompileShader(sh);
+    GLint ok = GL_FALSE;
+    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+    if (ok) return sh;
+    glGetShaderInfoLog(sh, log_size, NULL, log);
+    glDeleteShader(sh);
+    return 0;
+}
+
+/* One program draws and captures: the feedback varyings only matter while feedback is on. */
+static xyl_result build_program(xyl_foliage_gl *gl, xyl_diag *diag)
+{
+    char log[192] = "";
+    const GLenum stages[2] = {GL_VERTEX_SHADER, GL_FRAGMENT_SHADER};
+    const unsigned char *texts[2] = {xyl__shader_gl_foliage_leaf_vert,
+                                     xyl__shader_gl_foliage_leaf_frag};
+    const char *names[2] = {"foliage_leaf.vert", "foliage_leaf.frag"};
+    GLuint p = glCreateProgram();
+    for (int i = 0; i < 2; ++i) {
+        GLuint sh = compile(stages[i], texts[i], log, (GLsizei)sizeof log);
+        if (!sh) {
+            glDeleteProgram(p);
+            return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader %s: %s", names[i], log);
+        }
+        glAttachShader(p, sh);
+        glDeleteShader(sh); /* freed with the program */
+    }
+    const char *const xfb[] = {"gl_Position", "v_st", "v_leaf"};
+    glTransformFeedbackVaryings(p, 3, xfb, GL_INTERLEAVED_ATTRIBS);
+    glLinkProgram(p);
+    GLint ok = GL_FALSE;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, (GLsizei)sizeof log, NULL, log);
+        glDeleteProgram(p);
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "program foliage_leaf: %s", log);
+    }
+    gl->program = p;
+    return XYL_OK;
+}
+
+/* A 1 x 1 opaque white texture: untextured leaves show the frame's colour. */
+static GLuint make_texture(const uint8_t *rgba, uint32_t w, uint32_t h)
+{
+    GLsizei levels = 1;
+    for (uint32_t side = w > h ? w : h; side > 1; side >>= 1) ++levels;
+    GLuint t = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &t);
+    glTextureStorage2D(t, levels, GL_RGBA8, (GLsizei)w, (GLsizei)h);
+    GLint align = 4, row = 0;
+    glGetIntegerv(GL_UNPACK_ALIGNMENT, &align);
+    glGetIntegerv(GL_UNPACK_ROW_LENGTH, &row);
+    GLint unpack_buf = 0;
+    glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &unpack_buf);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glTextureSubImage2D(t, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, align);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, row);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, (GLuint)unpack_buf);
+    glGenerateTextureMipmap(t);
+    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return t;
+}
+
+static xyl_result build_objects(xyl_foliage_gl *gl, xyl_diag *diag)
+{
+    glCreateVertexArrays(1, &gl->vao); /* core profile draws need one, even without attributes */
+    glCreateBuffers(1, &gl->leaf_buf);
+    glCreateBuffers(1, &gl->xfb_buf);
+    glCreateFramebuffers(1, &gl->capture_fbo);
+    /* no attachments: captures draw with the rasterizer off, but a draw still needs a complete
+     * framebuffer, which a surfaceless context's default one is not */
+    glNamedFramebufferParameteri(gl->capture_fbo, GL_FRAMEBUFFER_DEFAULT_WIDTH, 1);
+    glNamedFramebufferParameteri(gl->capture_fbo, GL_FRAMEBUFFER_DEFAULT_HEIGHT, 1);
+    glCreateQueries(GL_PRIMITIVES_GENERATED, 1, &gl->generated_query);
+    glCreateQueries(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, 1, &gl->written_query);
+    glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &gl->max_ssbo_bytes);
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &gl->max_texture_side);
+    const uint8_t white[4] = {255, 255, 255, 255};
+    gl->texture = make_texture(white, 1, 1);
+    return gl_check(diag, "creating the leaf renderer's objects");
+}
+
+xyl_result xyl_foliage_gl_create(const xyl_foliage_gl_desc *desc, xyl_foliage_gl **out,
+                                 xyl_diag *diag)
+{
+    if (!out) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out is required");
+    xyl_result r = need_context(diag);
+    if (r != XYL_OK) return r;
+    xyl_allocator a = {0};
+    if (desc) a = desc->alloc;
+    xyl_foliage_gl *gl = xyl__calloc(&a, 1, sizeof *gl);
+    if (!gl) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    gl->alloc = a;
+    drain_errors();
+    r = build_program(gl, diag);
+    if (r == XYL_OK) r = build_objects(gl, diag);
+    if (r != XYL_OK) {
+        xyl_foliage_gl_destroy(gl);
+        return r;
+    }
+    *out = gl;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+void xyl_foliage_gl_destroy(xyl_foliage_gl *gl)
+{
+    if (!gl) return;
+    if (epoxy_gl_version() != 0) { /* GL objects died with the context otherwise */
+        glDeleteProgram(gl->program);
+        glDeleteVertexArrays(1, &gl->vao);
+        GLuint bufs[2] = {gl->leaf_buf, gl->xfb_buf};
+        glDeleteBuffers(2, bufs);
+        glDeleteTextures(1, &gl->texture);
+        glDeleteFramebuffers(1, &gl->capture_fbo);
+        GLuint qs[2] = {gl->generated_query, gl->written_query};
+        glDeleteQueries(2, qs);
+    }
+    xyl_allocator a = gl->alloc;
+    xyl__free(&a, gl->sectors);
+    xyl__free(&a, gl->ranges);
+    xyl__free(&a, gl);
+}
+
+/* ---- the species' leaves ------------------------------------------------------------------ */
+
+/* A table from xyl_foliage_build is always well formed; one a program assembled by hand must
+ * still keep every range inside the array, since the shader reads the buffer unchecked. */
+static xyl_result check_tables(const xyl_foliage *f, size_t *lod_total, xyl_diag *diag)
+{
+    if (!f->leaves || !f->sectors || f->sector_count == 0 ||
+        f->sector_count > XYL_FOLIAGE_MAX_SECTORS)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the foliage's leaves or sectors are missing");
+    size_t total = 0;
+    for (uint32_t s = 0; s < f->sector_count; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        uint64_t n = sec->original_count, end = (uint64_t)sec->base + n + sec->merged_count;
+        bool ok = sec->lods && end <= f->leaf_count && sec->merged_count < UINT32_MAX;
+        for (uint32_t i = 0; ok && i <= sec->merged_count; ++i) {
+            const xyl_foliage_lod *l = &sec->lods[i];
+            ok = l->a <= n && (uint64_t)l->b + l->c <= n + sec->merged_count &&
+                 (l->c == 0 || l->b >= n);
+        }
+        if (!ok)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)s,
+                             "sector %u's LOD table reaches outside the leaf array", s);
+        total += (size_t)sec->merged_count + 1;
+    }
+    *lod_total = total;
+    return XYL_OK;
+}
+
+static void copy_tables(const xyl_foliage *f, gl_sector *sectors, gl_range *ranges)
+{
+    uint32_t at = 0;
+    for (uint32_t s = 0; s < f->sector_count; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        sectors[s] = (gl_sector){sec->base, at, sec->merged_count + 1};
+        for (uint32_t i = 0; i <= sec->merged_count; ++i, ++at)
+            ranges[at] = (gl_range){sec->lods[i].a, sec->lods[i].b, sec->lods[i].c};
+    }
+}
+
+/* A new buffer, swapped in only when the upload worked. */
+static xyl_result upload_records(xyl_foliage_gl *gl, const xyl_foliage_gpu_leaf *records,
+                                 size_t count, xyl_diag *diag)
+{
+    drain_errors();
+    GLuint buf = 0;
+    glCreateBuffers(1, &buf);
+    glNamedBufferStorage(buf, (GLsizeiptr)(count * sizeof *records), records, 0);
+    xyl_result r = gl_check(diag, "uploading the leaves");
+    if (r != XYL_OK) {
+        glDeleteBuffers(1, &buf);
+        return r;
+    }
+    glDeleteBuffers(1, &gl->leaf_buf);
+    gl->leaf_buf = buf;
+    return XYL_OK;
+}
+
+xyl_result xyl_foliage_gl_set_foliage(xyl_foliage_gl *gl, const xyl_foliage *foliage,
+                                      xyl_diag *diag)
+{
+    if (!gl || !foliage)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "gl and foliage are required");
+    if (foliage->leaf_count == 0)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the foliage has no leaves: there is nothing to draw");
+    size_t lod_total = 0;
+    xyl_result r = check_tables(foliage, &lod_total, diag);
+    if (r != XYL_OK) return r;
+    size_t n = foliage->leaf_count;
+    if (n > UINT32_MAX || (GLint64)(n * sizeof(xyl_foliage_gpu_leaf)) > gl->max_ssbo_bytes)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%zu leaves exceed the driver's storage block size (%lld bytes)", n,
+                         (long long)gl->max_ssbo_bytes);
+    xyl_foliage_gpu_leaf *records = xyl__alloc_array(&gl->alloc, n, sizeof *records);
+    gl_sector *sectors = xyl__alloc_array(&gl->alloc, foliage->sector_count, sizeof *sectors);
+    gl_range *ranges = xyl__alloc_array(&gl->alloc, lod_total, sizeof *ranges);
+    if (!records || !sectors || !ranges)
+        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
+    if (r == XYL_OK) r = upload_records(gl, records, n, diag);
+    xyl__free(&gl->alloc, records);
+    if (r != XYL_OK) {
+        xyl__free(&gl->alloc, sectors);
+        xyl__free(&gl->alloc, ranges);
+        return r;
+    }
+    copy_tables(foliage, sectors, ranges);
+    xyl__free(&gl->alloc, gl->sectors);
+    xyl__free(&gl->alloc, gl->ranges);
+    gl->sectors = sectors;
+    gl->ranges = ranges;
+    gl->sector_count = foliage->sector_count;
+    gl->leaf_count = n;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_foliage_gl_set_texture(xyl_foliage_gl *gl, const uint8_t *rgba, uint32_t width,
+                                      uint32_t height, xyl_diag *diag)
+{
+    if (!gl || !rgba)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "gl and rgba are required");
+    uint32_t cap = XYL_FOLIAGE_GL_MAX_TEXTURE_SIDE;
+    if (gl->max_texture_side > 0 && (uint32_t)gl->max_texture_side < cap)
+        cap = (uint32_t)gl->max_texture_side;
+    if (width == 0 || height == 0 || width > cap || height > cap)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a leaf texture of %u x %u: each side from 1 to %u", width, height, cap);
+    drain_errors();
+    GLuint t = make_texture(rgba, width, height);
+    xyl_result r = gl_check(diag, "uploading the leaf texture");
+    if (r != XYL_OK) {
+        glDeleteTextures(1, &t);
+        return r;
+    }
+    glDeleteTextures(1, &gl->texture);
+    gl->texture = t;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+/* ---- draws -------------------------------------------------------------------------------- */
+
+static xyl_result resolve_frame(const xyl_foliage_gl_frame *f, resolved_frame *out,
+                                xyl_diag *diag)
+{
+    bool any = false;
+    for (int k = 0; k < 16; ++k) {
+        if (!isfinite(f->view_proj[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k,
+                             "view_proj[%d] is not finite", k);
+        any = any || f->view_proj[k] != 0.0f;
+    }
+    if (!any)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "view_proj is all zero (no camera given)");
+    const float scalars[9] = {f->light_dir[0], f->light_dir[1], f->light_dir[2], f->color[0],
+                              f->color[1],     f->color[2],     f->color[3],     f->alpha_cutoff,
+                              f->translucency};
+    for (int k = 0; k < 9; ++k)
+        if (!isfinite(scalars[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1,
+                             "a light, colour, cutoff or translucency value is not finite");
+    if (f->alpha_cutoff < 0.0f || f->alpha_cutoff > 1.0f || f->translucency > 1.0f)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "alpha_cutoff %g must lie in [0, 1] and translucency %g be at most 1",
+                         (double)f->alpha_cutoff, (double)f->translucency);
+    memcpy(out->view_proj, f->view_proj, sizeof out->view_proj);
+    double l2 = (double)f->light_dir[0] * f->light_dir[0] +
+                (double)f->light_dir[1] * f->light_dir[1] +
+                (double)f->light_dir[2] * f->light_dir[2];
+    double il = l2 > 0.0 && isfinite(l2) ? 1.0 / sqrt(l2) : 0.0;
+    for (int k = 0; k < 3; ++k) out->light[k] = il > 0.0 ? (float)(f->light_dir[k] * il) : 0.0f;
+    if (il == 0.0) out->light[1] = 1.0f;
+    bool no_color = f->color[0] == 0.0f && f->color[1] == 0.0f && f->color[2] == 0.0f &&
+                    f->color[3] == 0.0f;
+    const float green[4] = {0.42f, 0.62f, 0.25f, 1.0f};
+    memcpy(out->color, no_color ? green : f->color, sizeof out->color);
+    out->cutoff = f->alpha_cutoff > 0.0f ? f->alpha_cutoff : 0.5f;
+    out->translucency = f->translucency > 0.0f   ? f->translucency
+                        : f->translucency < 0.0f ? 0.0f
+                                                 : 0.5f;
+    return XYL_OK;
+}
+
+static xyl_result check_draw(const xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
+                             const uint32_t *lods, size_t lod_count, resolved_frame *rf,
+                             xyl_diag *diag)
+{
+    if (!gl || !frame || !lods)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "gl, frame and lods are required");
+    if (gl->leaf_count == 0)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no foliage uploaded (xyl_foliage_gl_set_foliage)");
+    if (lod_count != gl->sector_count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "%zu LODs given for %u sectors: one per sector", lod_count,
+                         gl->sector_count);
+    for (uint32_t s = 0; s < gl->sector_count; ++s)
+        if (lods[s] >= gl->sectors[s].lod_count)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)s,
+                             "sector %u has LODs 0 to %u, not %u", s,
+                             gl->sectors[s].lod_count - 1, lods[s]);
+    return resolve_frame(frame, rf, diag);
+}
+
+static uint64_t leaves_of(const xyl_foliage_gl *gl, const uint32_t *lods)
+{
+    uint64_t n = 0;
+    for (uint32_t s = 0; s < gl->sector_count; ++s) {
+        const gl_range *r = &gl->ranges[gl->sectors[s].first_lod + lods[s]];
+        n += (uint64_t)r->a + r->c;
+    }
+    return n;
+}
+
+static void bind_program(const xyl_foliage_gl *gl, const resolved_frame *rf)
+{
+    GLuint p = gl->program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE, rf->view_proj);
+    glProgramUniform3fv(p, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rf->light);
+    glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rf->color);
+    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rf->cutoff);
+    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rf->translucency);
+    glBindVertexArray(gl->vao);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LEAVES, gl->leaf_buf);
+    glBindTextureUnit(XYL_FOLIAGE_GL_BINDING_TEXTURE, gl->texture);
+}
+
+/* Per sector the LOD's two ranges, [base, base + a) and [base + b, base + b + c). */
+static void draw_ranges(const xyl_foliage_gl *gl, const uint32_t *lods)
+{
+    for (uint32_t s = 0; s < gl->sector_count; ++s) {
+        const gl_sector *sec = &gl->sectors[s];
+        const gl_range *r = &gl->ranges[sec->first_lod + lods[s]];
+        const uint32_t first[2] = {sec->base, sec->base + r->b}, count[2] = {r->a, r->c};
+        for (int k = 0; k < 2; ++k) {
+            if (!count[k]) continue;
+            glProgramUniform1ui(gl->program, XYL_FOLIAGE_GL_UNIFORM_BASE, first[k]);
+            glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)count[k]);
+        }
+    }
+}
+
+xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
+                               const uint32_t *lods, size_t lod_count, xyl_diag *diag)
+{
+    resolved_frame rf;
+    xyl_result r = check_draw(gl, frame, lods, lod_count, &rf, diag);
+    if (r != XYL_OK) return r;
+    drain_errors();
+    GLboolean cull = glIsEnabled(GL_CULL_FACE);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    bind_program(gl, &rf);
+    draw_ranges(gl, lods);
+    if (cull) glEnable(GL_CULL_FACE);
+    r = gl_check(diag, "drawing the leaves");
+    if (r == XYL_OK) xyl__diag_ok(diag);
+    return r;
+}
+
+/* ---- capture ------------------------------------------------------------------------------ */
+
+static xyl_result run_feedback(xyl_foliage_gl *gl, const resolved_frame *rf, const uint32_t *lods,
+                               size_t bytes, GLuint64 *written, GLuint64 *generated,
+                               xyl_diag *diag)
+{
+    drain_errors();
+    glNamedBufferData(gl->xfb_buf, (GLsizeiptr)bytes, NULL, GL_STREAM_READ);
+    xyl_result r = gl_check(diag, "allocating the transform feedback buffer");
+    if (r != XYL_OK) return r;
+    GLint draw_fbo = 0;
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &draw_fbo);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, gl->capture_fbo);
+    bind_program(gl, rf);
+    glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, gl->xfb_buf);
+    glEnable(GL_RASTERIZER_DISCARD);
+    glBeginQuery(GL_PRIMITIVES_GENERATED, gl->generated_query);
+    glBeginQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN, gl->written_query);
+    glBeginTransformFeedback(GL_TRIANGLES);
+    draw_ranges(gl, lods);
+    glEndTransformFeedback();
+    glEndQuery(GL_TRANSFORM_FEEDBACK_PRIMITIVES_WRITTEN);
+    glEndQuery(GL_PRIMITIVES_GENERATED);
+    glDisable(GL_RASTERIZER_DISCARD);
+    glGetQueryObjectui64v(gl->written_query, GL_QUERY_RESULT, written);
+    glGetQueryObjectui64v(gl->generated_query, GL_QUERY_RESULT, generated);
+    glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, (GLuint)draw_fbo);
+    return gl_check(diag, "capturing the leaves with transform feedback");
+}
+
+xyl_result xyl__foliage_gl_capture(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
+                                   const uint32_t *lods, size_t lod_count,
+                                   xyl__foliage_captured *out, size_t capacity, size_t *count,
+                                   uint64_t *generated, xyl_diag *diag)
+{
+    if (!count || !generated || (capacity && !out))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "count, generated, and out when capacity > 0, are required");
+    resolved_frame rf;
+    xyl_result r = check_draw(gl, frame, lods, lod_count, &rf, diag);
+    if (r != XYL_OK) return r;
+    uint64_t vertices = leaves_of(gl, lods) * VERTICES_PER_LEAF_CAPTURED;
+    if (vertices * XFB_VERTEX_BYTES > MAX_READBACK_BYTES)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%llu captured vertices exceed 2 GiB", (unsigned long long)vertices);
+    size_t bytes = (size_t)(vertices ? vertices : 1) * XFB_VERTEX_BYTES;
+    GLuint64 written = 0, gen = 0;
+    r = run_feedback(gl, &rf, lods, bytes, &written, &gen, diag);
+    if (r == XYL_OK && written < gen)
+        r = xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                      "transform feedback wrote %llu of %llu triangles",
+                      (unsigned long long)written, (unsigned long long)gen);
+    if (r != XYL_OK) return r;
+    size_t total = (size_t)written * 3;
+    size_t n = capacity < total ? capacity : total;
+    if (n) glGetNamedBufferSubData(gl->xfb_buf, 0, (GLsizeiptr)(n * XFB_VERTEX_BYTES), out);
+    r = gl_check(diag, "reading the transform feedback back");
+    if (r != XYL_OK) return r;
+    *count = total;
+    *generated = gen;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}

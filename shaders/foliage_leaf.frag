@@ -1,0 +1,32 @@
+
+// Alpha-tested, double-sided leaves: the side facing the viewer is lit by Lambert's law plus a
+// sky/ground hemisphere term (as the stems are), and light arriving from behind shines through
+// the blade, tinted yellow-green, in proportion to u_translucency.
+
+layout(binding = XYL_FOLIAGE_GL_BINDING_TEXTURE) uniform sampler2D u_texture;
+layout(location = XYL_FOLIAGE_GL_UNIFORM_LIGHT) uniform vec3 u_light;
+layout(location = XYL_FOLIAGE_GL_UNIFORM_COLOR) uniform vec4 u_color;
+layout(location = XYL_FOLIAGE_GL_UNIFORM_CUTOFF) uniform float u_cutoff;
+layout(location = XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY) uniform float u_translucency;
+
+layout(location = 0) in vec3 v_normal;
+layout(location = 1) in vec2 v_uv;
+layout(location = 0) out vec4 out_color;
+
+void main()
+{
+    // The image is stored top row first, as image files are, with the tip end (v = 1) at the
+    // top; GL's t = 0 is the first row stored.
+    vec4 texel = texture(u_texture, vec2(v_uv.x, 1.0 - v_uv.y));
+    if (texel.a < u_cutoff) discard;
+    vec3 n = normalize(v_normal);
+    if (!gl_FrontFacing) n = -n;
+    float facing = dot(n, u_light);
+    float diffuse = max(facing, 0.0);
+    float through = u_translucency * max(-facing, 0.0);
+    float hemi = 0.5 + 0.5 * n.y;
+    vec3 base = texel.rgb * u_color.rgb;
+    vec3 rgb = base * (0.65 * diffuse + 0.35 * mix(0.6, 1.0, hemi)) +
+               base * vec3(1.1, 1.2, 0.55) * through;
+    out_color = vec4(min(rgb, vec3(1.0)), 1.0);
+}
