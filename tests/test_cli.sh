@@ -105,6 +105,11 @@ expect 64 "mesh needs --out" -- "$XYLEM" mesh
 expect 64 "skeleton and preset" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --preset abop-1.24a --out "$tmp/x.glb"
 expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out "$tmp/x.glb"
 expect 65 "broken skeleton" -- "$XYLEM" mesh --skeleton "$data/skel/bad_parent.skel" --out "$tmp/x.glb"
+# A format version the reader does not know is bad input (65), not a missing backend (69).
+expect 65 "unknown .skel version" -- "$XYLEM" mesh --skeleton "$data/skel/bad_version.skel" --out "$tmp/x.glb"
+contains "version" "unknown .skel version names the version"
+[ ! -e "$tmp/x.glb" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: unknown .skel version wrote output"; }
+expect 65 "unknown .skel version (foliage)" -- "$XYLEM" foliage --skeleton "$data/skel/bad_version.skel" --out "$tmp/x.glb"
 expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
 
 # foliage: leaves, their LODs, a .glb and the LOD table
@@ -202,6 +207,8 @@ contains "(Vulkan)" "Vulkan device named"
 expect 0 "render stems of a leafy .glb" -- "$XYLEM" render --mesh "$tmp/leafy.glb" --size 32x32 --out "$tmp/l.png"
 contains "patches: 11646 (11646 quads)" "the leaves are not refined as stems"
 expect 0 "render CPU reference" -- "$XYLEM" render --tess cpu --error-px 2 --camera 90,20 --size 64x64 --out "$tmp/c.png"
+expect 65 "render an unknown .skel version" -- "$XYLEM" render --skeleton "$data/skel/bad_version.skel" --size 16x16 --out "$tmp/x.png"
+[ ! -e "$tmp/x.png" ] && ok || bad "a refused skeleton wrote x.png"
 expect 64 "render needs a .png" -- "$XYLEM" render --out "$tmp/x.jpg"
 expect 64 "render level out of range" -- "$XYLEM" render --level 65 --out "$tmp/x.png"
 expect 64 "render bad backend" -- "$XYLEM" render --backend metal --out "$tmp/x.png"

@@ -150,13 +150,15 @@ static int usage_error(const char *fmt, const char *arg)
     return EXIT_USAGE;
 }
 
+/* XYL_ERR_UNSUPPORTED means "this input asks for what the library does not do" (a .skel format
+ * version it does not know, a subdivision this build lacks): bad input, 65. Only the GPU and
+ * window paths map it to 69 (report_backend). */
 static int exit_code_for(xyl_result r)
 {
     switch (r) {
     case XYL_OK: return 0;
     case XYL_ERR_OUT_OF_MEMORY: return EXIT_OSERR;
     case XYL_ERR_IO: return EXIT_NOINPUT;
-    case XYL_ERR_UNSUPPORTED: return EXIT_UNAVAILABLE;
     case XYL_ERR_INVALID_ARGUMENT:
     case XYL_ERR_NOT_FOUND: return EXIT_USAGE;
     default: return EXIT_DATA;
@@ -171,6 +173,14 @@ static int report(const char *source, xyl_result r, const xyl_diag *d)
     else
         fprintf(stderr, "xylem: %s: %s: %s\n", source, xyl_result_string(r), d->message);
     return exit_code_for(r);
+}
+
+/* A failure of the GPU backend or its context: XYL_ERR_UNSUPPORTED there is a missing backend,
+ * driver feature or window system. */
+static int report_backend(const char *source, xyl_result r, const xyl_diag *d)
+{
+    int rc = report(source, r, d);
+    return r == XYL_ERR_UNSUPPORTED ? EXIT_UNAVAILABLE : rc;
 }
 
 /* ---- options ------------------------------------------------------------------------------- */
@@ -1337,7 +1347,7 @@ static int cmd_render(const options *o)
         fill_frame(&j, ro->variant, &j.frame);
         r = ro->vulkan ? render_vk(&j, &d) : render_gl(o, &j, &d);
     }
-    if (!rc && r != XYL_OK) rc = report(source, r, &d);
+    if (!rc && r != XYL_OK) rc = report_backend(source, r, &d);
     if (!rc) {
         char msg[512];
         if (xyl_png_write(o->out, j.rgba, j.image.width, j.image.height, msg, sizeof msg) != 0) {
