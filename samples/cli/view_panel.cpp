@@ -265,7 +265,8 @@ void stats_section(const view_panel_info *info)
                     t->stems_stats.branches_dropped);
     ImGui::Text("drawn: %llu triangles, %llu vertices, levels %u..%u", (unsigned long long)info->triangles,
                 (unsigned long long)info->vertices, info->level_lo, info->level_hi);
-    ImGui::Text("level selection %.3f ms, GPU %.2f ms", info->select_ms, info->gpu_ms);
+    if (info->gpu_ms >= 0.0) ImGui::Text("level selection %.3f ms, GPU %.2f ms", info->select_ms, info->gpu_ms);
+    else ImGui::Text("level selection %.3f ms, GPU timer pending", info->select_ms);
     if (info->renderer) ImGui::TextDisabled("%s", info->renderer);
 }
 

@@ -282,8 +282,12 @@ static void *worker_main(void *arg)
         xyl_diag d = {0};
         xyl_result r = grow(w, &p, &next, &stage, &d);
         view_tree *pub = NULL;
-        bool built = false;
-        if (r == XYL_OK) {
+        bool built = false, ran = false;
+        for (int i = 0; i < VIEW_STAGE_COUNT; ++i) ran |= next.ran[i];
+        if (r == XYL_OK && !ran && w->has_built) {
+            /* Nothing that shapes the tree changed: the tree on screen stays, with its times. */
+            drop_new(&next, &w->cache);
+        } else if (r == XYL_OK) {
             pub = malloc(sizeof *pub);
             built = pub && view_params_copy(&w->built, &p);
             if (!built) {

@@ -152,7 +152,10 @@ static void report_step(tuner *t, const char *what)
                     view_stage_names[st.failed_stage], xyl_result_string(st.error), d->message);
         return;
     }
-    if (!t->tree || t->tree->generation != st.done) return;
+    if (!t->tree || t->tree->generation != st.done) {
+        printf("%s: regrew nothing\n", what);
+        return;
+    }
     printf("%s: regrew", what);
     int ran = 0;
     for (int s = 0; s < VIEW_STAGE_COUNT; ++s)
@@ -346,8 +349,7 @@ static int draw_tree(tuner *t)
     }
     t->info.level_lo = t->batches->cmd_count ? lo : 0, t->info.level_hi = hi;
     t->info.triangles = t->batches->triangles, t->info.vertices = t->batches->vertices;
-    double gpu = xyl_tess_gl_last_gpu_ms(t->gl);
-    t->info.gpu_ms = gpu > 0 ? gpu : 0.0;
+    t->info.gpu_ms = xyl_tess_gl_last_gpu_ms(t->gl);
     pick_leaves(t, &cam);
     return 0;
 }
