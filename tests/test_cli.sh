@@ -274,6 +274,9 @@ else
   read -r m total < <(region not-colour "$tmp/pb.png" 240 0 480 360 "$bg")
   [ "$m" -gt 500 ] && ok || bad "no tree on screen after a bad grammar"
 
+  expect 65 "view stops a runaway depth" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set depth=14
+  contains "depth=14: derive: limit exceeded" "the limit is shown, the tree stays"
+
   expect 64 "--set unknown name" -- "$XYLEM" view --set bogus=1
   contains "unknown name 'bogus'" "--set names the bad name"
   expect 64 "--set without =" -- "$XYLEM" view --set sides

@@ -59,7 +59,13 @@ bool grammar_section(view_params *p, const view_panel_info *info)
     const char *text = p->text ? p->text : "";
     if (g_text_seen != text) g_text = g_text_seen = text;
     if (ImGui::InputTextMultiline("##grammar", &g_text, ImVec2(-1.0f, ImGui::GetTextLineHeight() * 10))) {
-        if (view_params_set_text(p, g_text.c_str(), "grammar_text")) {
+        // Typing keeps the tuned #defines (a preset or file replaces them).
+        uint32_t kept = p->define_count;
+        view_define tuned[VIEW_MAX_DEFINES];
+        std::memcpy(tuned, p->defines, sizeof tuned);
+        if (view_params_set_text(p, g_text.c_str(), "(edited)")) {
+            p->define_count = kept;
+            std::memcpy(p->defines, tuned, sizeof tuned);
             g_text_seen = g_text;
             changed = true;
         }

@@ -203,6 +203,7 @@ static xyl_result grow(view_regrow *w, const view_params *p, view_tree *next, vi
         xyl_derive_desc dd = {0};
         dd.has_depth = p->has_depth, dd.depth = p->depth;
         dd.has_seed = p->has_seed, dd.seed = p->seed;
+        dd.limits.max_modules = VIEW_MAX_MODULES;
         next->depth = p->has_depth ? p->depth : info.depth;
         next->seed = p->has_seed ? p->seed : info.seed;
         t0 = now_ms();

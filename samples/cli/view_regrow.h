@@ -21,6 +21,10 @@
 extern "C" {
 #endif
 
+/* Derived strings stop here (the library's default is 1 << 27): a depth slider pulled too far
+ * fails in a second or two with XYL_ERR_LIMIT_EXCEEDED instead of filling the memory. */
+#define VIEW_MAX_MODULES (UINT64_C(1) << 23)
+
 typedef enum view_stage {
     VIEW_STAGE_GRAMMAR,  /* tuned text -> xyl_grammar */
     VIEW_STAGE_DERIVE,   /* depth, seed -> module string */
