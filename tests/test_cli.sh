@@ -256,8 +256,8 @@ else
   grep -q '^leaves=1: regrew foliage [0-9.]* ms$' "$tmp/out" && ok || bad "leaves grow on the kept skeleton"
 
   # a scripted sequence ends with the tree the CLI builds from the same parameters
-  expect 0 "view --set sequence, exports" -- xvfb-run -a "$XYLEM" view --preset abop-2.6-monopodial --frames 1 --size 320x240 --set depth=7 --set sides=3 --set define.r2=0.7 --set angle=30 --set sides=6 --set radius_exponent=2.5 --set subdivide=catmark --set export="$tmp/s.lsys" --set export="$tmp/s.skel" --set export="$tmp/s.glb" --set export="$tmp/s.png"
-  grep -q '^#define r2 0.7 ' "$tmp/s.lsys" && grep -q '^#depth 7' "$tmp/s.lsys" && grep -q '^#angle 30' "$tmp/s.lsys" && ok || bad "the .lsys lacks the tuned values"
+  expect 0 "view --set sequence, exports" -- xvfb-run -a "$XYLEM" view --preset abop-2.6-monopodial --frames 1 --size 320x240 --set depth=7 --set sides=3 --set define.r2=0.7 --set angle=30 --set tropism=0,-1,0,0.2 --set sides=6 --set radius_exponent=2.5 --set subdivide=catmark --set export="$tmp/s.lsys" --set export="$tmp/s.skel" --set export="$tmp/s.glb" --set export="$tmp/s.png"
+  grep -q '^#define r2 0.7 ' "$tmp/s.lsys" && grep -q '^#depth 7' "$tmp/s.lsys" && grep -q '^#angle 30' "$tmp/s.lsys" && grep -q '^#tropism 0 -1 0 0.2' "$tmp/s.lsys" && ok || bad "the .lsys lacks the tuned values"
   expect 0 "CLI skeleton of the tuned grammar" -- "$XYLEM" skeleton --grammar "$tmp/s.lsys" --radius-exponent 2.5 --out "$tmp/c.skel"
   cmp -s "$tmp/s.skel" "$tmp/c.skel" && ok || bad "the viewer's skeleton differs from the CLI's"
   expect 0 "CLI mesh of the tuned grammar" -- "$XYLEM" mesh --grammar "$tmp/s.lsys" --radius-exponent 2.5 --sides 6 --subdivide catmark --out "$tmp/c.glb"
@@ -280,10 +280,13 @@ else
   expect 64 "--set unknown name" -- "$XYLEM" view --set bogus=1
   contains "unknown name 'bogus'" "--set names the bad name"
   expect 64 "--set without =" -- "$XYLEM" view --set sides
-  expect 64 "--set bad value" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set sides=99
+  expect 64 "--set bad value, before any window" -- env -u DISPLAY -u WAYLAND_DISPLAY "$XYLEM" view --set sides=99
   contains "sides takes a whole number 3..32" "--set says the range"
-  expect 64 "--set unknown define" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set define.nope=1
-  expect 64 "--set export needs a known type" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set export="$tmp/x.txt"
+  expect 64 "--set unknown define" -- "$XYLEM" view --set define.nope=1
+  expect 0 "--set define of the grammar set just before" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set preset=abop-2.6-monopodial --set define.r2=0.5
+  expect 64 "--set export needs a known type" -- "$XYLEM" view --set export="$tmp/x.txt"
+  expect 64 "--set tropism needs four numbers" -- "$XYLEM" view --set tropism=0,1
+  expect 66 "--set grammar file missing" -- "$XYLEM" view --set grammar="$tmp/none.lsys"
   expect 73 "--set export unwritable" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set export="$tmp/no/dir/x.glb"
   expect 64 "--set is view's" -- "$XYLEM" render --set sides=4 --out "$tmp/x.png"
   expect 64 "--set tunes a grammar only" -- "$XYLEM" view --mesh "$tmp/tree.glb" --set sides=4

@@ -108,6 +108,22 @@ bool grammar_section(view_params *p, const view_panel_info *info)
     float step = (float)(p->has_step ? p->step : (info->tree ? gi.step : 1.0));
     if (ImGui::DragFloat("step", &step, 0.01f, 0.001f, 1000.0f, "%.4g", ImGuiSliderFlags_AlwaysClamp))
         p->has_step = true, p->step = step, changed = true;
+    bool tropism = p->has_tropism;
+    if (ImGui::Checkbox("tropism", &tropism)) {
+        if (tropism && !p->has_tropism) // start from the grammar's
+            for (int k = 0; k < 3; ++k) p->tropism[k] = gi.tropism[k];
+        if (tropism && !p->has_tropism) p->tropism[3] = gi.elasticity;
+        p->has_tropism = tropism, changed = true;
+    }
+    if (p->has_tropism) {
+        float t[3] = {(float)p->tropism[0], (float)p->tropism[1], (float)p->tropism[2]};
+        float e = (float)p->tropism[3];
+        if (ImGui::DragFloat3("towards", t, 0.01f, -10.0f, 10.0f, "%.2f")) {
+            for (int k = 0; k < 3; ++k) p->tropism[k] = t[k];
+            changed = true;
+        }
+        if (ImGui::SliderFloat("elasticity", &e, -1.0f, 1.0f, "%.3f")) p->tropism[3] = e, changed = true;
+    }
     return changed;
 }
 

@@ -13,13 +13,6 @@
 
 #define DEG (3.14159265358979323846 / 180.0)
 
-const char *const view_param_names[] = {
-    "preset", "grammar", "grammar_text", "depth", "seed", "angle", "step", "define.NAME",
-    "radius", "radius_exponent", "tip_radius", "angles", "murray_min_angle", "murray_max_angle",
-    "merge_collinear", "sides", "subdivide", "normals", "joints", "variant", "tess", "level",
-    "error_px", "wireframe", "leaves", "leaf_aspect", "leaf_jitter", "leaf_sectors", "camera",
-    "azimuth", "elevation", "zoom", "background", "light", "panel", "export", NULL};
-
 void view_params_init(view_params *p)
 {
     memset(p, 0, sizeof *p);
@@ -210,6 +203,8 @@ static bool header_value(const view_params *p, const char *word, bool with_deriv
 {
     if (strcmp(word, "angle") == 0 && p->has_angle) putf(o, "#angle %.9g", p->angle_deg);
     else if (strcmp(word, "step") == 0 && p->has_step) putf(o, "#step %.9g", p->step);
+    else if (strcmp(word, "tropism") == 0 && p->has_tropism)
+        putf(o, "#tropism %.9g %.9g %.9g %.9g", p->tropism[0], p->tropism[1], p->tropism[2], p->tropism[3]);
     else if (with_derive && strcmp(word, "depth") == 0 && p->has_depth) putf(o, "#depth %u", p->depth);
     else if (with_derive && strcmp(word, "seed") == 0 && p->has_seed)
         putf(o, "#seed %llu", (unsigned long long)p->seed);
@@ -219,22 +214,22 @@ static bool header_value(const view_params *p, const char *word, bool with_deriv
 
 char *view_params_tuned_text(const view_params *p, bool with_derive)
 {
-    static const char *const words[] = {"angle", "step", "depth", "seed"};
+    static const char *const words[] = {"angle", "step", "tropism", "depth", "seed"};
     const char *text = p->text ? p->text : "";
-    bool seen[4] = {false, false, false, false};
+    bool seen[5] = {false, false, false, false, false};
     const char *s = text, *line;
     size_t len;
     while (next_line(&s, &line, &len)) {
         char word[16];
         size_t at;
         if (!header_word(line, len, word, sizeof word, &at)) continue;
-        for (int w = 0; w < 4; ++w)
+        for (int w = 0; w < 5; ++w)
             if (strcmp(word, words[w]) == 0) seen[w] = true;
     }
     text_out o = {NULL, 0, 0, true};
     put(&o, "", 0);
     /* Tuned header values the grammar does not state go first, before the axiom. */
-    for (int w = 0; w < 4; ++w)
+    for (int w = 0; w < 5; ++w)
         if (!seen[w] && header_value(p, words[w], with_derive, &o)) put(&o, "\n", 1);
     s = text;
     while (next_line(&s, &line, &len)) {
@@ -369,6 +364,15 @@ static int set_grammar(view_params *p, const char *name, const char *v, char *er
     } else if (!strcmp(name, "step")) {
         if (!number(v, 1e-6, 1e6, &x)) return bad(err, cap, "step takes a number in [1e-6, 1e6], not '%s'", v);
         p->has_step = true, p->step = x;
+    } else if (!strcmp(name, "tropism")) {
+        double t[4];
+        char extra;
+        if (sscanf(v, "%lf,%lf,%lf,%lf%c", &t[0], &t[1], &t[2], &t[3], &extra) != 4 ||
+            !isfinite(t[0] + t[1] + t[2] + t[3]) || fabs(t[0]) + fabs(t[1]) + fabs(t[2]) > 1e6 ||
+            !(fabs(t[3]) <= 10.0))
+            return bad(err, cap, "tropism takes X,Y,Z,ELASTICITY (|e| <= 10), not '%s'", v);
+        p->has_tropism = true;
+        memcpy(p->tropism, t, sizeof t);
     } else if (!strncmp(name, "define.", 7)) {
         view_text_define defs[VIEW_MAX_DEFINES];
         uint32_t n = view_text_defines(p->text, defs, VIEW_MAX_DEFINES), i = 0;

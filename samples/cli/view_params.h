@@ -34,6 +34,8 @@ typedef struct view_params {
     uint64_t seed;
     bool has_angle, has_step;    /* false: the grammar's #angle / #step */
     double angle_deg, step;
+    bool has_tropism;            /* false: the grammar's #tropism (none by default) */
+    double tropism[4];           /* x y z elasticity */
     uint32_t define_count;
     view_define defines[VIEW_MAX_DEFINES];
     /* skeleton, stems, patches */
@@ -69,9 +71,6 @@ bool view_params_set_text(view_params *p, const char *text, const char *source);
  * err: 64 for an unknown name or a bad value, 66 for an unreadable grammar file. */
 int view_params_set(view_params *p, const char *name, const char *value, char *err, size_t cap);
 
-/* The names, for the usage text and docs: NULL-terminated. */
-extern const char *const view_param_names[];
-
 /* A `#define NAME number` of the text. */
 typedef struct view_text_define {
     char name[VIEW_NAME_CAP];
@@ -91,7 +90,7 @@ bool view_params_tune_define(view_params *p, const char *name, double value);
 /* The grammar with every tuned value written in: #define values, #angle, #step and, when
  * with_derive, #depth and #seed (the worker passes those to the derivation instead, so a new
  * depth does not parse again). Lines that are missing are added at the top. Returns a malloc'd
- * NUL-terminated text, or NULL when out of memory. */
+ * NUL-terminated text, or NULL when out of memory. #tropism counts with #angle and #step. */
 char *view_params_tuned_text(const view_params *p, bool with_derive);
 
 /* The line `line` (1-based) of text, at most cap - 1 bytes, for showing a parse error. */

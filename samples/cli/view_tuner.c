@@ -452,22 +452,37 @@ static int start_gl(tuner *t)
     return 0;
 }
 
-int xyl_view_check_set(const char *arg)
+int xyl_view_check_sets(const view_params *start, const char *const *sets, uint32_t count)
 {
-    const char *eq = strchr(arg, '=');
-    if (!eq || eq == arg) {
-        fprintf(stderr, "xylem: --set takes NAME=VALUE, not '%s'\n", arg);
-        return 64;
+    view_params p;
+    view_params_init(&p);
+    if (!view_params_copy(&p, start)) {
+        fprintf(stderr, "xylem: out of memory\n");
+        return 71;
     }
-    size_t n = (size_t)(eq - arg);
-    for (size_t i = 0; view_param_names[i]; ++i) {
-        const char *name = view_param_names[i];
-        if ((strlen(name) == n && !strncmp(name, arg, n)) ||
-            (!strcmp(name, "define.NAME") && n > 7 && !strncmp(arg, "define.", 7)))
-            return 0;
+    int rc = 0;
+    for (uint32_t i = 0; !rc && i < count; ++i) {
+        const char *eq = strchr(sets[i], '=');
+        char name[64], err[512];
+        size_t n = eq ? (size_t)(eq - sets[i]) : 0;
+        if (!eq || n == 0 || n >= sizeof name) {
+            fprintf(stderr, "xylem: --set takes NAME=VALUE, not '%s'\n", sets[i]);
+            rc = 64;
+            break;
+        }
+        memcpy(name, sets[i], n);
+        name[n] = '\0';
+        if (!strcmp(name, "export")) {
+            if (export_kind_of(eq + 1) == VIEW_EXPORT_NONE) {
+                fprintf(stderr, "xylem: --set export takes FILE.lsys, .skel, .glb or .png, not '%s'\n", eq + 1);
+                rc = 64;
+            }
+        } else if ((rc = view_params_set(&p, name, eq + 1, err, sizeof err)) != 0) {
+            fprintf(stderr, "xylem: %s\n", err);
+        }
     }
-    fprintf(stderr, "xylem: --set: unknown name '%.*s' (docs/cli.md lists them)\n", (int)n, arg);
-    return 64;
+    view_params_free(&p);
+    return rc;
 }
 
 /* One --set step: a parameter (then the tree regrows and the step is reported) or an export. */
@@ -480,12 +495,7 @@ static int apply_set(tuner *t, const char *arg)
     name[n] = '\0';
     const char *value = eq + 1;
     if (!strcmp(name, "export")) {
-        view_export_kind kind = export_kind_of(value);
-        if (kind == VIEW_EXPORT_NONE) {
-            fprintf(stderr, "xylem: --set export takes FILE.lsys, .skel, .glb or .png, not '%s'\n", value);
-            return 64;
-        }
-        int rc = export_tree(t, kind, value);
+        int rc = export_tree(t, export_kind_of(value), value);
         fprintf(rc ? stderr : stdout, "%s%s\n", rc ? "xylem: view: " : "", t->note);
         return rc;
     }

@@ -24,7 +24,9 @@ typedef struct xyl_tune_request {
  * 71 out of memory; 73 when a screenshot or export cannot be written. */
 int xyl_view_tune(const xyl_tune_request *req);
 
-/* Splits "NAME=VALUE" and checks NAME, without applying it: 0 or 64 (message on stderr). */
-int xyl_view_check_set(const char *arg);
+/* Checks the --set steps on a copy of start, as the window would take them (names, values, a
+ * grammar file read, export types), so that a bad one is refused before any window opens:
+ * 0, 64, 66 or 71 (message on stderr). */
+int xyl_view_check_sets(const view_params *start, const char *const *sets, uint32_t count);
 
 #endif

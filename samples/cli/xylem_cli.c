@@ -1206,8 +1206,6 @@ static int cmd_view(const options *o)
 static int tune_view(const options *o)
 {
     const render_options *ro = &o->render;
-    for (uint32_t i = 0; i < o->set_count; ++i)
-        if (xyl_view_check_set(o->sets[i])) return EXIT_USAGE;
     view_params p;
     view_params_init(&p);
     char err[512];
@@ -1229,10 +1227,11 @@ static int tune_view(const options *o)
     p.wireframe = ro->wireframe;
     double deg = 3.14159265358979323846 / 180.0;
     if (ro->has_camera) p.azimuth = (float)(ro->azimuth * deg), p.elevation = (float)(ro->elevation * deg);
+    rc = xyl_view_check_sets(&p, o->sets, o->set_count);
     xyl_tune_request req = {&p, o->sets, o->set_count, ro->width ? ro->width : 1280,
                             ro->height ? ro->height : 800, ro->samples ? ro->samples : 4,
                             ro->frames, ro->screenshot};
-    rc = xyl_view_tune(&req);
+    if (!rc) rc = xyl_view_tune(&req);
     if (!rc && ro->screenshot) printf("wrote %s\n", ro->screenshot);
     view_params_free(&p);
     return rc;
