@@ -109,7 +109,7 @@ bool grammar_section(view_params *p, const view_panel_info *info)
     if (ImGui::DragFloat("step", &step, 0.01f, 0.001f, 1000.0f, "%.4g", ImGuiSliderFlags_AlwaysClamp))
         p->has_step = true, p->step = step, changed = true;
     bool tropism = p->has_tropism;
-    if (ImGui::Checkbox("tropism", &tropism)) {
+    if (ImGui::Checkbox("tune tropism", &tropism)) {
         if (tropism && !p->has_tropism) // start from the grammar's
             for (int k = 0; k < 3; ++k) p->tropism[k] = gi.tropism[k];
         if (tropism && !p->has_tropism) p->tropism[3] = gi.elasticity;
@@ -123,6 +123,13 @@ bool grammar_section(view_params *p, const view_panel_info *info)
             changed = true;
         }
         if (ImGui::SliderFloat("elasticity", &e, -1.0f, 1.0f, "%.3f")) p->tropism[3] = e, changed = true;
+    } else if (info->tree) {
+        ImGui::SameLine();
+        if (gi.elasticity != 0.0)
+            ImGui::TextDisabled("grammar: %.3g %.3g %.3g, e %.3g", gi.tropism[0], gi.tropism[1],
+                                gi.tropism[2], gi.elasticity);
+        else
+            ImGui::TextDisabled("grammar: none");
     }
     return changed;
 }
@@ -260,7 +267,7 @@ void status_lines(const view_panel_info *info)
     }
 }
 
-void stats_section(const view_panel_info *info)
+void stats_section(const view_params *p, const view_panel_info *info)
 {
     const view_tree *t = info->tree;
     if (!t) return;
@@ -287,6 +294,13 @@ void stats_section(const view_panel_info *info)
                     t->stems_stats.branches_dropped);
     ImGui::Text("drawn: %llu triangles, %llu vertices, levels %u..%u", (unsigned long long)info->triangles,
                 (unsigned long long)info->vertices, info->level_lo, info->level_hi);
+    if (p->level) {
+        double e = info->error_coefficient / ((double)p->level * p->level);
+        ImGui::TextWrapped("level %u: within %.3g world units of the PN surface (%.2g%% of the tree size)", p->level, e,
+                    t->patches->size > 0 ? 100.0 * e / t->patches->size : 0.0);
+    } else {
+        ImGui::TextWrapped("adaptive: every patch within %.3g px of the PN surface", (double)p->error_px);
+    }
     if (info->gpu_ms >= 0.0) ImGui::Text("level selection %.3f ms, GPU %.2f ms", info->select_ms, info->gpu_ms);
     else ImGui::Text("level selection %.3f ms, GPU timer pending", info->select_ms);
     if (info->renderer) ImGui::TextDisabled("%s", info->renderer);
@@ -340,7 +354,7 @@ void view_panel_frame(view_params *p, const view_panel_info *info, view_panel_re
         bool regrow = false;
         status_lines(info);
         if (ImGui::CollapsingHeader("Grammar", ImGuiTreeNodeFlags_DefaultOpen)) regrow |= grammar_section(p, info);
-        if (ImGui::CollapsingHeader("Stages and counts", ImGuiTreeNodeFlags_DefaultOpen)) stats_section(info);
+        if (ImGui::CollapsingHeader("Stages and counts", ImGuiTreeNodeFlags_DefaultOpen)) stats_section(p, info);
         if (ImGui::CollapsingHeader("Skeleton")) regrow |= skeleton_section(p);
         if (ImGui::CollapsingHeader("Stems")) regrow |= stems_section(p);
         if (ImGui::CollapsingHeader("Refinement")) regrow |= refinement_section(p);

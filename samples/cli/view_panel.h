@@ -23,6 +23,8 @@ typedef struct view_panel_info {
     view_regrow_status status;
     uint64_t triangles, vertices; /* drawn in the last frame */
     uint32_t level_lo, level_hi;
+    float error_coefficient;      /* the largest patch error coefficient of the tree: a patch at
+                                     level L lies within coefficient / L^2 of its PN surface */
     double select_ms, gpu_ms;
     bool has_leaf_pick;           /* the leaves' LODs for the current camera and budget */
     uint64_t leaves_picked;

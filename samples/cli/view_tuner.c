@@ -133,6 +133,10 @@ static int adopt(tuner *t)
     }
     t->uploaded = t->tree->patches;
     xyl_mesh_bounds(t->tree->mesh, t->lo, t->hi);
+    float c = 0.0f;
+    for (size_t i = 0; i < t->tree->patches->count; ++i)
+        c = fmaxf(c, xyl_tess_patch_error_coefficient(t->tree->patches, i));
+    t->info.error_coefficient = c;
     return 0;
 }
 
