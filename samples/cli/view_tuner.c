@@ -400,8 +400,14 @@ static int loop(tuner *t)
         }
         glfwSwapBuffers(t->window);
         if (last) break;
-        if (req->frames) glfwPollEvents();
-        else glfwWaitEventsTimeout(t->info.status.busy ? 0.02 : 0.25);
+        if (req->frames) {
+            glfwPollEvents();
+        } else {
+            /* Idle windows sleep; while the worker runs, frames follow its progress line. */
+            view_regrow_status st;
+            view_regrow_status_get(t->worker, &st);
+            glfwWaitEventsTimeout(st.busy ? 0.02 : 0.25);
+        }
     }
     return 0;
 }
