@@ -274,6 +274,9 @@ else
   read -r m total < <(region not-colour "$tmp/pb.png" 240 0 480 360 "$bg")
   [ "$m" -gt 500 ] && ok || bad "no tree on screen after a bad grammar"
 
+  printf 'axiom: F\np1: F -> F[+F\n' >"$tmp/bad.lsys"
+  expect 65 "view of a grammar that does not parse" -- xvfb-run -a "$XYLEM" view --grammar "$tmp/bad.lsys" --frames 1 --size 64x48
+  contains "bad.lsys: grammar:2:11: invalid grammar: '[' is never closed (no tree yet)" "the first tree's error"
   expect 65 "view stops a runaway depth" -- xvfb-run -a "$XYLEM" view --frames 1 --size 64x48 --set depth=14
   contains "depth=14: derive: limit exceeded" "the limit is shown, the tree stays"
 

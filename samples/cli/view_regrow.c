@@ -36,7 +36,6 @@ struct view_regrow {
     view_tree *published;     /* newest good tree not yet adopted (owned struct) */
     retired *graveyard;
     size_t graveyard_count, graveyard_cap;
-    bool graveyard_full;      /* an allocation failed: objects are kept until stop */
     /* the worker's own */
     view_tree cache;          /* the last good tree: its objects are shared with the main thread */
     view_params built;        /* the parameters of cache */
@@ -93,10 +92,7 @@ static void retire_replaced(view_regrow *w, const view_tree *old, const view_tre
         if (w->graveyard_count == w->graveyard_cap) {
             size_t cap = w->graveyard_cap ? w->graveyard_cap * 2 : 32;
             retired *g = realloc(w->graveyard, cap * sizeof *g);
-            if (!g) {
-                w->graveyard_full = true; /* leaked until the process ends: never freed early */
-                continue;
-            }
+            if (!g) continue; /* out of memory: leaked rather than freed while still shown */
             w->graveyard = g, w->graveyard_cap = cap;
         }
         w->graveyard[w->graveyard_count++] = (retired){object_kinds[i], a[i]};

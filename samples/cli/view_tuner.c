@@ -147,13 +147,14 @@ static void report_step(tuner *t, const char *what)
     view_regrow_status_get(t->worker, &st);
     if (st.failed) {
         const xyl_diag *d = &st.diag;
+        const char *stays = t->tree ? "the last good tree stays" : "no tree yet";
         if (d->line)
-            fprintf(stderr, "xylem: view: %s: %s:%u:%u: %s: %s (the last good tree stays)\n", what,
+            fprintf(stderr, "xylem: view: %s: %s:%u:%u: %s: %s (%s)\n", what,
                     view_stage_names[st.failed_stage], d->line, d->column, xyl_result_string(st.error),
-                    d->message);
+                    d->message, stays);
         else
-            fprintf(stderr, "xylem: view: %s: %s: %s: %s (the last good tree stays)\n", what,
-                    view_stage_names[st.failed_stage], xyl_result_string(st.error), d->message);
+            fprintf(stderr, "xylem: view: %s: %s: %s: %s (%s)\n", what, view_stage_names[st.failed_stage],
+                    xyl_result_string(st.error), d->message, stays);
         return;
     }
     if (!t->tree || t->tree->generation != st.done) {
