@@ -15,6 +15,7 @@ packages=(
   glslang-tools spirv-tools  # shaders: GLSL -> SPIR-V and validation at build time
   libpng-dev                 # xylem render writes PNG (samples only)
   libglfw3-dev xvfb xauth    # xylem view: GL in a GLFW window; tests run it under Xvfb
+  libimgui-dev               # xylem view's tuning panel (Dear ImGui 1.86; samples only, optional)
   libtinygltf-dev nlohmann-json3-dev   # xylem render --mesh reads .glb (samples only)
   gnuplot-nox                # docs/ plots from bench_tess and bench_foliage (scripts/bench.sh)
   libmeshoptimizer-dev       # bench_foliage's peer (samples only)

@@ -169,8 +169,7 @@ static void show_status(viewer *v)
     glfwSetWindowTitle(v->window, title);
 }
 
-/* The window's pixels, top row first, as PNG. */
-static int write_screenshot(const char *path, int width, int height)
+int xyl_view_write_screenshot(const char *path, int width, int height)
 {
     size_t row = (size_t)width * 4;
     uint8_t *rgba = malloc(row * (size_t)height), *tmp = malloc(row);
@@ -203,7 +202,7 @@ static int loop(viewer *v)
         if (rc) return rc;
         bool last = v->req->frames && n + 1 >= v->req->frames;
         if (last && v->req->screenshot) {
-            rc = write_screenshot(v->req->screenshot, width, height);
+            rc = xyl_view_write_screenshot(v->req->screenshot, width, height);
             if (rc) return rc;
         }
         glfwSwapBuffers(v->window);

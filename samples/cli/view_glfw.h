@@ -30,4 +30,8 @@ typedef struct xyl_view_request {
  * screenshot cannot be written. */
 int xyl_view_run(const xyl_view_request *req);
 
+/* The current GL context's back buffer, top row first, as PNG: 0, 71 (out of memory) or 73 (not
+ * written), after printing why. */
+int xyl_view_write_screenshot(const char *path, int width, int height);
+
 #endif

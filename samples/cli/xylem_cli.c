@@ -33,6 +33,9 @@
 #ifdef XYL_HAVE_GLFW
 #include "view_glfw.h"
 #endif
+#ifdef XYL_HAVE_IMGUI
+#include "view_tuner.h"
+#endif
 
 enum {
     EXIT_USAGE = 64, EXIT_DATA = 65, EXIT_NOINPUT = 66, EXIT_UNAVAILABLE = 69, EXIT_OSERR = 71,
@@ -86,6 +89,8 @@ typedef struct options {
     xyl_turtle_desc turtle;
     render_options render;
     foliage_options foliage;
+    const char *sets[256];   /* view --set NAME=VALUE, in order */
+    uint32_t set_count;
 } options;
 
 static const char usage_text[] =
@@ -127,9 +132,12 @@ static const char usage_text[] =
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
     "           [--wireframe] [--samples N] [--frames N] [--screenshot FILE.png]\n"
+    "           [--set NAME=VALUE ...]\n"
     "                               the same in a window (GLFW, OpenGL); levels follow the\n"
     "                               camera: drag to orbit, scroll to zoom, H hardware path,\n"
-    "                               V handle rule, L fixed level, +/- budget, W wireframe\n"
+    "                               V handle rule, L fixed level, +/- budget, W wireframe;\n"
+    "                               from a grammar, a panel tunes the tree and regrows it\n"
+    "                               (P hides it); --set: a panel parameter, steps in order\n"
     "\n"
     "source: --preset NAME (default: the default tree) or --grammar FILE\n"
     "exit codes: 0 ok, 64 usage, 65 bad input, 66 unreadable input, 69 no usable GPU\n"
@@ -395,6 +403,11 @@ static int parse_options(int argc, char **argv, options *o)
         if (strcmp(opt, "--preset") == 0) o->preset = val;
         else if (strcmp(opt, "--grammar") == 0) o->grammar_path = val;
         else if (strcmp(opt, "--out") == 0) o->out = val;
+        else if (strcmp(opt, "--set") == 0) {
+            if (o->set_count == sizeof o->sets / sizeof *o->sets)
+                return usage_error("%s", "at most 256 --set options");
+            o->sets[o->set_count++] = val;
+        }
         else if (strcmp(opt, "--seed") == 0) {
             if (!parse_u64(val, UINT64_MAX, &o->seed))
                 return usage_error("--seed takes a whole number >= 0, not '%s'", val);
@@ -1361,6 +1374,10 @@ static int cmd_render(const options *o)
 }
 
 #ifdef XYL_HAVE_GLFW
+#ifdef XYL_HAVE_IMGUI
+static int tune_view(const options *o);
+#endif
+
 static int cmd_view(const options *o)
 {
     const render_options *ro = &o->render;
@@ -1374,6 +1391,20 @@ static int cmd_view(const options *o)
         return usage_error("%s", "'view' zooms with the mouse wheel: --camera AZIMUTH,ELEVATION");
     if (ro->screenshot && (!ends_with(ro->screenshot, ".png") || !ro->frames))
         return usage_error("%s", "--screenshot takes FILE.png and needs --frames N");
+    bool grammar = !o->skeleton_path && !o->mesh_path;
+#ifdef XYL_HAVE_IMGUI
+    if (grammar) return tune_view(o);
+    if (o->set_count) return usage_error("%s", "--set tunes a grammar: not with --mesh or --skeleton");
+    printf("view: the tuning panel regrows a grammar; --mesh and --skeleton show the fixed viewer\n");
+#else
+    if (o->set_count) {
+        fprintf(stderr, "xylem: --set needs the tuning panel: this xylem was built without Dear "
+                        "ImGui (libimgui-dev)\n");
+        return EXIT_UNAVAILABLE;
+    }
+    if (grammar)
+        printf("view: built without Dear ImGui (libimgui-dev): the fixed viewer, no tuning panel\n");
+#endif
     xyl_mesh *mesh = NULL;
     const char *source = NULL;
     int rc = load_mesh(o, &mesh, &source, NULL);
@@ -1403,6 +1434,43 @@ static int cmd_view(const options *o)
     xyl_mesh_destroy(mesh);
     return rc;
 }
+
+#ifdef XYL_HAVE_IMGUI
+/* The command line's options as the panel's starting state; --set steps follow. */
+static int tune_view(const options *o)
+{
+    const render_options *ro = &o->render;
+    view_params p;
+    view_params_init(&p);
+    char err[512];
+    const char *preset = o->preset ? o->preset : xyl_lsystem_default_preset();
+    int rc = o->grammar_path ? view_params_set(&p, "grammar", o->grammar_path, err, sizeof err)
+                             : view_params_set(&p, "preset", preset, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "xylem: %s\n", err);
+        return rc;
+    }
+    p.has_depth = o->has_depth, p.depth = o->depth;
+    p.has_seed = o->has_seed, p.seed = o->seed;
+    p.turtle = o->turtle;
+    p.stems = o->stems;
+    p.variant = ro->variant;
+    p.path = ro->tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE : XYL_TESS_PATH_INSTANCED;
+    p.level = ro->level;
+    if (ro->error_px > 0.0) p.error_px = (float)ro->error_px;
+    p.wireframe = ro->wireframe;
+    double deg = 3.14159265358979323846 / 180.0;
+    if (ro->has_camera) p.azimuth = (float)(ro->azimuth * deg), p.elevation = (float)(ro->elevation * deg);
+    rc = xyl_view_check_sets(&p, o->sets, o->set_count);
+    xyl_tune_request req = {&p, o->sets, o->set_count, ro->width ? ro->width : 1280,
+                            ro->height ? ro->height : 800, ro->samples ? ro->samples : 4,
+                            ro->frames, ro->screenshot};
+    if (!rc) rc = xyl_view_tune(&req);
+    if (!rc && ro->screenshot) printf("wrote %s\n", ro->screenshot);
+    view_params_free(&p);
+    return rc;
+}
+#endif
 #else
 static int cmd_view(const options *o)
 {
@@ -1440,6 +1508,7 @@ int main(int argc, char **argv)
     if (rc) return rc;
     if (o.foliage.enabled && !mesh)
         return usage_error("%s", "--foliage is an option of 'mesh' and 'render'");
+    if (o.set_count && !view) return usage_error("%s", "--set is an option of 'view'");
     if (o.foliage.given && !foliage && !o.foliage.enabled)
         return usage_error("%s", "--sectors, --aspect, --table, --leaf-texture, --leaf-mesh, "
                                  "--leaf-template and --cost go with 'foliage' or 'mesh --foliage'");
