@@ -98,6 +98,7 @@ expect 64 "sides below 3" -- "$XYLEM" mesh --sides 2 --out "$tmp/x.glb"
 expect 64 "bad subdivision" -- "$XYLEM" mesh --subdivide cubic --out "$tmp/x.glb"
 expect 0 "checked joints" -- "$XYLEM" mesh --preset faycal-leaves --out "$tmp/f.glb"
 contains "laterals start later" "joint summary"
+contains "the written mesh has 0 pairs at joints" "joint summary says what the written mesh holds"
 expect 0 "unchecked joints" -- "$XYLEM" mesh --preset faycal-leaves --joints unchecked --out "$tmp/f.glb"
 grep -qF "laterals start later" "$tmp/out" && { failed=$((failed + 1)); echo "FAIL: unchecked build reports joints"; } || passed=$((passed + 1))
 expect 64 "bad joint check" -- "$XYLEM" mesh --joints some --out "$tmp/x.glb"

@@ -901,12 +901,13 @@ static int cmd_mesh(const options *o)
                source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
                m->tri_view_count);
         if (desc.joints == XYL_JOINTS_CHECKED)
-            printf("joints: %zu intersecting pairs at joints; %u laterals start later, %u are "
-                   "left out (%zu of %zu faces kept), %u build%s; %zu pairs where the skeleton "
-                   "overlaps itself\n",
+            printf("joints: the first build had %zu intersecting pairs at joints; repaired: %u "
+                   "laterals start later, %u are left out (%zu of %zu faces kept), %u build%s; "
+                   "the written mesh has %zu pairs at joints and %zu where the skeleton overlaps "
+                   "itself\n",
                    st.joint_pairs_first, st.laterals_started_later, st.branches_dropped,
                    st.faces_checked, st.faces_first, st.builds, st.builds == 1 ? "" : "s",
-                   st.skeleton_pairs);
+                   st.joint_pairs_left, st.skeleton_pairs);
         if (d.warning_count) printf("warning: %s\n", d.warning);
         if (o->foliage.enabled) print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
