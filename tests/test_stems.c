@@ -751,6 +751,39 @@ static void a_bridge_ring_of_radius_zero_keeps_uvs_finite(void **state)
     assert_fuzz_case_meshes("fuzz_zero_radius_bridge.skel");
 }
 
+/* A valid stem whose segments are 1e40 radii long: v (arc length in circumferences) was
+ * infinite and the writers refused the mesh. Each segment now adds at most 65 536 to v; the
+ * same stem at a moderate length / radius keeps its exact v. */
+static void very_long_thin_segments_keep_uvs_finite(void **state)
+{
+    (void)state;
+    const float radii[] = {1e-30f, 1e-35f, 1.0f};
+    const float lengths[] = {1e10f, 1e5f, 1e3f};
+    for (int c = 0; c < 3; ++c) {
+        float r = radii[c], l = lengths[c];
+        xyl_skel_node nodes[] = {{{0, 0, 0}, r, -1, 0, 0},
+                                 {{0, l, 0}, r, 0, 0, 0},
+                                 {{0, 2 * l, 0}, r, 1, 0, 0}};
+        xyl_skeleton *sk = skeleton_of(nodes, 3);
+        xyl_mesh *m = NULL;
+        xyl_diag d = {0};
+        assert_int_equal(xyl_stems_build(sk, NULL, &m, NULL, &d), XYL_OK);
+        double want = fmin((double)l / (2.0 * 3.14159265358979323846 * (double)r), 65536.0);
+        float vmax = 0.0f;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            assert_true(isfinite(m->uvs[2 * v]) && isfinite(m->uvs[2 * v + 1]));
+            if (m->uvs[2 * v + 1] > vmax) vmax = m->uvs[2 * v + 1];
+        }
+        /* the tip ring's v is two segments' worth; a domed cap's apex adds up to 0.25 / 2pi */
+        double tip = 2.0 * want, apex = 0.25 / (2.0 * 3.14159265358979323846);
+        if ((double)vmax < tip * (1.0 - 1e-6) || (double)vmax > (tip + apex) * (1.0 + 1e-6))
+            fail_msg("length %g, radius %g: largest v %.9g, expected %.9g .. %.9g", (double)l,
+                     (double)r, (double)vmax, tip, tip + apex);
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+}
+
 /* ---- normals ------------------------------------------------------------------------------- */
 
 /* Worst angle (degrees) between the parent's vertex normals and the radial direction of the
@@ -1434,6 +1467,7 @@ int main(void)
         cmocka_unit_test(siblings_that_part_later_grow_out_of_each_other),
         cmocka_unit_test(a_fork_whose_stations_round_together_still_meshes),
         cmocka_unit_test(a_bridge_ring_of_radius_zero_keeps_uvs_finite),
+        cmocka_unit_test(very_long_thin_segments_keep_uvs_finite),
         cmocka_unit_test(thin_spokes_stay_separate_branches),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(subdivision_limit_keeps_the_skeleton_radius),

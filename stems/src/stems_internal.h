@@ -151,6 +151,9 @@ void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3
 /* Per skeleton branch, what checked joints ask of it (stems_joints.c): levels 1 ..
  * XYL__JOINT_DROP - 1 start the lateral that many nodes later than the placement would,
  * XYL__JOINT_DROP leaves it out with all that grows from it. */
+/* The most v grows along one segment, in circumferences (docs/stems.md, "Normals, UVs and
+ * seams"). */
+#define XYL__STEMS_MAX_DV 65536.0
 #define XYL__JOINT_DROP 3
 
 /* What xyl__stems_judge_joints found in one mesh. */

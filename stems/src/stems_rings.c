@@ -130,7 +130,12 @@ xyl_result xyl__stems_add_ring(stems *s, xyl__dvec3 c, xyl__dvec3 t, double r)
          * on a patch without height, and the stub that keeps its radius) has none, and its
          * length would give 0 / 0 or an infinite v: it adds nothing */
         double along = xyl__d3_len(xyl__d3_sub(c, prev->centre));
-        ring->v = prev->v + (mean_r > 0.0 ? along / (2.0 * XYL__PI * mean_r) : 0.0);
+        double dv = mean_r > 0.0 ? along / (2.0 * XYL__PI * mean_r) : 0.0;
+        /* a segment longer than XYL__STEMS_MAX_DV circumferences (length / radius above 4e5;
+         * valid, but no bark texture could show it) is textured as if it were that long, so v
+         * stays finite for every valid skeleton (length / radius up to 1e39 and beyond would
+         * give an infinite v) */
+        ring->v = prev->v + (dv < XYL__STEMS_MAX_DV ? dv : XYL__STEMS_MAX_DV);
     } else {
         ring->u = xyl__d3_any_orthogonal(t);
         ring->v = 0.0;
