@@ -7,6 +7,7 @@
 #include <string.h>
 
 #ifdef XYL_HAVE_GL
+#include <epoxy/gl.h>
 #include <xylem/xyl_foliage_gl.h>
 #endif
 
@@ -33,6 +34,73 @@ xyl_result leaf_draw_create(xyl_foliage_gl **out, xyl_diag *d)
     }
     *out = gl;
     return XYL_OK;
+}
+
+void leaf_draw_target_free(leaf_draw_target *t)
+{
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDeleteFramebuffers(1, &t->fbo);
+    glDeleteFramebuffers(1, &t->resolve_fbo);
+    glDeleteRenderbuffers(2, t->rb);
+    glDeleteRenderbuffers(1, &t->resolve_rb);
+    memset(t, 0, sizeof *t);
+}
+
+xyl_result leaf_draw_target_make(leaf_draw_target *t, uint32_t width, uint32_t height,
+                                 uint32_t samples, xyl_diag *d)
+{
+    memset(t, 0, sizeof *t);
+    GLint max_samples = 1;
+    glGetIntegerv(GL_MAX_SAMPLES, &max_samples);
+    if (samples > (uint32_t)max_samples) {
+        snprintf(d->message, sizeof d->message, "%u samples asked, the driver has %d", samples,
+                 max_samples);
+        return XYL_ERR_UNSUPPORTED;
+    }
+    GLsizei n = samples > 1 ? (GLsizei)samples : 0, w = (GLsizei)width, h = (GLsizei)height;
+    glCreateRenderbuffers(2, t->rb);
+    glNamedRenderbufferStorageMultisample(t->rb[0], n, GL_RGBA8, w, h);
+    glNamedRenderbufferStorageMultisample(t->rb[1], n, GL_DEPTH_COMPONENT24, w, h);
+    glCreateFramebuffers(1, &t->fbo);
+    glNamedFramebufferRenderbuffer(t->fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->rb[0]);
+    glNamedFramebufferRenderbuffer(t->fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->rb[1]);
+    glCreateRenderbuffers(1, &t->resolve_rb);
+    glNamedRenderbufferStorage(t->resolve_rb, GL_RGBA8, w, h);
+    glCreateFramebuffers(1, &t->resolve_fbo);
+    glNamedFramebufferRenderbuffer(t->resolve_fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                                   t->resolve_rb);
+    if (glCheckNamedFramebufferStatus(t->fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE ||
+        glCheckNamedFramebufferStatus(t->resolve_fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE ||
+        glGetError() != GL_NO_ERROR) {
+        snprintf(d->message, sizeof d->message, "a %ux%u framebuffer with %u samples is incomplete",
+                 width, height, samples);
+        leaf_draw_target_free(t);
+        return XYL_ERR_UNSUPPORTED;
+    }
+    t->width = width, t->height = height;
+    glBindFramebuffer(GL_FRAMEBUFFER, t->fbo);
+    glViewport(0, 0, w, h);
+    return XYL_OK;
+}
+
+void leaf_draw_target_read(const leaf_draw_target *t, uint8_t *rgba)
+{
+    GLint w = (GLint)t->width, h = (GLint)t->height;
+    glBlitNamedFramebuffer(t->fbo, t->resolve_fbo, 0, 0, w, h, 0, 0, w, h, GL_COLOR_BUFFER_BIT,
+                           GL_NEAREST);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, t->resolve_fbo);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, w, h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, t->fbo);
+    size_t row = 4u * (size_t)w; /* GL's rows run bottom to top */
+    for (GLint y = 0; y < h / 2; ++y) {
+        uint8_t *a = rgba + (size_t)y * row, *b = rgba + (size_t)(h - 1 - y) * row;
+        for (size_t i = 0; i < row; ++i) {
+            uint8_t c = a[i];
+            a[i] = b[i];
+            b[i] = c;
+        }
+    }
 }
 #endif
 

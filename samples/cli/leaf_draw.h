@@ -37,6 +37,26 @@ typedef struct xyl_foliage_gl xyl_foliage_gl;
 xyl_result leaf_draw_create(xyl_foliage_gl **out, xyl_diag *d);
 #endif
 
+#ifdef XYL_HAVE_GL
+/* An offscreen colour + depth target (multisampled when samples > 1) and its resolve target,
+ * for a picture of stems and leaves that is not the window's: both renderers draw into
+ * whatever framebuffer is bound. */
+typedef struct leaf_draw_target {
+    unsigned int fbo, rb[2], resolve_fbo, resolve_rb; /* GL names */
+    uint32_t width, height;
+} leaf_draw_target;
+
+/* Makes the target and binds it (GL_FRAMEBUFFER) with a full viewport. Errors:
+ * XYL_ERR_UNSUPPORTED (more samples than the driver has, an incomplete framebuffer); on failure
+ * what was made is deleted. */
+xyl_result leaf_draw_target_make(leaf_draw_target *t, uint32_t width, uint32_t height,
+                                 uint32_t samples, xyl_diag *d);
+/* Resolves and reads the picture into rgba (width * height * 4 bytes), top row first. */
+void leaf_draw_target_read(const leaf_draw_target *t, uint8_t *rgba);
+/* Deletes the target and binds the default framebuffer. */
+void leaf_draw_target_free(leaf_draw_target *t);
+#endif
+
 /* Grows [lo, hi] to hold every leaf quad of f (centre +- |side| + |axis| per axis): leaves reach
  * out past the twigs, and a camera framed on the stems alone would cut them off. */
 void leaf_draw_bounds(const xyl_foliage *f, float lo[3], float hi[3]);

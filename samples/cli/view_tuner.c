@@ -267,7 +267,36 @@ static xyl_result select_levels(tuner *t, const xyl_tess_camera *cam, int height
     return r;
 }
 
-/* The tree alone (no panel) at the size of its viewport, offscreen. */
+/* Stems, then leaves, into an offscreen target of the CLI's own, read back into rgba. */
+static xyl_result render_leafy(tuner *t, const xyl_tess_image_desc *im, const xyl_tess_camera *cam,
+                               const xyl_tess_frame *f, uint8_t *rgba, xyl_diag *d)
+{
+    const xyl_foliage *fo = t->tree->foliage;
+    leaf_draw_pick_info pick;
+    uint32_t *lods = t->lods;
+    xyl_result r = leaf_draw_pick(fo, t->p.leaf_draw == VIEW_LEAVES_FULL, cam, im->height, t->p.error_px,
+                                  lods, LEAF_DRAW_MAX_SECTORS, &pick, d);
+    leaf_draw_target target;
+    if (r == XYL_OK) r = leaf_draw_target_make(&target, im->width, im->height, im->samples, d);
+    if (r != XYL_OK) return r;
+    glClearColor(im->background[0], im->background[1], im->background[2], im->background[3]);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    r = xyl_tess_gl_draw(t->gl, t->batches, f, t->p.path, d);
+    if (r == XYL_OK) {
+        xyl_foliage_gl_frame lf = {0};
+        memcpy(lf.view_proj, f->view_proj, sizeof lf.view_proj);
+        memcpy(lf.light_dir, f->light_dir, sizeof lf.light_dir);
+        lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f;
+        r = xyl_foliage_gl_draw(t->leaf_gl, &lf, lods, fo->sector_count, d);
+    }
+    if (r == XYL_OK) leaf_draw_target_read(&target, rgba);
+    leaf_draw_target_free(&target);
+    return r;
+}
+
+/* The tree alone (no panel) at the size of its viewport, offscreen, with the leaves the window
+ * draws. */
 static int export_png(tuner *t, const char *path, char *msg, size_t cap)
 {
     xyl_tess_image_desc im = {0};
@@ -280,12 +309,14 @@ static int export_png(tuner *t, const char *path, char *msg, size_t cap)
     camera_of(t, (int)im.width, (int)im.height, &cam);
     xyl_tess_frame f;
     fill_frame(t, &f);
-    f.flags &= ~(uint32_t)XYL_TESS_FLAG_WIREFRAME; /* the image desc draws the edges */
+    bool leaves = leaves_shown(t);
+    if (!leaves) f.flags &= ~(uint32_t)XYL_TESS_FLAG_WIREFRAME; /* the image desc draws the edges */
     xyl_diag d = {0};
     uint8_t *rgba = malloc((size_t)im.width * im.height * 4);
     xyl_result r = rgba ? xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_GL, f.view_proj, &d) : XYL_ERR_OUT_OF_MEMORY;
     if (r == XYL_OK) r = select_levels(t, &cam, (int)im.height, &d);
-    if (r == XYL_OK) r = xyl_tess_gl_render_rgba(t->gl, t->batches, &f, t->p.path, &im, rgba, &d);
+    if (r == XYL_OK && leaves) r = render_leafy(t, &im, &cam, &f, rgba, &d);
+    else if (r == XYL_OK) r = xyl_tess_gl_render_rgba(t->gl, t->batches, &f, t->p.path, &im, rgba, &d);
     int rc = 0;
     if (r != XYL_OK) {
         snprintf(msg, cap, "%s: %s: %s", path, xyl_result_string(r), rgba ? d.message : "out of memory");
