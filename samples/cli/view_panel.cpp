@@ -306,6 +306,14 @@ void stats_section(const view_params *p, const view_panel_info *info)
                     t->stems_stats.branches_dropped);
     ImGui::Text("drawn: %llu triangles, %llu vertices, levels %u..%u", (unsigned long long)info->triangles,
                 (unsigned long long)info->vertices, info->level_lo, info->level_hi);
+    if (info->leaves_drawn) {
+        if (info->leaf_lod_lo == info->leaf_lod_hi)
+            ImGui::Text("leaves drawn: %llu of %zu, LOD %u of 0..%u", (unsigned long long)info->leaves_picked,
+                        t->foliage->original_count, info->leaf_lod_lo, info->leaf_lod_top);
+        else
+            ImGui::Text("leaves drawn: %llu of %zu, LODs %u..%u of 0..%u", (unsigned long long)info->leaves_picked,
+                        t->foliage->original_count, info->leaf_lod_lo, info->leaf_lod_hi, info->leaf_lod_top);
+    }
     if (p->level) {
         double e = info->error_coefficient / ((double)p->level * p->level);
         ImGui::TextWrapped("level %u: within %.3g world units of the PN surface (%.2g%% of the tree size)", p->level, e,
