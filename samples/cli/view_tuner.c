@@ -83,6 +83,10 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
     case GLFW_KEY_V: p->variant = (xyl_tess_variant)((p->variant + 1) % 3); regrow(t); break;
     case GLFW_KEY_W: p->wireframe = !p->wireframe; break;
     case GLFW_KEY_P: p->panel = !p->panel; break;
+    case GLFW_KEY_F: /* the leaf draw: lod, full, none; drawing them builds them */
+        p->leaf_draw = (view_leaf_draw)((p->leaf_draw + 1) % 3);
+        if (p->leaf_draw != VIEW_LEAVES_NONE && !p->leaves) p->leaves = true, regrow(t);
+        break;
     case GLFW_KEY_L: {
         size_t i = 0;
         while (i < sizeof levels / sizeof *levels && levels[i] != p->level) ++i;
