@@ -307,6 +307,47 @@ else
   expect 0 "CLI stems and leaves" -- "$XYLEM" mesh --preset abop-2.8-ternary --depth 4 --foliage --aspect 0.3 --out "$tmp/cl.glb"
   cmp -s "$tmp/l.glb" "$tmp/cl.glb" && ok || bad "the viewer's leaves differ from the CLI's"
 
+  # leaves in the window: with them the tree's half differs from the stems alone and has
+  # leaf-green pixels (png_pixels.mjs), the stems alone have none, in the window and in a PNG export
+  expect 0 "view draws the leaves" -- xvfb-run -a "$XYLEM" view --frames 2 --size 480x360 --set depth=5 --set leaves=1 --set export="$tmp/vle.png" --screenshot "$tmp/vl1.png"
+  contains "leaves: foliage=lod: LOD " "view names the leaf LOD drawn"
+  expect 0 "view with the leaves built, not drawn" -- xvfb-run -a "$XYLEM" view --frames 2 --size 480x360 --set depth=5 --set leaves=1 --set foliage=none --set export="$tmp/vl0e.png" --screenshot "$tmp/vl0.png"
+  contains "leaves: not drawn (foliage=none); the budget picks LOD" "foliage=none says the leaves are not drawn"
+  read -r n total < <(region differ "$tmp/vl1.png" "$tmp/vl0.png" 240 0 480 360)
+  [ "$n" -gt 2000 ] && ok || bad "leaves changed only $n of $total pixels of the tree's half"
+  if command -v node >/dev/null; then
+    read -r _ g1 < <(node "$pixels" "$tmp/vl1.png")
+    read -r _ g0 < <(node "$pixels" "$tmp/vl0.png")
+    read -r _ ge1 < <(node "$pixels" "$tmp/vle.png")
+    read -r _ ge0 < <(node "$pixels" "$tmp/vl0e.png")
+    [ "$g1" -gt 2000 ] && [ "$g0" -eq 0 ] && [ "$ge1" -gt 2000 ] && [ "$ge0" -eq 0 ] && ok ||
+      bad "leaf-green pixels: window $g1 with leaves, $g0 without; export $ge1 with, $ge0 without"
+  else
+    bad "node (scripts/setup.sh installs it) is needed to read the viewer's leaves back"
+  fi
+  # wireframe draws the stems' edges; the leaves stay solid
+  expect 0 "view leaves in wireframe" -- xvfb-run -a "$XYLEM" view --frames 1 --size 320x240 --set depth=5 --set foliage=lod --set wireframe=1 --set panel=0 --screenshot "$tmp/vlw.png"
+  if command -v node >/dev/null; then
+    read -r _ gw < <(node "$pixels" "$tmp/vlw.png")
+    [ "$gw" -gt 1000 ] && ok || bad "wireframe lost the leaves ($gw leaf-green pixels)"
+  fi
+  # the leaves drawn are those render --foliage lod picks for the same size, camera and budget:
+  # both frame stems and leaves from the same box and pick with xyl_foliage_pick
+  for view in "30,10 0.5 96x96" "40,20 8 320x240" "-60,35 2 200x300"; do
+    read -r cam px size <<<"$view"
+    expect 0 "view leaves at $view" -- xvfb-run -a "$XYLEM" view --frames 1 --size "$size" --camera "$cam" --error-px "$px" --set panel=0 --set foliage=lod
+    v=$(grep -o '[0-9]* of [0-9]* leaves drawn' "$tmp/out")
+    expect 0 "render leaves at $view" -- "$XYLEM" render --size "$size" --camera "$cam" --error-px "$px" --out "$tmp/vr.png"
+    r=$(grep -o '[0-9]* of [0-9]* leaves drawn' "$tmp/out")
+    [ -n "$v" ] && [ "$v" = "$r" ] && ok || bad "view drew '$v', render '$r' at $view (camera, px, size)"
+  done
+  expect 0 "view all leaves" -- xvfb-run -a "$XYLEM" view --frames 1 --size 96x96 --set foliage=full
+  contains "leaves: foliage=full: LOD 0 of 0..5102, 5103 of 5103 leaves drawn in the last frame" "foliage=full draws every leaf"
+  expect 0 "view of a leafless tree with leaves on" -- xvfb-run -a "$XYLEM" view --preset abop-1.24a --frames 1 --size 64x48 --set leaves=1
+  grep -q "^leaves:" "$tmp/out" && bad "a leafless tree reported leaves" || ok
+  expect 64 "--set foliage bad value" -- "$XYLEM" view --set foliage=billboard
+  contains "foliage takes lod, full or none" "--set foliage names the values"
+
   # a bad grammar shows its error; the last good tree stays on screen and in the exports
   expect 65 "view keeps the last good tree" -- xvfb-run -a "$XYLEM" view --frames 2 --size 480x360 --set depth=3 --set export="$tmp/good.glb" --set grammar_text=$'#depth 3\naxiom: F\np1: F -> F[+F' --set export="$tmp/after.glb" --screenshot "$tmp/pb.png"
   contains "grammar_text: grammar:3:11: invalid grammar: '[' is never closed (the last good tree stays)" "the grammar error at its line"

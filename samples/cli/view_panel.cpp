@@ -194,8 +194,11 @@ bool refinement_section(view_params *p)
 
 bool foliage_section(view_params *p, const view_panel_info *info)
 {
-    bool changed = ImGui::Checkbox("leaves (CPU: counts, LODs, .glb)", &p->leaves);
+    bool changed = ImGui::Checkbox("leaves", &p->leaves);
     if (!p->leaves) return changed;
+    static const char *const draws[] = {"LOD within the budget", "full (every leaf)", "none (CPU only)"};
+    int draw = (int)p->leaf_draw;
+    if (combo("draw", &draw, draws, 3)) p->leaf_draw = (view_leaf_draw)draw;
     float aspect = p->leaf_aspect > 0 ? p->leaf_aspect : 0.5f;
     if (ImGui::SliderFloat("leaf aspect", &aspect, 0.05f, 2.0f, "%.2f")) p->leaf_aspect = aspect, changed = true;
     if (ImGui::SliderFloat("size jitter", &p->leaf_jitter, 0.0f, 0.9f, "%.2f")) changed = true;
@@ -205,9 +208,18 @@ bool foliage_section(view_params *p, const view_panel_info *info)
     if (f) {
         ImGui::Text("%zu leaves, %zu in the LOD array, coarsest %zu", f->original_count, f->leaf_count,
                     f->coarsest_count);
-        if (info->has_leaf_pick)
-            ImGui::Text("this view: LOD %u..%u, %llu leaves, error %.3g", info->leaf_lod_lo,
-                        info->leaf_lod_hi, (unsigned long long)info->leaves_picked, (double)info->leaf_error);
+        if (info->has_leaf_pick) {
+            char lods[48];
+            if (info->leaf_lod_lo == info->leaf_lod_hi) snprintf(lods, sizeof lods, "LOD %u", info->leaf_lod_lo);
+            else snprintf(lods, sizeof lods, "LODs %u..%u", info->leaf_lod_lo, info->leaf_lod_hi);
+            ImGui::Text("%s this frame: %s of 0..%u, %llu leaves", info->leaves_drawn ? "drawn" : "picked",
+                        lods, info->leaf_lod_top, (unsigned long long)info->leaves_picked);
+            ImGui::Text("error bound %.3g world units", (double)info->leaf_error);
+            if (p->leaf_draw == VIEW_LEAVES_LOD)
+                ImGui::TextDisabled("budget: the stems' %.3g px (refinement group)", (double)p->error_px);
+            if (info->leaves_drawn && p->wireframe) ImGui::TextDisabled("wireframe: the leaves stay solid");
+        }
+        if (info->leaf_note) ImGui::TextColored(kRed, "not drawn: %s", info->leaf_note);
     }
     return changed;
 }
@@ -294,6 +306,14 @@ void stats_section(const view_params *p, const view_panel_info *info)
                     t->stems_stats.branches_dropped);
     ImGui::Text("drawn: %llu triangles, %llu vertices, levels %u..%u", (unsigned long long)info->triangles,
                 (unsigned long long)info->vertices, info->level_lo, info->level_hi);
+    if (info->leaves_drawn) {
+        if (info->leaf_lod_lo == info->leaf_lod_hi)
+            ImGui::Text("leaves drawn: %llu of %zu, LOD %u of 0..%u", (unsigned long long)info->leaves_picked,
+                        t->foliage->original_count, info->leaf_lod_lo, info->leaf_lod_top);
+        else
+            ImGui::Text("leaves drawn: %llu of %zu, LODs %u..%u of 0..%u", (unsigned long long)info->leaves_picked,
+                        t->foliage->original_count, info->leaf_lod_lo, info->leaf_lod_hi, info->leaf_lod_top);
+    }
     if (p->level) {
         double e = info->error_coefficient / ((double)p->level * p->level);
         ImGui::TextWrapped("level %u: within %.3g world units of the PN surface (%.2g%% of the tree size)", p->level, e,

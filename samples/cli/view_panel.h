@@ -27,9 +27,11 @@ typedef struct view_panel_info {
                                      level L lies within coefficient / L^2 of its PN surface */
     double select_ms, gpu_ms;
     bool has_leaf_pick;           /* the leaves' LODs for the current camera and budget */
-    uint64_t leaves_picked;
+    bool leaves_drawn;            /* and they were drawn this frame */
+    uint64_t leaves_picked;       /* leaves of those LODs */
     float leaf_error;             /* world units, the worst sector's */
-    uint32_t leaf_lod_lo, leaf_lod_hi;
+    uint32_t leaf_lod_lo, leaf_lod_hi, leaf_lod_top;
+    const char *leaf_note;        /* why leaves that are on are not drawn, or NULL */
     const char *renderer;
     const char *note;             /* the last export's outcome, or NULL */
     float width;                  /* the panel's width in pixels */

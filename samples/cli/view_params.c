@@ -426,6 +426,11 @@ static int set_tree(view_params *p, const char *name, const char *v, char *err, 
         p->stems.joints = (xyl_joint_check)c;
     } else if (!strcmp(name, "leaves")) {
         if (!flag(v, &p->leaves)) return bad(err, cap, "leaves takes 0 or 1, not '%s'", v);
+    } else if (!strcmp(name, "foliage")) {
+        static const char *const draws[] = {"lod", "full", "none", NULL};
+        if ((c = choice(v, draws)) < 0) return bad(err, cap, "foliage takes lod, full or none, not '%s'", v);
+        p->leaf_draw = (view_leaf_draw)c;
+        if (p->leaf_draw != VIEW_LEAVES_NONE) p->leaves = true; /* drawing them needs them built */
     } else if (!strcmp(name, "leaf_aspect")) {
         if (!number(v, 0.0, 100.0, &x)) return bad(err, cap, "leaf_aspect takes a number in [0, 100] (0: 0.5), not '%s'", v);
         p->leaf_aspect = (float)x;

@@ -25,6 +25,11 @@ typedef struct view_define {
     double value;
 } view_define;
 
+/* How the window draws the leaves (per frame, no regeneration): the LOD per sector that the pixel
+ * budget allows for the camera (xyl_foliage_pick with error_px, as `render --foliage lod`), every
+ * leaf, or none. The order is the --set value's: lod is the zero default. */
+typedef enum view_leaf_draw { VIEW_LEAVES_LOD, VIEW_LEAVES_FULL, VIEW_LEAVES_NONE } view_leaf_draw;
+
 typedef struct view_params {
     /* grammar */
     char *text;                  /* the grammar as typed (malloc'd, NUL-terminated) */
@@ -42,7 +47,7 @@ typedef struct view_params {
     xyl_turtle_desc turtle;
     xyl_stems_desc stems;
     xyl_tess_variant variant;
-    /* foliage (on the CPU: counts, LODs, export) */
+    /* foliage (built on the CPU: counts, LODs, export; drawn per leaf_draw) */
     bool leaves;
     float leaf_aspect;           /* 0: the library's 0.5 */
     float leaf_jitter;           /* size jitter, [0, 1) */
@@ -51,7 +56,8 @@ typedef struct view_params {
     xyl_tess_path path;
     uint32_t level;              /* 0: adaptive from error_px */
     float error_px;              /* > 0 */
-    bool wireframe;
+    bool wireframe;              /* the stems' edges; leaves stay solid */
+    view_leaf_draw leaf_draw;    /* --set foliage=lod|full|none */
     bool panel;                  /* the panel is shown */
     float azimuth, elevation;    /* radians */
     float zoom;                  /* 1: the tree fills the view */

@@ -1,6 +1,6 @@
 /* `xylem view` with the tuning panel (view_tuner.h). The main thread owns the window, GL and the
  * panel; the worker (view_regrow.c) grows trees. A new tree is adopted at the start of a frame:
- * its patch records are uploaded here, never on the worker. */
+ * its patch records and its leaves are uploaded here, never on the worker. */
 #define _POSIX_C_SOURCE 200809L
 
 #include "view_tuner.h"
@@ -15,8 +15,10 @@
 #include <GLFW/glfw3.h>
 
 #include <xylem/xyl_foliage.h>
+#include <xylem/xyl_foliage_gl.h>
 #include <xylem/xyl_tess_gl.h>
 
+#include "leaf_draw.h"
 #include "leaf_texture.h"
 #include "png_write.h"
 #include "view_glfw.h"
@@ -33,12 +35,17 @@ typedef struct tuner {
     xyl_tess_patterns *patterns;
     xyl_tess_batches *batches;
     xyl_tess_gl *gl;
-    float lo[3], hi[3];
+    xyl_foliage_gl *leaf_gl;
+    const xyl_foliage *leaf_uploaded;   /* the foliage in leaf_gl: the tree's, or NULL */
+    uint32_t lods[LEAF_DRAW_MAX_SECTORS];
+    float lo[3], hi[3];                 /* the stems' box */
+    float leaf_lo[3], leaf_hi[3];       /* the stems' and the leaves' */
     bool dragging;
     double drag_x, drag_y;
     int tree_x, tree_w, tree_h;         /* the tree's viewport (right of the panel) */
     view_panel_info info;
     char note[640];
+    char leaf_note[320];                /* why the leaves are not drawn, when they are not */
     char renderer[256];
 } tuner;
 
@@ -76,6 +83,10 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
     case GLFW_KEY_V: p->variant = (xyl_tess_variant)((p->variant + 1) % 3); regrow(t); break;
     case GLFW_KEY_W: p->wireframe = !p->wireframe; break;
     case GLFW_KEY_P: p->panel = !p->panel; break;
+    case GLFW_KEY_F: /* the leaf draw: lod, full, none; drawing them builds them */
+        p->leaf_draw = (view_leaf_draw)((p->leaf_draw + 1) % 3);
+        if (p->leaf_draw != VIEW_LEAVES_NONE && !p->leaves) p->leaves = true, regrow(t);
+        break;
     case GLFW_KEY_L: {
         size_t i = 0;
         while (i < sizeof levels / sizeof *levels && levels[i] != p->level) ++i;
@@ -120,6 +131,37 @@ static void on_scroll(GLFWwindow *w, double dx, double dy)
 
 /* ---- trees ----------------------------------------------------------------------------------- */
 
+/* The new tree's leaves into leaf_gl when they are new. A failed upload is not fatal: the stems
+ * stay on screen and the panel says why the leaves are missing. */
+static void upload_leaves(tuner *t)
+{
+    const xyl_foliage *f = t->tree->foliage;
+    /* The old foliage lives until this adoption, so an equal address is the same object. */
+    if (f == t->leaf_uploaded) return;
+    t->leaf_uploaded = NULL;
+    t->leaf_note[0] = '\0';
+    if (!f) return;
+    if (f->original_count == 0) {
+        snprintf(t->leaf_note, sizeof t->leaf_note, "the tree has no leaf attachments");
+        return;
+    }
+    xyl_diag d = {0};
+    xyl_result r = xyl_foliage_gl_set_foliage(t->leaf_gl, f, &d);
+    if (r != XYL_OK) {
+        snprintf(t->leaf_note, sizeof t->leaf_note, "leaf upload: %s: %s", xyl_result_string(r), d.message);
+        fprintf(stderr, "xylem: view: %s (the stems are drawn alone)\n", t->leaf_note);
+        return;
+    }
+    t->leaf_uploaded = f;
+}
+
+/* Whether this frame draws leaves: built, uploaded, and not switched off. */
+static bool leaves_shown(const tuner *t)
+{
+    return t->tree && t->p.leaves && t->leaf_uploaded && t->tree->foliage == t->leaf_uploaded &&
+           t->p.leaf_draw != VIEW_LEAVES_NONE;
+}
+
 /* Takes the worker's newest tree, if any, and uploads its patches when they are new. */
 static int adopt(tuner *t)
 {
@@ -132,7 +174,11 @@ static int adopt(tuner *t)
         if (r != XYL_OK) return fail("patches upload", r, &d);
     }
     t->uploaded = t->tree->patches;
+    upload_leaves(t);
     xyl_mesh_bounds(t->tree->mesh, t->lo, t->hi);
+    memcpy(t->leaf_lo, t->lo, sizeof t->lo);
+    memcpy(t->leaf_hi, t->hi, sizeof t->hi);
+    leaf_draw_bounds(t->leaf_uploaded, t->leaf_lo, t->leaf_hi);
     float c = 0.0f;
     for (size_t i = 0; i < t->tree->patches->count; ++i)
         c = fmaxf(c, xyl_tess_patch_error_coefficient(t->tree->patches, i));
@@ -184,10 +230,14 @@ static view_export_kind export_kind_of(const char *path)
     return VIEW_EXPORT_NONE;
 }
 
+/* Framed on the stems, or on stems and leaves when leaves are drawn, as `xylem render` frames
+ * them: the same size and camera then pick the same leaf LODs. */
 static void camera_of(const tuner *t, int width, int height, xyl_tess_camera *cam)
 {
-    xyl_tess_camera_frame(t->lo, t->hi, t->p.azimuth, t->p.elevation, 0.8f,
-                          (float)width / (float)(height ? height : 1), cam);
+    bool leaves = leaves_shown(t);
+    xyl_tess_camera_frame(leaves ? t->leaf_lo : t->lo, leaves ? t->leaf_hi : t->hi, t->p.azimuth,
+                          t->p.elevation, 0.8f, (float)width / (float)(height ? height : 1), cam);
+    if (t->p.zoom == 1.0f) return; /* the framed eye itself, bit for bit */
     for (int k = 0; k < 3; ++k)
         cam->eye[k] = cam->target[k] + t->p.zoom * (cam->eye[k] - cam->target[k]);
     cam->near_plane *= t->p.zoom;
@@ -221,7 +271,36 @@ static xyl_result select_levels(tuner *t, const xyl_tess_camera *cam, int height
     return r;
 }
 
-/* The tree alone (no panel) at the size of its viewport, offscreen. */
+/* Stems, then leaves, into an offscreen target of the CLI's own, read back into rgba. */
+static xyl_result render_leafy(tuner *t, const xyl_tess_image_desc *im, const xyl_tess_camera *cam,
+                               const xyl_tess_frame *f, uint8_t *rgba, xyl_diag *d)
+{
+    const xyl_foliage *fo = t->tree->foliage;
+    leaf_draw_pick_info pick;
+    uint32_t *lods = t->lods;
+    xyl_result r = leaf_draw_pick(fo, t->p.leaf_draw == VIEW_LEAVES_FULL, cam, im->height, t->p.error_px,
+                                  lods, LEAF_DRAW_MAX_SECTORS, &pick, d);
+    leaf_draw_target target;
+    if (r == XYL_OK) r = leaf_draw_target_make(&target, im->width, im->height, im->samples, d);
+    if (r != XYL_OK) return r;
+    glClearColor(im->background[0], im->background[1], im->background[2], im->background[3]);
+    glClearDepth(1.0);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    r = xyl_tess_gl_draw(t->gl, t->batches, f, t->p.path, d);
+    if (r == XYL_OK) {
+        xyl_foliage_gl_frame lf = {0};
+        memcpy(lf.view_proj, f->view_proj, sizeof lf.view_proj);
+        memcpy(lf.light_dir, f->light_dir, sizeof lf.light_dir);
+        lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f;
+        r = xyl_foliage_gl_draw(t->leaf_gl, &lf, lods, fo->sector_count, d);
+    }
+    if (r == XYL_OK) leaf_draw_target_read(&target, rgba);
+    leaf_draw_target_free(&target);
+    return r;
+}
+
+/* The tree alone (no panel) at the size of its viewport, offscreen, with the leaves the window
+ * draws. */
 static int export_png(tuner *t, const char *path, char *msg, size_t cap)
 {
     xyl_tess_image_desc im = {0};
@@ -234,12 +313,14 @@ static int export_png(tuner *t, const char *path, char *msg, size_t cap)
     camera_of(t, (int)im.width, (int)im.height, &cam);
     xyl_tess_frame f;
     fill_frame(t, &f);
-    f.flags &= ~(uint32_t)XYL_TESS_FLAG_WIREFRAME; /* the image desc draws the edges */
+    bool leaves = leaves_shown(t);
+    if (!leaves) f.flags &= ~(uint32_t)XYL_TESS_FLAG_WIREFRAME; /* the image desc draws the edges */
     xyl_diag d = {0};
     uint8_t *rgba = malloc((size_t)im.width * im.height * 4);
     xyl_result r = rgba ? xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_GL, f.view_proj, &d) : XYL_ERR_OUT_OF_MEMORY;
     if (r == XYL_OK) r = select_levels(t, &cam, (int)im.height, &d);
-    if (r == XYL_OK) r = xyl_tess_gl_render_rgba(t->gl, t->batches, &f, t->p.path, &im, rgba, &d);
+    if (r == XYL_OK && leaves) r = render_leafy(t, &im, &cam, &f, rgba, &d);
+    else if (r == XYL_OK) r = xyl_tess_gl_render_rgba(t->gl, t->batches, &f, t->p.path, &im, rgba, &d);
     int rc = 0;
     if (r != XYL_OK) {
         snprintf(msg, cap, "%s: %s: %s", path, xyl_result_string(r), rgba ? d.message : "out of memory");
@@ -305,29 +386,32 @@ static int export_tree(tuner *t, view_export_kind kind, const char *path)
 
 /* ---- frames ---------------------------------------------------------------------------------- */
 
-static void pick_leaves(tuner *t, const xyl_tess_camera *cam)
+/* The leaves' LODs for this camera and budget (the panel shows them with leaves on, drawn or
+ * not), then, when they are shown, the draw with the stems' matrix and light. */
+static int draw_leaves(tuner *t, const xyl_tess_camera *cam, const xyl_tess_frame *stems)
 {
-    const xyl_foliage *f = t->tree ? t->tree->foliage : NULL;
-    t->info.has_leaf_pick = false;
-    uint32_t lods[256];
-    if (!f || f->sector_count > 256 || f->original_count == 0) return;
-    xyl_foliage_view v = {0};
-    memcpy(v.eye, cam->eye, sizeof v.eye);
-    v.fovy = cam->fovy;
-    v.viewport_height = (uint32_t)(t->tree_h > 0 ? t->tree_h : 1);
-    v.error_px = t->p.error_px;
+    const xyl_foliage *f = t->tree->foliage;
+    t->info.has_leaf_pick = t->info.leaves_drawn = false;
+    if (!t->p.leaves || !f || f->original_count == 0) return 0;
+    leaf_draw_pick_info pick;
     xyl_diag d = {0};
-    if (xyl_foliage_pick(f, &v, lods, 256, &d) != XYL_OK) return;
-    t->info.leaves_picked = 0, t->info.leaf_error = 0.0f;
-    t->info.leaf_lod_lo = UINT32_MAX, t->info.leaf_lod_hi = 0;
-    for (uint32_t s = 0; s < f->sector_count; ++s) {
-        const xyl_foliage_lod *l = &f->sectors[s].lods[lods[s]];
-        t->info.leaves_picked += l->a + l->c;
-        t->info.leaf_error = fmaxf(t->info.leaf_error, l->error);
-        t->info.leaf_lod_lo = lods[s] < t->info.leaf_lod_lo ? lods[s] : t->info.leaf_lod_lo;
-        t->info.leaf_lod_hi = lods[s] > t->info.leaf_lod_hi ? lods[s] : t->info.leaf_lod_hi;
-    }
+    xyl_result r = leaf_draw_pick(f, t->p.leaf_draw == VIEW_LEAVES_FULL, cam, (uint32_t)t->tree_h,
+                                  t->p.error_px, t->lods, LEAF_DRAW_MAX_SECTORS, &pick, &d);
+    if (r != XYL_OK) return fail("leaf LODs", r, &d);
     t->info.has_leaf_pick = true;
+    t->info.leaves_picked = pick.drawn;
+    t->info.leaf_error = pick.error;
+    t->info.leaf_lod_lo = pick.lod_lo, t->info.leaf_lod_hi = pick.lod_hi;
+    t->info.leaf_lod_top = pick.lod_top;
+    if (!leaves_shown(t)) return 0;
+    xyl_foliage_gl_frame lf = {0};
+    memcpy(lf.view_proj, stems->view_proj, sizeof lf.view_proj);
+    memcpy(lf.light_dir, stems->light_dir, sizeof lf.light_dir);
+    lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
+    r = xyl_foliage_gl_draw(t->leaf_gl, &lf, t->lods, f->sector_count, &d);
+    if (r != XYL_OK) return fail("leaf draw", r, &d);
+    t->info.leaves_drawn = true;
+    return 0;
 }
 
 static int draw_tree(tuner *t)
@@ -355,8 +439,7 @@ static int draw_tree(tuner *t)
     t->info.level_lo = t->batches->cmd_count ? lo : 0, t->info.level_hi = hi;
     t->info.triangles = t->batches->triangles, t->info.vertices = t->batches->vertices;
     t->info.gpu_ms = xyl_tess_gl_last_gpu_ms(t->gl);
-    pick_leaves(t, &cam);
-    return 0;
+    return draw_leaves(t, &cam, &f);
 }
 
 static int frame(tuner *t, int width, int height)
@@ -378,6 +461,7 @@ static int frame(tuner *t, int width, int height)
     t->info.note = t->note[0] ? t->note : NULL;
     t->info.width = panel;
     t->info.renderer = t->renderer;
+    t->info.leaf_note = t->leaf_note[0] ? t->leaf_note : NULL;
     view_panel_result out;
     view_panel_frame(&t->p, &t->info, &out);
     if (out.regrow) regrow(t);
@@ -454,6 +538,7 @@ static int start_gl(tuner *t)
     xyl_result r = xyl_tess_patterns_create(0, NULL, &t->patterns, &d);
     if (r == XYL_OK) r = xyl_tess_batches_create(NULL, &t->batches, &d);
     if (r == XYL_OK) r = xyl_tess_gl_create(NULL, t->patterns, &t->gl, &d);
+    if (r == XYL_OK) r = leaf_draw_create(&t->leaf_gl, &d);
     if (r != XYL_OK) return fail("GL backend", r, &d);
     GLint samples = 0;
     glGetIntegerv(GL_SAMPLES, &samples);
@@ -524,6 +609,24 @@ static int apply_set(tuner *t, const char *arg)
     return rc;
 }
 
+/* The last frame's leaves, in the words of `xylem render`'s leaves line. */
+static void print_leaves(const tuner *t)
+{
+    static const char *const modes[] = {"lod", "full", "none"};
+    const view_panel_info *i = &t->info;
+    char which[64];
+    if (i->leaf_lod_lo == i->leaf_lod_hi) snprintf(which, sizeof which, "LOD %u", i->leaf_lod_lo);
+    else snprintf(which, sizeof which, "LODs %u..%u", i->leaf_lod_lo, i->leaf_lod_hi);
+    if (i->leaves_drawn)
+        printf("leaves: foliage=%s: %s of 0..%u, %llu of %zu leaves drawn in the last frame\n",
+               modes[t->p.leaf_draw], which, i->leaf_lod_top, (unsigned long long)i->leaves_picked,
+               t->tree->foliage->original_count);
+    else
+        printf("leaves: not drawn (%s); the budget picks %s of 0..%u, %llu of %zu leaves\n",
+               t->leaf_note[0] ? t->leaf_note : "foliage=none", which, i->leaf_lod_top,
+               (unsigned long long)i->leaves_picked, t->tree->foliage->original_count);
+}
+
 static int run(tuner *t)
 {
     int rc = open_window(t);
@@ -541,6 +644,7 @@ static int run(tuner *t)
     for (uint32_t i = 0; !rc && i < t->req->set_count; ++i) rc = apply_set(t, t->req->sets[i]);
     if (!rc) rc = loop(t);
     if (!rc && t->tree) printf("%llu triangles in the last frame\n", (unsigned long long)t->info.triangles);
+    if (!rc && t->info.has_leaf_pick) print_leaves(t);
     if (!rc) {
         view_regrow_status st;
         view_regrow_status_get(t->worker, &st);
@@ -561,6 +665,7 @@ int xyl_view_tune(const xyl_tune_request *req)
     int rc = view_params_copy(&t->p, req->start) ? run(t) : 71;
     view_regrow_stop(t->worker, &t->tree);
     view_panel_shutdown();
+    xyl_foliage_gl_destroy(t->leaf_gl);
     xyl_tess_gl_destroy(t->gl);
     xyl_tess_batches_destroy(t->batches);
     xyl_tess_patterns_destroy(t->patterns);
