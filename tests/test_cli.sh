@@ -251,9 +251,14 @@ if command -v node >/dev/null; then
   read -r n_vbare g_vbare < <(node "$pixels" "$tmp/vbare.png")
   [ "$n_vleafy" -eq 9216 ] && [ "$g_vleafy" -gt 500 ] && [ "$g_vbare" -eq 0 ] && ok ||
     bad "Vulkan leaf-green pixels: $g_vleafy of $n_vleafy with leaves, $g_vbare without"
-  # GL and Vulkan draw the same leaves: their leaf-green counts agree within 5 %
+  # GL and Vulkan draw the same leaves: their leaf-green counts agree within 5 %, and with the
+  # leaves the two pictures differ no more (RMSE) than the bare stems' do, edges and MSAA alone
   [ $((20 * (g_vleafy > g_leafy ? g_vleafy - g_leafy : g_leafy - g_vleafy))) -le "$g_leafy" ] && ok ||
     bad "leaf-green pixels: $g_leafy on GL, $g_vleafy on Vulkan"
+  read -r _ _ _ rmse_leafy < <(node "$pixels" --diff "$tmp/leafy.png" "$tmp/vleafy.png")
+  read -r _ _ _ rmse_bare < <(node "$pixels" --diff "$tmp/bare.png" "$tmp/vbare.png")
+  awk -v l="$rmse_leafy" -v b="$rmse_bare" 'BEGIN { exit !(l <= b) }' && ok ||
+    bad "GL against Vulkan: RMSE $rmse_leafy with leaves, $rmse_bare for the bare stems"
 fi
 expect 0 "render leaves on Vulkan, no MSAA, wireframe" -- "$XYLEM" render --backend vulkan --samples 1 --wireframe --camera 40,20,0.5 --size 64x64 --out "$tmp/vl1.png"
 # view: the same in a GLFW window, on an X server of its own (Xvfb)
