@@ -701,17 +701,23 @@ static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
     if (!vk->features.vertexPipelineStoresAndAtomics)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "the capture needs vertexPipelineStoresAndAtomics enabled");
-    VkSubpassDescription sub = {0};
-    sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
-    VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
-    ri.subpassCount = 1;
-    ri.pSubpasses = &sub;
-    VK_TRY(vkCreateRenderPass(vk->device, &ri, NULL, &vk->capture_pass), "vkCreateRenderPass");
-    VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
-    fi.renderPass = vk->capture_pass;
-    fi.width = fi.height = fi.layers = 1;
-    VK_TRY(vkCreateFramebuffer(vk->device, &fi, NULL, &vk->capture_framebuffer),
-           "vkCreateFramebuffer");
+    /* each object once: a call that failed half-way resumes where it stopped */
+    if (!vk->capture_pass) {
+        VkSubpassDescription sub = {0};
+        sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+        VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+        ri.subpassCount = 1;
+        ri.pSubpasses = &sub;
+        VK_TRY(vkCreateRenderPass(vk->device, &ri, NULL, &vk->capture_pass),
+               "vkCreateRenderPass");
+    }
+    if (!vk->capture_framebuffer) {
+        VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        fi.renderPass = vk->capture_pass;
+        fi.width = fi.height = fi.layers = 1;
+        VK_TRY(vkCreateFramebuffer(vk->device, &fi, NULL, &vk->capture_framebuffer),
+               "vkCreateFramebuffer");
+    }
     pipe_target t = {vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,
                      VK_SAMPLE_COUNT_1_BIT, true};
     return pipeline(vk, &t, &vk->capture_pipeline, diag);
