@@ -29,6 +29,7 @@ typedef struct app {
     char first[XYL_DIAG_MESSAGE_SIZE];
     VkPhysicalDevice physical;
     VkPhysicalDeviceFeatures features;
+    bool dynamic_rendering; /* Vulkan 1.3's, enabled where instance and device have 1.3 */
     VkDevice device;
     uint32_t family;
     VkQueue queue;
@@ -76,8 +77,11 @@ static void expect(xyl_result got, xyl_result want, const xyl_diag *d)
 
 static VkResult make_instance(app *a)
 {
+    uint32_t version = VK_API_VERSION_1_2;
+    if (vkEnumerateInstanceVersion(&version) != VK_SUCCESS) version = VK_API_VERSION_1_2;
     VkApplicationInfo ai = {.sType = VK_STRUCTURE_TYPE_APPLICATION_INFO};
-    ai.apiVersion = VK_API_VERSION_1_2;
+    ai.apiVersion = version >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
+    a->dynamic_rendering = ai.apiVersion >= VK_API_VERSION_1_3;
     VkDebugUtilsMessengerCreateInfoEXT mi = {
         .sType = VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
     mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
@@ -114,6 +118,7 @@ static bool make_device(app *a, char *why, size_t why_size)
         return false;
     }
     vkGetPhysicalDeviceProperties(a->physical, &props);
+    a->dynamic_rendering = a->dynamic_rendering && props.apiVersion >= VK_API_VERSION_1_3;
     VkPhysicalDeviceFeatures have;
     vkGetPhysicalDeviceFeatures(a->physical, &have);
     if (props.apiVersion < VK_API_VERSION_1_2 || !have.vertexPipelineStoresAndAtomics) {
@@ -136,7 +141,11 @@ static bool make_device(app *a, char *why, size_t why_size)
     qi.queueFamilyIndex = a->family;
     qi.queueCount = 1;
     qi.pQueuePriorities = &priority;
+    VkPhysicalDeviceVulkan13Features v13 = {
+        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    v13.dynamicRendering = VK_TRUE;
     VkDeviceCreateInfo di = {.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    di.pNext = a->dynamic_rendering ? &v13 : NULL;
     di.queueCreateInfoCount = 1;
     di.pQueueCreateInfos = &qi;
     di.pEnabledFeatures = &a->features;
@@ -516,8 +525,69 @@ static xyl_foliage_vk_frame square_frame(void)
     return fr;
 }
 
-/* The application's frame: clear, the leaves, a copy of the colour image; rgba top row first. */
-static void draw_square(suite *s, const xyl_foliage_vk_frame *fr, uint8_t *rgba)
+static void image_barrier(VkCommandBuffer cb, VkImage image, VkImageAspectFlags aspect,
+                          VkImageLayout from, VkImageLayout to, VkPipelineStageFlags src_stage,
+                          VkAccessFlags src, VkPipelineStageFlags dst_stage, VkAccessFlags dst)
+{
+    VkImageMemoryBarrier b = {.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    b.srcAccessMask = src;
+    b.dstAccessMask = dst;
+    b.oldLayout = from;
+    b.newLayout = to;
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = image;
+    b.subresourceRange.aspectMask = aspect;
+    b.subresourceRange.levelCount = b.subresourceRange.layerCount = 1;
+    vkCmdPipelineBarrier(cb, src_stage, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
+}
+
+/* Dynamic rendering into the same images: their layouts are the application's to set. */
+static void begin_dynamic(const app *a, VkCommandBuffer cb, const VkClearValue *clear)
+{
+    image_barrier(cb, a->image[0], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                  VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
+    image_barrier(cb, a->image[1], VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                  VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
+                  VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                      VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT,
+                  VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+                      VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
+    VkRenderingAttachmentInfo color = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    color.imageView = a->view[0];
+    color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    color.clearValue = clear[0];
+    VkRenderingAttachmentInfo depth = color;
+    depth.imageView = a->view[1];
+    depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+    depth.clearValue = clear[1];
+    VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea.extent = (VkExtent2D){SIDE, SIDE};
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = 1;
+    ri.pColorAttachments = &color;
+    ri.pDepthAttachment = &depth;
+    vkCmdBeginRendering(cb, &ri);
+}
+
+static void end_dynamic(const app *a, VkCommandBuffer cb)
+{
+    vkCmdEndRendering(cb);
+    image_barrier(cb, a->image[0], VK_IMAGE_ASPECT_COLOR_BIT,
+                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                  VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
+                  VK_ACCESS_TRANSFER_READ_BIT);
+}
+
+/* The application's frame: clear, vk's leaves at lods (in the render pass, or with dynamic
+ * rendering), a copy of the colour image; rgba top row first. */
+static void draw_frame(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_foliage_vk_frame *fr,
+                       const uint32_t *lods, size_t lod_count, uint8_t *rgba)
 {
     app *a = &s->a;
     VkCommandBuffer cb;
@@ -533,21 +603,25 @@ static void draw_square(suite *s, const xyl_foliage_vk_frame *fr, uint8_t *rgba)
     for (int k = 0; k < 3; ++k) clear[0].color.float32[k] = background[k] / 255.0f;
     clear[0].color.float32[3] = 1.0f;
     clear[1].depthStencil.depth = 1.0f;
-    VkRenderPassBeginInfo rb = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    rb.renderPass = a->pass;
-    rb.framebuffer = a->framebuffer;
-    rb.renderArea.extent = (VkExtent2D){SIDE, SIDE};
-    rb.clearValueCount = 2;
-    rb.pClearValues = clear;
-    vkCmdBeginRenderPass(cb, &rb, VK_SUBPASS_CONTENTS_INLINE);
+    if (dynamic) {
+        begin_dynamic(a, cb, clear);
+    } else {
+        VkRenderPassBeginInfo rb = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+        rb.renderPass = a->pass;
+        rb.framebuffer = a->framebuffer;
+        rb.renderArea.extent = (VkExtent2D){SIDE, SIDE};
+        rb.clearValueCount = 2;
+        rb.pClearValues = clear;
+        vkCmdBeginRenderPass(cb, &rb, VK_SUBPASS_CONTENTS_INLINE);
+    }
     VkViewport vp = {0.0f, 0.0f, (float)SIDE, (float)SIDE, 0.0f, 1.0f};
     VkRect2D sc = {{0, 0}, {SIDE, SIDE}};
     vkCmdSetViewport(cb, 0, 1, &vp);
     vkCmdSetScissor(cb, 0, 1, &sc);
-    uint32_t lod = 0;
     xyl_diag d = {0};
-    expect(xyl_foliage_vk_cmd_draw(s->vk, cb, fr, &lod, 1, &d), XYL_OK, &d);
-    vkCmdEndRenderPass(cb);
+    expect(xyl_foliage_vk_cmd_draw(vk, cb, fr, lods, lod_count, &d), XYL_OK, &d);
+    if (dynamic) end_dynamic(a, cb);
+    else vkCmdEndRenderPass(cb);
     VkBufferImageCopy copy = {0};
     copy.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
     copy.imageSubresource.layerCount = 1;
@@ -571,6 +645,12 @@ static void draw_square(suite *s, const xyl_foliage_vk_frame *fr, uint8_t *rgba)
     vkDestroyFence(a->device, fence, NULL);
     vkFreeCommandBuffers(a->device, a->pool, 1, &cb);
     memcpy(rgba, a->pixels, 4u * SIDE * SIDE);
+}
+
+static void draw_square(suite *s, const xyl_foliage_vk_frame *fr, uint8_t *rgba)
+{
+    uint32_t lod = 0;
+    draw_frame(s, s->vk, false, fr, &lod, 1, rgba);
 }
 
 static void draw_textured(suite *s, const uint8_t *tex, uint8_t *rgba)
@@ -672,6 +752,48 @@ static void both_faces_are_lit_and_light_shines_through(void **state)
     assert_true(through > unlit + 30);
     assert_true(unlit > 0);
     free(rgba);
+    xyl_foliage_destroy(f);
+    no_messages(s);
+}
+
+/* A renderer made for dynamic rendering (formats, no render pass) draws the tree into the same
+ * images exactly as the render pass renderer does, pixel for pixel; and the picture has leaves
+ * (not only the background). Skipped without Vulkan 1.3 on instance and device. */
+static void dynamic_rendering_draws_what_the_render_pass_draws(void **state)
+{
+    suite *s = need_vk(state);
+    if (!s->a.dynamic_rendering) {
+        print_message("skipped: no Vulkan 1.3 dynamic rendering\n");
+        skip();
+    }
+    xyl_foliage_vk_desc dd = app_desc(&s->a);
+    dd.render_pass = VK_NULL_HANDLE;
+    dd.color_format = COLOR_FORMAT;
+    dd.depth_format = DEPTH_FORMAT;
+    xyl_foliage_vk *dyn = NULL;
+    xyl_diag d = {0};
+    expect(xyl_foliage_vk_create(&dd, &dyn, &d), XYL_OK, &d);
+    xyl_foliage *f = tree_foliage("faycal-leaves", 3);
+    expect(xyl_foliage_vk_set_foliage(s->vk, f, &d), XYL_OK, &d);
+    expect(xyl_foliage_vk_set_foliage(dyn, f, &d), XYL_OK, &d);
+    uint8_t tex[16 * 16 * 4];
+    half_clear(tex, left_half);
+    expect(xyl_foliage_vk_set_texture(s->vk, tex, 16, 16, &d), XYL_OK, &d);
+    expect(xyl_foliage_vk_set_texture(dyn, tex, 16, 16, &d), XYL_OK, &d);
+    xyl_foliage_vk_frame fr;
+    frame_of(f, 0.7f, 0.3f, &fr);
+    const uint32_t lods[3] = {0, 3, 9};
+    uint8_t *pass = malloc(4 * SIDE * SIDE), *dynamic = malloc(4 * SIDE * SIDE);
+    draw_frame(s, s->vk, false, &fr, lods, 3, pass);
+    draw_frame(s, dyn, true, &fr, lods, 3, dynamic);
+    size_t leaf = 0;
+    for (unsigned i = 0; i < SIDE * SIDE; ++i) leaf += !is_background(pass + 4 * i);
+    print_message("%zu of %u pixels show leaves\n", leaf, SIDE * SIDE);
+    assert_true(leaf > 50);
+    assert_memory_equal(pass, dynamic, 4 * SIDE * SIDE);
+    free(pass);
+    free(dynamic);
+    xyl_foliage_vk_destroy(dyn);
     xyl_foliage_destroy(f);
     no_messages(s);
 }
@@ -824,6 +946,7 @@ int main(void)
         cmocka_unit_test(gpu_corners_match_the_cpu_reference_per_lod),
         cmocka_unit_test(alpha_test_discards_the_transparent_half),
         cmocka_unit_test(both_faces_are_lit_and_light_shines_through),
+        cmocka_unit_test(dynamic_rendering_draws_what_the_render_pass_draws),
         cmocka_unit_test(bad_input_gets_result_codes),
         cmocka_unit_test(renderer_allocates_through_the_callers_allocator),
     };
