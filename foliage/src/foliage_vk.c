@@ -38,6 +38,8 @@ typedef struct vk_image {
 
 struct xyl_foliage_vk {
     xyl_allocator alloc;
+    VkAllocationCallbacks callbacks;
+    const VkAllocationCallbacks *vkalloc; /* &callbacks with a caller's allocator, else NULL */
     VkPhysicalDevice physical;
     VkDevice device;
     VkQueue queue;
@@ -61,6 +63,26 @@ struct xyl_foliage_vk {
 };
 
 /* ---- errors and memory -------------------------------------------------------------------- */
+
+/* Vulkan's host allocations through the caller's allocator (core's aligned blocks). */
+static void *VKAPI_PTR vk_alloc(void *user, size_t size, size_t align,
+                                VkSystemAllocationScope scope)
+{
+    (void)scope;
+    return xyl__alloc_aligned(user, size, align);
+}
+
+static void VKAPI_PTR vk_free(void *user, void *p)
+{
+    xyl__free_aligned(user, p);
+}
+
+static void *VKAPI_PTR vk_realloc(void *user, void *old, size_t size, size_t align,
+                                  VkSystemAllocationScope scope)
+{
+    (void)scope;
+    return xyl__realloc_aligned(user, old, size, align);
+}
 
 static xyl_result vk_fail(xyl_diag *diag, VkResult r, const char *what)
 {
@@ -89,14 +111,14 @@ static xyl_result allocate(const xyl_foliage_vk *vk, VkMemoryRequirements req,
     VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = req.size;
     ai.memoryTypeIndex = type;
-    VK_TRY(vkAllocateMemory(vk->device, &ai, NULL, out), "vkAllocateMemory");
+    VK_TRY(vkAllocateMemory(vk->device, &ai, vk->vkalloc, out), "vkAllocateMemory");
     return XYL_OK;
 }
 
 static void buffer_destroy(const xyl_foliage_vk *vk, vk_buffer *b)
 {
-    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, NULL);
-    if (b->memory) vkFreeMemory(vk->device, b->memory, NULL);
+    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, vk->vkalloc);
+    if (b->memory) vkFreeMemory(vk->device, b->memory, vk->vkalloc);
     memset(b, 0, sizeof *b);
 }
 
@@ -109,7 +131,7 @@ static xyl_result buffer_create(const xyl_foliage_vk *vk, VkDeviceSize size,
     VkBufferCreateInfo bi = {.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     bi.size = size;
     bi.usage = usage;
-    VkResult vr = vkCreateBuffer(vk->device, &bi, NULL, &b.buffer);
+    VkResult vr = vkCreateBuffer(vk->device, &bi, vk->vkalloc, &b.buffer);
     if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkCreateBuffer");
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(vk->device, b.buffer, &req);
@@ -160,7 +182,7 @@ static xyl_result submit_wait(const xyl_foliage_vk *vk, VkCommandBuffer cmd, xyl
     VkResult vr = vkEndCommandBuffer(cmd);
     const char *what = "vkEndCommandBuffer";
     if (vr == VK_SUCCESS) {
-        vr = vkCreateFence(vk->device, &fi, NULL, &fence);
+        vr = vkCreateFence(vk->device, &fi, vk->vkalloc, &fence);
         what = "vkCreateFence";
     }
     if (vr == VK_SUCCESS) {
@@ -174,7 +196,7 @@ static xyl_result submit_wait(const xyl_foliage_vk *vk, VkCommandBuffer cmd, xyl
         vr = vkWaitForFences(vk->device, 1, &fence, VK_TRUE, UINT64_MAX);
         what = "vkWaitForFences";
     }
-    if (fence) vkDestroyFence(vk->device, fence, NULL);
+    if (fence) vkDestroyFence(vk->device, fence, vk->vkalloc);
     vkFreeCommandBuffers(vk->device, vk->commands, 1, &cmd);
     return vr == VK_SUCCESS ? XYL_OK : vk_fail(diag, vr, what);
 }
@@ -183,9 +205,9 @@ static xyl_result submit_wait(const xyl_foliage_vk *vk, VkCommandBuffer cmd, xyl
 
 static void image_destroy(const xyl_foliage_vk *vk, vk_image *im)
 {
-    if (im->view) vkDestroyImageView(vk->device, im->view, NULL);
-    if (im->image) vkDestroyImage(vk->device, im->image, NULL);
-    if (im->memory) vkFreeMemory(vk->device, im->memory, NULL);
+    if (im->view) vkDestroyImageView(vk->device, im->view, vk->vkalloc);
+    if (im->image) vkDestroyImage(vk->device, im->image, vk->vkalloc);
+    if (im->memory) vkFreeMemory(vk->device, im->memory, vk->vkalloc);
     memset(im, 0, sizeof *im);
 }
 
@@ -208,7 +230,7 @@ static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h,
     ii.samples = VK_SAMPLE_COUNT_1_BIT;
     ii.usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
                VK_IMAGE_USAGE_SAMPLED_BIT;
-    VK_TRY(vkCreateImage(vk->device, &ii, NULL, &out->image), "vkCreateImage");
+    VK_TRY(vkCreateImage(vk->device, &ii, vk->vkalloc, &out->image), "vkCreateImage");
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(vk->device, out->image, &req);
     xyl_result r = allocate(vk, req, 0, &out->memory, diag);
@@ -221,7 +243,7 @@ static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h,
     vi.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
     vi.subresourceRange.levelCount = ii.mipLevels;
     vi.subresourceRange.layerCount = 1;
-    VK_TRY(vkCreateImageView(vk->device, &vi, NULL, &out->view), "vkCreateImageView");
+    VK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view), "vkCreateImageView");
     return XYL_OK;
 }
 
@@ -383,7 +405,7 @@ static xyl_result shader(const xyl_foliage_vk *vk, const unsigned char *code, si
     VkShaderModuleCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     si.codeSize = size;
     si.pCode = (const uint32_t *)(const void *)code; /* the embedded arrays are 4-byte aligned */
-    VK_TRY(vkCreateShaderModule(vk->device, &si, NULL, out), "vkCreateShaderModule");
+    VK_TRY(vkCreateShaderModule(vk->device, &si, vk->vkalloc, out), "vkCreateShaderModule");
     return XYL_OK;
 }
 
@@ -400,7 +422,7 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     li.bindingCount = 3;
     li.pBindings = b;
-    VK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, NULL, &vk->set_layout),
+    VK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &vk->set_layout),
            "vkCreateDescriptorSetLayout");
     VkPushConstantRange pc = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                               XYL_FOLIAGE_VK_PUSH_SIZE};
@@ -409,14 +431,14 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
     pi.pSetLayouts = &vk->set_layout;
     pi.pushConstantRangeCount = 1;
     pi.pPushConstantRanges = &pc;
-    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, NULL, &vk->layout), "vkCreatePipelineLayout");
+    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->layout), "vkCreatePipelineLayout");
     VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 4},
                                      {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2}};
     VkDescriptorPoolCreateInfo dp = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dp.maxSets = 2;
     dp.poolSizeCount = 2;
     dp.pPoolSizes = sizes;
-    VK_TRY(vkCreateDescriptorPool(vk->device, &dp, NULL, &vk->pool), "vkCreateDescriptorPool");
+    VK_TRY(vkCreateDescriptorPool(vk->device, &dp, vk->vkalloc, &vk->pool), "vkCreateDescriptorPool");
     VkDescriptorSetLayout sl[2] = {vk->set_layout, vk->set_layout};
     VkDescriptorSet sets[2];
     VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
@@ -501,7 +523,7 @@ static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPip
         ri.depthAttachmentFormat = t->depth;
         pi.pNext = &ri;
     }
-    VK_TRY(vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, NULL, out),
+    VK_TRY(vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, vk->vkalloc, out),
            "vkCreateGraphicsPipelines");
     return XYL_OK;
 }
@@ -527,11 +549,11 @@ static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
     si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
     si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     si.maxLod = VK_LOD_CLAMP_NONE;
-    VK_TRY(vkCreateSampler(vk->device, &si, NULL, &vk->sampler), "vkCreateSampler");
+    VK_TRY(vkCreateSampler(vk->device, &si, vk->vkalloc, &vk->sampler), "vkCreateSampler");
     VkCommandPoolCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     ci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
     ci.queueFamilyIndex = d->queue_family;
-    VK_TRY(vkCreateCommandPool(vk->device, &ci, NULL, &vk->commands), "vkCreateCommandPool");
+    VK_TRY(vkCreateCommandPool(vk->device, &ci, vk->vkalloc, &vk->commands), "vkCreateCommandPool");
     const uint8_t white[4] = {255, 255, 255, 255};
     return upload_texture(vk, white, 1, 1, diag);
 }
@@ -548,6 +570,13 @@ xyl_result xyl_foliage_vk_create(const xyl_foliage_vk_desc *desc, xyl_foliage_vk
     xyl_foliage_vk *vk = xyl__calloc(&a, 1, sizeof *vk);
     if (!vk) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     vk->alloc = a;
+    if (a.alloc) { /* else the driver's default: as good as malloc */
+        vk->callbacks.pUserData = &vk->alloc;
+        vk->callbacks.pfnAllocation = vk_alloc;
+        vk->callbacks.pfnReallocation = vk_realloc;
+        vk->callbacks.pfnFree = vk_free;
+        vk->vkalloc = &vk->callbacks;
+    }
     vk->physical = desc->physical_device;
     vk->device = desc->device;
     vk->queue = desc->queue;
@@ -568,18 +597,18 @@ void xyl_foliage_vk_destroy(xyl_foliage_vk *vk)
     VkDevice dev = vk->device;
     buffer_destroy(vk, &vk->leaves);
     image_destroy(vk, &vk->texture);
-    if (vk->commands) vkDestroyCommandPool(dev, vk->commands, NULL);
-    if (vk->sampler) vkDestroySampler(dev, vk->sampler, NULL);
-    if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, NULL);
-    if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, NULL);
-    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, NULL);
-    if (vk->pipeline) vkDestroyPipeline(dev, vk->pipeline, NULL);
-    if (vk->pool) vkDestroyDescriptorPool(dev, vk->pool, NULL);
-    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, NULL);
-    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, NULL);
+    if (vk->commands) vkDestroyCommandPool(dev, vk->commands, vk->vkalloc);
+    if (vk->sampler) vkDestroySampler(dev, vk->sampler, vk->vkalloc);
+    if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, vk->vkalloc);
+    if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, vk->vkalloc);
+    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, vk->vkalloc);
+    if (vk->pipeline) vkDestroyPipeline(dev, vk->pipeline, vk->vkalloc);
+    if (vk->pool) vkDestroyDescriptorPool(dev, vk->pool, vk->vkalloc);
+    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, vk->vkalloc);
+    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, vk->vkalloc);
     VkShaderModule mods[3] = {vk->vert, vk->vert_capture, vk->frag};
     for (int k = 0; k < 3; ++k)
-        if (mods[k]) vkDestroyShaderModule(dev, mods[k], NULL);
+        if (mods[k]) vkDestroyShaderModule(dev, mods[k], vk->vkalloc);
     xyl_allocator a = vk->alloc;
     xyl__foliage_tables_free(&vk->tables, &a);
     xyl__free(&a, vk);
@@ -708,14 +737,14 @@ static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
         VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
         ri.subpassCount = 1;
         ri.pSubpasses = &sub;
-        VK_TRY(vkCreateRenderPass(vk->device, &ri, NULL, &vk->capture_pass),
+        VK_TRY(vkCreateRenderPass(vk->device, &ri, vk->vkalloc, &vk->capture_pass),
                "vkCreateRenderPass");
     }
     if (!vk->capture_framebuffer) {
         VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
         fi.renderPass = vk->capture_pass;
         fi.width = fi.height = fi.layers = 1;
-        VK_TRY(vkCreateFramebuffer(vk->device, &fi, NULL, &vk->capture_framebuffer),
+        VK_TRY(vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &vk->capture_framebuffer),
                "vkCreateFramebuffer");
     }
     pipe_target t = {vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,

@@ -39,9 +39,8 @@
  * set 0 and push constants (rebind yours after it) and uses the viewport and scissor you set.
  *
  * Every call checks its input before its first Vulkan call. Threads: one renderer is used by
- * one thread at a time. Allocation: the renderer's host memory (the LOD tables, the packed
- * records during an upload) comes from desc.alloc; the driver's own host allocations use the
- * driver's default allocator.
+ * one thread at a time. Allocation: every host allocation of the renderer, the driver's for its
+ * objects included (as VkAllocationCallbacks), goes through desc.alloc when one is given.
  *
  * Copyright (c) xylem authors. MIT licence, see LICENSE.
  */
@@ -79,7 +78,7 @@ typedef struct xyl_foliage_vk_desc {
     /* The features the device was made with; default (NULL): none. The tests' capture needs
      * vertexPipelineStoresAndAtomics; drawing needs none. */
     const VkPhysicalDeviceFeatures *enabled_features;
-    xyl_allocator alloc; /* the renderer's host allocations (not the driver's) */
+    xyl_allocator alloc; /* host allocations, Vulkan's included; default: malloc / free */
 } xyl_foliage_vk_desc;
 
 /* The values of a draw: those of xyl_foliage_gl_frame, with view_proj in Vulkan's convention. */
