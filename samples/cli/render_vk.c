@@ -26,6 +26,8 @@ typedef struct app {
     VkImageView view[3];
     VkFramebuffer framebuffer;
     VkBuffer readback;
+    VkQueryPool timer;   /* two timestamps around the pass; none where the queue lacks them */
+    double tick_ns;
     uint32_t width, height;
     VkSampleCountFlagBits samples;
 } app;
@@ -71,6 +73,7 @@ static xyl_result open_device(app *a, char *name, xyl_diag *d)
             continue;
         a->physical = devs[i];
         a->family = fam;
+        if (q[fam].timestampValidBits > 0) a->tick_ns = p.limits.timestampPeriod;
         snprintf(name, 256, "%s", p.deviceName);
         a->features.drawIndirectFirstInstance = VK_TRUE;
         a->features.multiDrawIndirect = f.multiDrawIndirect;
@@ -95,6 +98,12 @@ static xyl_result open_device(app *a, char *name, xyl_diag *d)
     VkCommandPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pi.queueFamilyIndex = a->family;
     TRY(vkCreateCommandPool(a->device, &pi, NULL, &a->pool), "vkCreateCommandPool");
+    if (a->tick_ns > 0.0) {
+        VkQueryPoolCreateInfo qp = {.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+        qp.queryType = VK_QUERY_TYPE_TIMESTAMP;
+        qp.queryCount = 2;
+        TRY(vkCreateQueryPool(a->device, &qp, NULL, &a->timer), "vkCreateQueryPool");
+    }
     return XYL_OK;
 }
 
@@ -233,6 +242,7 @@ static void close_app(app *a)
         for (int k = 0; k < 4; ++k)
             if (a->memory[k]) vkFreeMemory(a->device, a->memory[k], NULL);
         if (a->pass) vkDestroyRenderPass(a->device, a->pass, NULL);
+        if (a->timer) vkDestroyQueryPool(a->device, a->timer, NULL);
         if (a->pool) vkDestroyCommandPool(a->device, a->pool, NULL);
         vkDestroyDevice(a->device, NULL);
     }
@@ -246,6 +256,10 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
     VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     TRY(vkBeginCommandBuffer(cb, &bi), "vkBeginCommandBuffer");
+    if (a->timer) {
+        vkCmdResetQueryPool(cb, a->timer, 0, 2);
+        vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, a->timer, 0);
+    }
     VkClearValue clear[3];
     memset(clear, 0, sizeof clear);
     memcpy(clear[0].color.float32, t->image->background, sizeof clear[0].color.float32);
@@ -271,6 +285,7 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
     if (r == XYL_OK)
         r = xyl_foliage_vk_cmd_draw(leaves, cb, &lf, t->lods, t->foliage->sector_count, d);
     vkCmdEndRenderPass(cb);
+    if (a->timer) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, a->timer, 1);
     VkBufferImageCopy copy = {0};
     copy.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
     copy.imageSubresource.layerCount = 1;
@@ -287,7 +302,8 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
     return r;
 }
 
-static xyl_result submit_and_read(const app *a, VkCommandBuffer cb, uint8_t *rgba, xyl_diag *d)
+static xyl_result submit_and_read(const app *a, VkCommandBuffer cb, uint8_t *rgba,
+                                  double *gpu_ms, xyl_diag *d)
 {
     VkFenceCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     VkFence fence;
@@ -303,10 +319,16 @@ static xyl_result submit_and_read(const app *a, VkCommandBuffer cb, uint8_t *rgb
     TRY(vkMapMemory(a->device, a->memory[3], 0, VK_WHOLE_SIZE, 0, &map), "vkMapMemory");
     memcpy(rgba, map, 4u * (size_t)a->width * a->height);
     vkUnmapMemory(a->device, a->memory[3]);
+    uint64_t ticks[2];
+    *gpu_ms = -1.0;
+    if (a->timer && vkGetQueryPoolResults(a->device, a->timer, 0, 2, sizeof ticks, ticks,
+                                          sizeof ticks[0], VK_QUERY_RESULT_64_BIT) == VK_SUCCESS)
+        *gpu_ms = (double)(ticks[1] - ticks[0]) * a->tick_ns * 1e-6;
     return XYL_OK;
 }
 
-static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, xyl_diag *d)
+static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, double *gpu_ms,
+                       xyl_diag *d)
 {
     xyl_tess_vk_device_desc sd = {0};
     sd.physical_device = a->physical;
@@ -342,7 +364,7 @@ static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, xyl_diag
         if (vr != VK_SUCCESS) r = fail(d, vr, "vkAllocateCommandBuffers");
     }
     if (r == XYL_OK) r = record(a, cb, stems, leaves, t, d);
-    if (r == XYL_OK) r = submit_and_read(a, cb, rgba, d);
+    if (r == XYL_OK) r = submit_and_read(a, cb, rgba, gpu_ms, d);
     vkDeviceWaitIdle(a->device);
     if (cb) vkFreeCommandBuffers(a->device, a->pool, 1, &cb);
     xyl_foliage_vk_destroy(leaves);
@@ -351,7 +373,7 @@ static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, xyl_diag
 }
 
 xyl_result xyl_cli_render_vk_tree(const xyl_cli_vk_tree *t, uint8_t *rgba, char *device_name,
-                                  xyl_diag *d)
+                                  double *gpu_ms, xyl_diag *d)
 {
     app a;
     memset(&a, 0, sizeof a);
@@ -373,7 +395,7 @@ xyl_result xyl_cli_render_vk_tree(const xyl_cli_vk_tree *t, uint8_t *rgba, char 
     }
     if (r == XYL_OK) r = make_pass(&a, d);
     if (r == XYL_OK) r = make_target(&a, d);
-    if (r == XYL_OK) r = draw(&a, t, rgba, d);
+    if (r == XYL_OK) r = draw(&a, t, rgba, gpu_ms, d);
     close_app(&a);
     return r;
 }

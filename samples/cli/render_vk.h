@@ -21,9 +21,10 @@ typedef struct xyl_cli_vk_tree {
 
 /* Draws the stems, then the leaves, into a colour (R8G8B8A8, image->samples) and depth target
  * cleared to image->background, resolves it, and writes width * height RGBA8 pixels, top row
- * first. device_name (at least 256 bytes) gets the device's name. Errors: the libraries' codes;
+ * first. device_name (at least 256 bytes) gets the device's name, *gpu_ms the render pass's GPU
+ * time from timestamp queries (negative where the queue has none). Errors: the libraries' codes;
  * XYL_ERR_UNSUPPORTED for a machine without a fitting Vulkan 1.2 device (diag says why). */
 xyl_result xyl_cli_render_vk_tree(const xyl_cli_vk_tree *tree, uint8_t *rgba, char *device_name,
-                                  xyl_diag *diag);
+                                  double *gpu_ms, xyl_diag *diag);
 
 #endif

@@ -920,6 +920,7 @@ typedef struct render_job {
     bool draw_leaves;     /* leaves and a backend that draws them */
     uint32_t *lods;       /* one per sector: the LOD drawn */
     size_t leaves_drawn;
+    bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
 } render_job;
 
 static void render_job_free(render_job *j)
@@ -1223,9 +1224,9 @@ static xyl_result render_vk_tree(render_job *j, xyl_diag *d)
     t.texture_height = h;
     char name[256] = "";
     double t0 = now_seconds();
-    xyl_result r = xyl_cli_render_vk_tree(&t, j->rgba, name, d);
+    xyl_result r = xyl_cli_render_vk_tree(&t, j->rgba, name, &j->gpu_ms, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
-    j->gpu_ms = -1.0; /* the frame is the CLI's own: no timer query around it */
+    j->gpu_timer_all = true;
     free(tex);
     if (r == XYL_OK) printf("device: %s (Vulkan)\n", name);
     return r;
@@ -1284,7 +1285,7 @@ static void print_render(const options *o, const render_job *j, const char *path
            j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
            "GPU timer %.3f ms%s\n", j->select_ms, j->render_ms, j->gpu_ms,
-           j->draw_leaves ? " (stems)" : "");
+           !j->draw_leaves ? "" : j->gpu_timer_all ? " (stems and leaves)" : " (stems)");
     printf("wrote %s\n", path);
 }
 
