@@ -12,18 +12,19 @@ set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_
 # The foliage module's GL shaders read the leaf record only (foliage/ does not see tessellate/).
 set(XYL_FOLIAGE_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_foliage_shared.h)
 
-# xyl_shader(<name> <stage file> <gl|vulkan|gl_foliage> [DEFINE...]): appends the generated C
-# file to XYL_GL_SHADER_SOURCES, XYL_VK_SHADER_SOURCES or (gl_foliage: GLSL text assembled with
-# the leaf record's header) XYL_FOLIAGE_GL_SHADER_SOURCES; the symbol is xyl__shader_<name>.
+# xyl_shader(<name> <stage file> <gl|vulkan|gl_foliage|vk_foliage> [DEFINE...]): appends the
+# generated C file to XYL_GL_SHADER_SOURCES, XYL_VK_SHADER_SOURCES, or (the *_foliage kinds:
+# assembled with the leaf record's header) XYL_FOLIAGE_GL_SHADER_SOURCES (GLSL text) or
+# XYL_FOLIAGE_VK_SHADER_SOURCES (SPIR-V); the symbol is xyl__shader_<name>.
 function(xyl_shader name stage api)
   set(common ${XYL_SHADER_COMMON})
-  if(api STREQUAL "gl_foliage")
+  if(api MATCHES "_foliage$")
     set(common ${XYL_FOLIAGE_SHADER_COMMON})
   endif()
   get_filename_component(ext ${stage} LAST_EXT)
   string(SUBSTRING ${ext} 1 -1 ext)
   set(prefix_text "#version 450\n#define XYL_GLSL 1\n")
-  if(api STREQUAL "vulkan")
+  if(api STREQUAL "vulkan" OR api STREQUAL "vk_foliage")
     string(APPEND prefix_text "#define XYL_VULKAN 1\n")
   endif()
   foreach(d IN LISTS ARGN)
@@ -61,7 +62,11 @@ function(xyl_shader name stage api)
       DEPENDS ${src} ${PROJECT_SOURCE_DIR}/cmake/xyl_embed.cmake
       BYPRODUCTS ${spv}
       COMMENT "Compiling ${name} to SPIR-V" VERBATIM)
-    set(XYL_VK_SHADER_SOURCES ${XYL_VK_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    if(api STREQUAL "vulkan")
+      set(XYL_VK_SHADER_SOURCES ${XYL_VK_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    else()
+      set(XYL_FOLIAGE_VK_SHADER_SOURCES ${XYL_FOLIAGE_VK_SHADER_SOURCES} ${c_out} PARENT_SCOPE)
+    endif()
     set(XYL_VK_SPIRV ${XYL_VK_SPIRV} ${spv} PARENT_SCOPE)
   endif()
 endfunction()
@@ -70,6 +75,7 @@ set(XYL_GL_SHADER_SOURCES)
 set(XYL_VK_SHADER_SOURCES)
 set(XYL_VK_SPIRV)
 set(XYL_FOLIAGE_GL_SHADER_SOURCES)
+set(XYL_FOLIAGE_VK_SHADER_SOURCES)
 xyl_shader(gl_instanced_vert tess_instanced.vert gl)
 xyl_shader(gl_instanced_capture_vert tess_instanced.vert gl XYL_CAPTURE)
 xyl_shader(gl_shade_frag tess_shade.frag gl)
@@ -84,3 +90,6 @@ xyl_shader(vk_instanced_capture_vert tess_instanced.vert vulkan XYL_CAPTURE)
 xyl_shader(vk_shade_frag tess_shade.frag vulkan)
 xyl_shader(gl_foliage_leaf_vert foliage_leaf.vert gl_foliage)
 xyl_shader(gl_foliage_leaf_frag foliage_leaf.frag gl_foliage)
+xyl_shader(vk_foliage_leaf_vert foliage_leaf.vert vk_foliage)
+xyl_shader(vk_foliage_leaf_capture_vert foliage_leaf.vert vk_foliage XYL_CAPTURE)
+xyl_shader(vk_foliage_leaf_frag foliage_leaf.frag vk_foliage)

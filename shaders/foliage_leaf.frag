@@ -3,11 +3,19 @@
 // sky/ground hemisphere term (as the stems are), and light arriving from behind shines through
 // the blade, tinted yellow-green, in proportion to u_translucency.
 
+#ifdef XYL_VULKAN
+layout(set = 0, binding = XYL_FOLIAGE_VK_BINDING_TEXTURE) uniform sampler2D u_texture;
+#define u_light xyl_push.light.xyz
+#define u_color xyl_push.color
+#define u_cutoff xyl_push.cutoff
+#define u_translucency xyl_push.translucency
+#else
 layout(binding = XYL_FOLIAGE_GL_BINDING_TEXTURE) uniform sampler2D u_texture;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_LIGHT) uniform vec3 u_light;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_COLOR) uniform vec4 u_color;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_CUTOFF) uniform float u_cutoff;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY) uniform float u_translucency;
+#endif
 
 layout(location = 0) in vec3 v_normal;
 layout(location = 1) in vec2 v_uv;
@@ -16,7 +24,7 @@ layout(location = 0) out vec4 out_color;
 void main()
 {
     // The image is stored top row first, as image files are, with the tip end (v = 1) at the
-    // top; GL's t = 0 is the first row stored.
+    // top; t = 0 is the first row stored, in GL and in Vulkan alike.
     vec4 texel = texture(u_texture, vec2(v_uv.x, 1.0 - v_uv.y));
     if (texel.a < u_cutoff) discard;
     vec3 n = normalize(v_normal);

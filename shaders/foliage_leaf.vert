@@ -1,30 +1,59 @@
-
-// One leaf a instance: the record (xyl_foliage_shared.h) at u_base + gl_InstanceID expanded to
+// One leaf a instance: the record (xyl_foliage_shared.h) at the instance's index expanded to
 // its quad, a 4-vertex triangle strip: vertex v is the corner st = (v & 1 ? 1 : -1,
 // v & 2 ? 1 : -1), so the strip runs (-1,-1) (1,-1) (-1,1) (1,1), counter-clockwise seen from
-// the side the normal points to. No index buffer, no per-leaf CPU work.
+// the side the normal points to. No index buffer, no per-leaf CPU work. GL adds u_base to
+// gl_InstanceID; Vulkan draws each range with firstInstance = its first record, which
+// gl_InstanceIndex includes. With XYL_CAPTURE (Vulkan, the tests' capture pipeline) each
+// vertex also stores what it computed at 4 * record + corner.
 
+#ifdef XYL_VULKAN
+layout(std430, set = 0, binding = XYL_FOLIAGE_VK_BINDING_LEAVES) readonly buffer xyl_leaf_buffer {
+    xyl_foliage_gpu_leaf xyl_leaves[];
+};
+#define XYL_LEAF_INDEX uint(gl_InstanceIndex)
+#define XYL_CORNER gl_VertexIndex
+#define u_view_proj xyl_push.view_proj
+#ifdef XYL_CAPTURE
+struct xyl_foliage_vk_captured {
+    vec4 clip;
+    vec2 st;
+    uint leaf;
+    uint pad;
+};
+layout(std430, set = 0, binding = XYL_FOLIAGE_VK_BINDING_CAPTURE) writeonly buffer xyl_capture {
+    xyl_foliage_vk_captured xyl_captured[];
+};
+#endif
+#else
 layout(std430, binding = XYL_FOLIAGE_GL_BINDING_LEAVES) readonly buffer xyl_leaf_buffer {
     xyl_foliage_gpu_leaf xyl_leaves[];
 };
-
 layout(location = XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ) uniform mat4 u_view_proj;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_BASE) uniform uint u_base;
+#define XYL_LEAF_INDEX (u_base + uint(gl_InstanceID))
+#define XYL_CORNER gl_VertexID
+#endif
 
 layout(location = 0) out vec3 v_normal;
 layout(location = 1) out vec2 v_uv;
-layout(location = 2) out vec2 v_st;      // the corner; read back by the capture
-layout(location = 3) flat out uint v_leaf; // the record; read back by the capture
+#ifndef XYL_VULKAN // GL's transform feedback capture reads these back
+layout(location = 2) out vec2 v_st;      // the corner
+layout(location = 3) flat out uint v_leaf; // the record
+#endif
 
 void main()
 {
-    uint leaf = u_base + uint(gl_InstanceID);
+    uint leaf = XYL_LEAF_INDEX;
     xyl_foliage_gpu_leaf l = xyl_leaves[leaf];
-    vec2 st = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
+    vec2 st = vec2((XYL_CORNER & 1) != 0 ? 1.0 : -1.0, (XYL_CORNER & 2) != 0 ? 1.0 : -1.0);
     vec3 p = xyl_foliage_corner(l, st);
     gl_Position = u_view_proj * vec4(p, 1.0);
     v_normal = xyl_foliage_normal(l);
     v_uv = xyl_foliage_corner_uv(l, st);
+#ifndef XYL_VULKAN
     v_st = st;
     v_leaf = leaf;
+#elif defined(XYL_CAPTURE)
+    xyl_captured[4u * leaf + uint(XYL_CORNER)] = xyl_foliage_vk_captured(gl_Position, st, leaf, 0u);
+#endif
 }

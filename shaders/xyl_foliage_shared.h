@@ -36,6 +36,14 @@
 #define XYL_FOLIAGE_GL_UNIFORM_CUTOFF 4
 #define XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY 5
 
+/* The Vulkan leaf renderer's (xylem/xyl_foliage_vk.h): descriptor set 0 holds the records, the
+ * leaf texture and, in the tests' capture pipeline only, the captured vertices; the draw's
+ * values are push constants (xyl_foliage_vk_push below). */
+#define XYL_FOLIAGE_VK_BINDING_LEAVES 0
+#define XYL_FOLIAGE_VK_BINDING_TEXTURE 1
+#define XYL_FOLIAGE_VK_BINDING_CAPTURE 2
+#define XYL_FOLIAGE_VK_PUSH_SIZE 104
+
 #ifdef XYL_GLSL
 
 struct xyl_foliage_gpu_leaf {
@@ -80,6 +88,17 @@ vec2 xyl_foliage_corner_uv(xyl_foliage_gpu_leaf l, vec2 st)
     return mix(r.xy, r.zw, 0.5 * st + 0.5);
 }
 
+#ifdef XYL_VULKAN
+/* A Vulkan draw's values, in push constants (std430 offsets: 0, 64, 80, 96, 100). */
+layout(push_constant) uniform xyl_foliage_vk_push {
+    mat4 view_proj;     /* Vulkan clip convention (y down, depth 0..1) */
+    vec4 light;         /* xyz: towards the light, normalised */
+    vec4 color;
+    float cutoff;
+    float translucency;
+} xyl_push;
+#endif
+
 #else /* C */
 
 #include <stdint.h>
@@ -90,6 +109,15 @@ typedef struct xyl_foliage_gpu_leaf {
     uint16_t side[3]; /* binary16 bits */
     uint16_t uv[4];   /* unorm16: u0, v0, u1, v1 */
 } xyl_foliage_gpu_leaf;
+
+/* The push constants of a Vulkan leaf draw (pinned in foliage/src/foliage_vk.c). */
+typedef struct xyl_foliage_vk_push {
+    float view_proj[16];
+    float light[4];
+    float color[4];
+    float cutoff;
+    float translucency;
+} xyl_foliage_vk_push;
 
 #endif
 

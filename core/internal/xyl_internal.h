@@ -51,6 +51,14 @@ size_t xyl__alloc_blocks_in_use(void);
 void *xyl__alloc(const xyl_allocator *a, size_t size);
 void *xyl__calloc(const xyl_allocator *a, size_t count, size_t size); /* overflow-checked, zeroed */
 void xyl__free(const xyl_allocator *a, void *p);
+/* Blocks with an alignment (a power of two; below max_align_t's it is raised to it) and a
+ * realloc, on top of an allocator that has neither: what Vulkan's allocation callbacks ask of
+ * the caller's xyl_allocator. A block is over-allocated and keeps its base pointer and size just
+ * below the pointer returned. xyl__realloc_aligned(a, NULL, ...) allocates; size 0 frees and
+ * returns NULL; on failure NULL and the old block stays valid. */
+void *xyl__alloc_aligned(const xyl_allocator *a, size_t size, size_t align);
+void *xyl__realloc_aligned(const xyl_allocator *a, void *old, size_t size, size_t align);
+void xyl__free_aligned(const xyl_allocator *a, void *p);
 /* Grows *ptr (of *cap elements of elem bytes, *used of which are live) to hold at least need
  * elements; doubling. Returns false on overflow or allocation failure (then *ptr unchanged).
  * The usual case, room left, is decided inline; xyl__grow_slow does the rest. */

@@ -214,3 +214,44 @@ void xyl__free(const xyl_allocator *a, void *p)
 #endif
     free(h);
 }
+
+/* ---- aligned blocks (xyl__alloc_aligned) -------------------------------------------------- */
+
+typedef struct aligned_head {
+    void *base;
+    size_t size;
+} aligned_head;
+
+void *xyl__alloc_aligned(const xyl_allocator *a, size_t size, size_t align)
+{
+    const size_t min_align = _Alignof(max_align_t);
+    if (align < min_align) align = min_align; /* also aligns the head below the block */
+    if (size > SIZE_MAX - align - sizeof(aligned_head)) return NULL;
+    char *base = xyl__alloc(a, size + align + sizeof(aligned_head));
+    if (!base) return NULL;
+    uintptr_t at = ((uintptr_t)(base + sizeof(aligned_head)) + align - 1) & ~(uintptr_t)(align - 1);
+    aligned_head *h = (aligned_head *)at - 1;
+    h->base = base;
+    h->size = size;
+    return (void *)at;
+}
+
+void xyl__free_aligned(const xyl_allocator *a, void *p)
+{
+    if (p) xyl__free(a, ((aligned_head *)p - 1)->base);
+}
+
+void *xyl__realloc_aligned(const xyl_allocator *a, void *old, size_t size, size_t align)
+{
+    if (!old) return xyl__alloc_aligned(a, size, align);
+    if (size == 0) {
+        xyl__free_aligned(a, old);
+        return NULL;
+    }
+    void *p = xyl__alloc_aligned(a, size, align);
+    if (!p) return NULL;
+    size_t keep = ((aligned_head *)old - 1)->size;
+    memcpy(p, old, keep < size ? keep : size);
+    xyl__free_aligned(a, old);
+    return p;
+}

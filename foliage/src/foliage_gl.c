@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "foliage_draw.h"
 #include "foliage_gl_debug.h"
 #include "foliage_internal.h"
 
@@ -19,30 +20,14 @@ extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
 _Static_assert(sizeof(xyl__foliage_captured) == XFB_VERTEX_BYTES, "captured = xfb record");
 _Static_assert(offsetof(xyl__foliage_captured, leaf) == 24, "v_leaf follows vec4 and vec2");
 
-typedef struct gl_sector {
-    uint32_t base, first_lod, lod_count;
-} gl_sector;
-
-typedef struct gl_range {
-    uint32_t a, b, c;
-} gl_range;
-
 struct xyl_foliage_gl {
     GLuint program, vao, leaf_buf, texture, capture_fbo, xfb_buf;
     GLuint generated_query, written_query;
     GLint64 max_ssbo_bytes;
     GLint max_texture_side;
-    size_t leaf_count; /* 0: nothing uploaded */
-    gl_sector *sectors;
-    gl_range *ranges;
-    uint32_t sector_count;
+    xyl__foliage_tables tables; /* leaf_count 0: nothing uploaded */
     xyl_allocator alloc;
 };
-
-/* The frame with its defaults filled in. */
-typedef struct resolved_frame {
-    float view_proj[16], light[3], color[4], cutoff, translucency;
-} resolved_frame;
 
 /* ---- errors and context ------------------------------------------------------------------- */
 
@@ -207,50 +192,11 @@ void xyl_foliage_gl_destroy(xyl_foliage_gl *gl)
         glDeleteQueries(2, qs);
     }
     xyl_allocator a = gl->alloc;
-    xyl__free(&a, gl->sectors);
-    xyl__free(&a, gl->ranges);
+    xyl__foliage_tables_free(&gl->tables, &a);
     xyl__free(&a, gl);
 }
 
 /* ---- the species' leaves ------------------------------------------------------------------ */
-
-/* A table from xyl_foliage_build is always well formed; one a program assembled by hand must
- * still keep every range inside the array, since the shader reads the buffer unchecked. */
-static xyl_result check_tables(const xyl_foliage *f, size_t *lod_total, xyl_diag *diag)
-{
-    if (!f->leaves || !f->sectors || f->sector_count == 0 ||
-        f->sector_count > XYL_FOLIAGE_MAX_SECTORS)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "the foliage's leaves or sectors are missing");
-    size_t total = 0;
-    for (uint32_t s = 0; s < f->sector_count; ++s) {
-        const xyl_foliage_sector *sec = &f->sectors[s];
-        uint64_t n = sec->original_count, end = (uint64_t)sec->base + n + sec->merged_count;
-        bool ok = sec->lods && end <= f->leaf_count && sec->merged_count < UINT32_MAX;
-        for (uint32_t i = 0; ok && i <= sec->merged_count; ++i) {
-            const xyl_foliage_lod *l = &sec->lods[i];
-            ok = l->a <= n && (uint64_t)l->b + l->c <= n + sec->merged_count &&
-                 (l->c == 0 || l->b >= n);
-        }
-        if (!ok)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)s,
-                             "sector %u's LOD table reaches outside the leaf array", s);
-        total += (size_t)sec->merged_count + 1;
-    }
-    *lod_total = total;
-    return XYL_OK;
-}
-
-static void copy_tables(const xyl_foliage *f, gl_sector *sectors, gl_range *ranges)
-{
-    uint32_t at = 0;
-    for (uint32_t s = 0; s < f->sector_count; ++s) {
-        const xyl_foliage_sector *sec = &f->sectors[s];
-        sectors[s] = (gl_sector){sec->base, at, sec->merged_count + 1};
-        for (uint32_t i = 0; i <= sec->merged_count; ++i, ++at)
-            ranges[at] = (gl_range){sec->lods[i].a, sec->lods[i].b, sec->lods[i].c};
-    }
-}
 
 /* A new buffer, swapped in only when the upload worked. */
 static xyl_result upload_records(xyl_foliage_gl *gl, const xyl_foliage_gpu_leaf *records,
@@ -275,37 +221,25 @@ xyl_result xyl_foliage_gl_set_foliage(xyl_foliage_gl *gl, const xyl_foliage *fol
 {
     if (!gl || !foliage)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "gl and foliage are required");
-    if (foliage->leaf_count == 0)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "the foliage has no leaves: there is nothing to draw");
-    size_t lod_total = 0;
-    xyl_result r = check_tables(foliage, &lod_total, diag);
-    if (r != XYL_OK) return r;
     size_t n = foliage->leaf_count;
     if (n > UINT32_MAX || (GLint64)(n * sizeof(xyl_foliage_gpu_leaf)) > gl->max_ssbo_bytes)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%zu leaves exceed the driver's storage block size (%lld bytes)", n,
                          (long long)gl->max_ssbo_bytes);
+    xyl__foliage_tables tables;
+    xyl_result r = xyl__foliage_tables_make(foliage, &gl->alloc, &tables, diag);
+    if (r != XYL_OK) return r;
     xyl_foliage_gpu_leaf *records = xyl__alloc_array(&gl->alloc, n, sizeof *records);
-    gl_sector *sectors = xyl__alloc_array(&gl->alloc, foliage->sector_count, sizeof *sectors);
-    gl_range *ranges = xyl__alloc_array(&gl->alloc, lod_total, sizeof *ranges);
-    if (!records || !sectors || !ranges)
-        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    if (!records) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
     if (r == XYL_OK) r = upload_records(gl, records, n, diag);
     xyl__free(&gl->alloc, records);
     if (r != XYL_OK) {
-        xyl__free(&gl->alloc, sectors);
-        xyl__free(&gl->alloc, ranges);
+        xyl__foliage_tables_free(&tables, &gl->alloc);
         return r;
     }
-    copy_tables(foliage, sectors, ranges);
-    xyl__free(&gl->alloc, gl->sectors);
-    xyl__free(&gl->alloc, gl->ranges);
-    gl->sectors = sectors;
-    gl->ranges = ranges;
-    gl->sector_count = foliage->sector_count;
-    gl->leaf_count = n;
+    xyl__foliage_tables_free(&gl->tables, &gl->alloc);
+    gl->tables = tables;
     xyl__diag_ok(diag);
     return XYL_OK;
 }
@@ -336,81 +270,19 @@ xyl_result xyl_foliage_gl_set_texture(xyl_foliage_gl *gl, const uint8_t *rgba, u
 
 /* ---- draws -------------------------------------------------------------------------------- */
 
-static xyl_result resolve_frame(const xyl_foliage_gl_frame *f, resolved_frame *out,
-                                xyl_diag *diag)
-{
-    bool any = false;
-    for (int k = 0; k < 16; ++k) {
-        if (!isfinite(f->view_proj[k]))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k,
-                             "view_proj[%d] is not finite", k);
-        any = any || f->view_proj[k] != 0.0f;
-    }
-    if (!any)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "view_proj is all zero (no camera given)");
-    const float scalars[9] = {f->light_dir[0], f->light_dir[1], f->light_dir[2], f->color[0],
-                              f->color[1],     f->color[2],     f->color[3],     f->alpha_cutoff,
-                              f->translucency};
-    for (int k = 0; k < 9; ++k)
-        if (!isfinite(scalars[k]))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1,
-                             "a light, colour, cutoff or translucency value is not finite");
-    if (f->alpha_cutoff < 0.0f || f->alpha_cutoff > 1.0f || f->translucency > 1.0f)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "alpha_cutoff %g must lie in [0, 1] and translucency %g be at most 1",
-                         (double)f->alpha_cutoff, (double)f->translucency);
-    memcpy(out->view_proj, f->view_proj, sizeof out->view_proj);
-    double l2 = (double)f->light_dir[0] * f->light_dir[0] +
-                (double)f->light_dir[1] * f->light_dir[1] +
-                (double)f->light_dir[2] * f->light_dir[2];
-    double il = l2 > 0.0 && isfinite(l2) ? 1.0 / sqrt(l2) : 0.0;
-    for (int k = 0; k < 3; ++k) out->light[k] = il > 0.0 ? (float)(f->light_dir[k] * il) : 0.0f;
-    if (il == 0.0) out->light[1] = 1.0f;
-    bool no_color = f->color[0] == 0.0f && f->color[1] == 0.0f && f->color[2] == 0.0f &&
-                    f->color[3] == 0.0f;
-    const float green[4] = {0.42f, 0.62f, 0.25f, 1.0f};
-    memcpy(out->color, no_color ? green : f->color, sizeof out->color);
-    out->cutoff = f->alpha_cutoff > 0.0f ? f->alpha_cutoff : 0.5f;
-    out->translucency = f->translucency > 0.0f   ? f->translucency
-                        : f->translucency < 0.0f ? 0.0f
-                                                 : 0.5f;
-    return XYL_OK;
-}
-
 static xyl_result check_draw(const xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
-                             const uint32_t *lods, size_t lod_count, resolved_frame *rf,
+                             const uint32_t *lods, size_t lod_count, xyl__foliage_frame *rf,
                              xyl_diag *diag)
 {
     if (!gl || !frame || !lods)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "gl, frame and lods are required");
-    if (gl->leaf_count == 0)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "no foliage uploaded (xyl_foliage_gl_set_foliage)");
-    if (lod_count != gl->sector_count)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "%zu LODs given for %u sectors: one per sector", lod_count,
-                         gl->sector_count);
-    for (uint32_t s = 0; s < gl->sector_count; ++s)
-        if (lods[s] >= gl->sectors[s].lod_count)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)s,
-                             "sector %u has LODs 0 to %u, not %u", s,
-                             gl->sectors[s].lod_count - 1, lods[s]);
-    return resolve_frame(frame, rf, diag);
+    return xyl__foliage_draw_check(&gl->tables, lods, lod_count, frame->view_proj,
+                                   frame->light_dir, frame->color, frame->alpha_cutoff,
+                                   frame->translucency, rf, diag);
 }
 
-static uint64_t leaves_of(const xyl_foliage_gl *gl, const uint32_t *lods)
-{
-    uint64_t n = 0;
-    for (uint32_t s = 0; s < gl->sector_count; ++s) {
-        const gl_range *r = &gl->ranges[gl->sectors[s].first_lod + lods[s]];
-        n += (uint64_t)r->a + r->c;
-    }
-    return n;
-}
-
-static void bind_program(const xyl_foliage_gl *gl, const resolved_frame *rf)
+static void bind_program(const xyl_foliage_gl *gl, const xyl__foliage_frame *rf)
 {
     GLuint p = gl->program;
     glUseProgram(p);
@@ -427,9 +299,9 @@ static void bind_program(const xyl_foliage_gl *gl, const resolved_frame *rf)
 /* Per sector the LOD's two ranges, [base, base + a) and [base + b, base + b + c). */
 static void draw_ranges(const xyl_foliage_gl *gl, const uint32_t *lods)
 {
-    for (uint32_t s = 0; s < gl->sector_count; ++s) {
-        const gl_sector *sec = &gl->sectors[s];
-        const gl_range *r = &gl->ranges[sec->first_lod + lods[s]];
+    for (uint32_t s = 0; s < gl->tables.sector_count; ++s) {
+        const xyl__foliage_sector_ref *sec = &gl->tables.sectors[s];
+        const xyl__foliage_range *r = &gl->tables.ranges[sec->first_lod + lods[s]];
         const uint32_t first[2] = {sec->base, sec->base + r->b}, count[2] = {r->a, r->c};
         for (int k = 0; k < 2; ++k) {
             if (!count[k]) continue;
@@ -442,7 +314,7 @@ static void draw_ranges(const xyl_foliage_gl *gl, const uint32_t *lods)
 xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
                                const uint32_t *lods, size_t lod_count, xyl_diag *diag)
 {
-    resolved_frame rf;
+    xyl__foliage_frame rf;
     xyl_result r = check_draw(gl, frame, lods, lod_count, &rf, diag);
     if (r != XYL_OK) return r;
     drain_errors();
@@ -461,7 +333,7 @@ xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *f
 
 /* ---- capture ------------------------------------------------------------------------------ */
 
-static xyl_result run_feedback(xyl_foliage_gl *gl, const resolved_frame *rf, const uint32_t *lods,
+static xyl_result run_feedback(xyl_foliage_gl *gl, const xyl__foliage_frame *rf, const uint32_t *lods,
                                size_t bytes, GLuint64 *written, GLuint64 *generated,
                                xyl_diag *diag)
 {
@@ -498,10 +370,10 @@ xyl_result xyl__foliage_gl_capture(xyl_foliage_gl *gl, const xyl_foliage_gl_fram
     if (!count || !generated || (capacity && !out))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "count, generated, and out when capacity > 0, are required");
-    resolved_frame rf;
+    xyl__foliage_frame rf;
     xyl_result r = check_draw(gl, frame, lods, lod_count, &rf, diag);
     if (r != XYL_OK) return r;
-    uint64_t vertices = leaves_of(gl, lods) * VERTICES_PER_LEAF_CAPTURED;
+    uint64_t vertices = xyl__foliage_tables_leaves(&gl->tables, lods) * VERTICES_PER_LEAF_CAPTURED;
     if (vertices * XFB_VERTEX_BYTES > MAX_READBACK_BYTES)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%llu captured vertices exceed 2 GiB", (unsigned long long)vertices);

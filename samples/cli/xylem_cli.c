@@ -24,6 +24,8 @@
 #endif
 #ifdef XYL_HAVE_VULKAN
 #include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
+
+#include "render_vk.h"
 #endif
 #include <xylem/xyl_tessellate.h>
 
@@ -942,6 +944,7 @@ typedef struct render_job {
     bool draw_leaves;     /* leaves and a backend that draws them */
     uint32_t *lods;       /* one per sector: the LOD drawn */
     size_t leaves_drawn;
+    bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
 } render_job;
 
 static void render_job_free(render_job *j)
@@ -1224,13 +1227,42 @@ static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
 #endif
 
 #ifdef XYL_HAVE_VULKAN
+/* Stems and leaves into one target of the CLI's own device (render_vk.c), as an engine would. */
+static xyl_result render_vk_tree(render_job *j, xyl_diag *d)
+{
+    uint32_t w = XYL_LEAF_TEXTURE_WIDTH, h = XYL_LEAF_TEXTURE_HEIGHT;
+    uint8_t *tex = malloc((size_t)w * h * 4);
+    if (!tex) return XYL_ERR_OUT_OF_MEMORY;
+    xyl_leaf_texture(tex, w, h);
+    xyl_cli_vk_tree t;
+    memset(&t, 0, sizeof t);
+    t.patterns = j->patterns;
+    t.patches = j->drawn;
+    t.batches = j->batches;
+    t.frame = j->frame;
+    t.image = &j->image;
+    t.foliage = j->leaves.foliage;
+    t.lods = j->lods;
+    t.leaf_texture = tex;
+    t.texture_width = w;
+    t.texture_height = h;
+    char name[256] = "";
+    double t0 = now_seconds();
+    xyl_result r = xyl_cli_render_vk_tree(&t, j->rgba, name, &j->gpu_ms, d);
+    j->render_ms = (now_seconds() - t0) * 1e3;
+    j->gpu_timer_all = true;
+    free(tex);
+    if (r == XYL_OK) printf("device: %s (Vulkan)\n", name);
+    return r;
+}
+
 static xyl_result render_vk(render_job *j, xyl_diag *d)
 {
+    xyl_result r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_VULKAN, j->frame.view_proj, d);
+    if (r == XYL_OK && j->draw_leaves) return render_vk_tree(j, d);
     xyl_tess_vk *vk = NULL;
     xyl_tess_vk_desc vd = {0};
-    xyl_result r = xyl_tess_vk_create(&vd, j->patterns, &vk, d);
-    if (r == XYL_OK)
-        r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_VULKAN, j->frame.view_proj, d);
+    if (r == XYL_OK) r = xyl_tess_vk_create(&vd, j->patterns, &vk, d);
     if (r == XYL_OK) r = xyl_tess_vk_set_patches(vk, j->drawn, d);
     double t0 = now_seconds();
     if (r == XYL_OK) r = xyl_tess_vk_render_rgba(vk, j->batches, &j->frame, &j->image, j->rgba, d);
@@ -1277,7 +1309,7 @@ static void print_render(const options *o, const render_job *j, const char *path
            j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
            "GPU timer %.3f ms%s\n", j->select_ms, j->render_ms, j->gpu_ms,
-           j->draw_leaves ? " (stems)" : "");
+           !j->draw_leaves ? "" : j->gpu_timer_all ? " (stems and leaves)" : " (stems)");
     printf("wrote %s\n", path);
 }
 
@@ -1312,16 +1344,11 @@ static int load_mesh(const options *o, xyl_mesh **mesh, const char **source, xyl
     return r ? report(*source, r, &d) : 0;
 }
 
-/* The source's leaves and their LODs; the Vulkan backend does not draw leaves yet. */
+/* The source's leaves and their LODs. */
 static int prepare_leaves(const options *o, render_job *j, const xyl_skeleton *sk,
                           const char *source)
 {
     if (sk->leaf_count == 0) return 0;
-    if (o->render.vulkan) {
-        fprintf(stderr, "xylem: the Vulkan backend does not draw leaves yet: drawing the stems "
-                        "only (use --backend gl for the leaves)\n");
-        return 0;
-    }
     int rc = build_foliage(o, sk, source, &j->leaves);
     if (!rc) j->draw_leaves = j->leaves.foliage->leaf_count > 0;
     return rc;

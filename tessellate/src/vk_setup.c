@@ -44,48 +44,25 @@ xyl_result xyl__vk_fail(xyl_tess_vk *vk, xyl_diag *diag, VkResult r, const char 
 
 /* ---- allocation callbacks ------------------------------------------------------------------ */
 
-/* xyl_allocator has no alignment and no realloc: a block is over-allocated, aligned, and keeps
- * its size and the allocator's pointer just below the pointer Vulkan gets. */
-typedef struct block_head {
-    void *base;
-    size_t size;
-} block_head;
-
+/* The caller's xyl_allocator with the alignment and realloc Vulkan asks for (core's aligned
+ * blocks). */
 static void *VKAPI_PTR vk_alloc(void *user, size_t size, size_t align,
                                 VkSystemAllocationScope scope)
 {
     (void)scope;
-    const size_t min_align = _Alignof(max_align_t);
-    if (align < min_align) align = min_align; /* also aligns the head below the block */
-    if (size > SIZE_MAX - align - sizeof(block_head)) return NULL;
-    char *base = xyl__alloc(user, size + align + sizeof(block_head));
-    if (!base) return NULL;
-    uintptr_t at = ((uintptr_t)(base + sizeof(block_head)) + align - 1) & ~(uintptr_t)(align - 1);
-    block_head *h = (block_head *)at - 1;
-    h->base = base;
-    h->size = size;
-    return (void *)at;
+    return xyl__alloc_aligned(user, size, align);
 }
 
 static void VKAPI_PTR vk_free(void *user, void *p)
 {
-    if (p) xyl__free(user, ((block_head *)p - 1)->base);
+    xyl__free_aligned(user, p);
 }
 
 static void *VKAPI_PTR vk_realloc(void *user, void *old, size_t size, size_t align,
                                   VkSystemAllocationScope scope)
 {
-    if (!old) return vk_alloc(user, size, align, scope);
-    if (size == 0) {
-        vk_free(user, old);
-        return NULL;
-    }
-    void *p = vk_alloc(user, size, align, scope);
-    if (!p) return NULL; /* the old block stays valid, as Vulkan requires */
-    size_t keep = ((block_head *)old - 1)->size;
-    memcpy(p, old, keep < size ? keep : size);
-    vk_free(user, old);
-    return p;
+    (void)scope;
+    return xyl__realloc_aligned(user, old, size, align);
 }
 
 void xyl__vk_init_callbacks(xyl_tess_vk *vk)

@@ -1,0 +1,49 @@
+/* What foliage/'s GPU leaf renderers (GL and Vulkan) share: the checked copy of a species' LOD
+ * tables they draw from, and the checks and defaults of a draw's values, so both accept and
+ * refuse the same input with the same codes and messages. Not installed. */
+#ifndef XYL_FOLIAGE_DRAW_H
+#define XYL_FOLIAGE_DRAW_H
+
+#include "xyl_internal.h"
+#include "xylem/xyl_foliage.h"
+
+typedef struct xyl__foliage_sector_ref {
+    uint32_t base, first_lod, lod_count;
+} xyl__foliage_sector_ref;
+
+typedef struct xyl__foliage_range {
+    uint32_t a, b, c; /* a LOD's ranges [base, base + a) and [base + b, base + b + c) */
+} xyl__foliage_range;
+
+/* A species' tables as a renderer keeps them; leaf_count 0: nothing uploaded. */
+typedef struct xyl__foliage_tables {
+    xyl__foliage_sector_ref *sectors;
+    xyl__foliage_range *ranges; /* at sectors[s].first_lod + lod */
+    uint32_t sector_count;
+    size_t leaf_count;
+} xyl__foliage_tables;
+
+/* A draw's values with their defaults filled in (light normalised). */
+typedef struct xyl__foliage_frame {
+    float view_proj[16], light[3], color[4], cutoff, translucency;
+} xyl__foliage_frame;
+
+/* The tables of a non-NULL foliage, checked (a foliage without leaves, missing arrays, a range
+ * outside the leaf array: XYL_ERR_INVALID_ARGUMENT) and copied from alloc
+ * (XYL_ERR_OUT_OF_MEMORY). On failure *out is untouched. */
+xyl_result xyl__foliage_tables_make(const xyl_foliage *foliage, const xyl_allocator *alloc,
+                                    xyl__foliage_tables *out, xyl_diag *diag);
+void xyl__foliage_tables_free(xyl__foliage_tables *t, const xyl_allocator *alloc);
+
+/* Leaves a draw of these LODs draws. */
+uint64_t xyl__foliage_tables_leaves(const xyl__foliage_tables *t, const uint32_t *lods);
+
+/* The checks of a draw after its NULL arguments: an upload, one LOD per sector within its
+ * table, then the frame's values (the fields both renderers' public frames have). */
+xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t *lods,
+                                   size_t lod_count, const float view_proj[16],
+                                   const float light_dir[3], const float color[4],
+                                   float alpha_cutoff, float translucency,
+                                   xyl__foliage_frame *out, xyl_diag *diag);
+
+#endif /* XYL_FOLIAGE_DRAW_H */

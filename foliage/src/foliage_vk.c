@@ -1,0 +1,822 @@
+/* The Vulkan 1.2 leaf renderer on the caller's device: the species' packed leaves in one
+ * storage buffer, each LOD recorded as its two ranges (per sector) of instanced 4-vertex strips
+ * with firstInstance = the range's first record, the frame in push constants, and the tests'
+ * capture (a vertex-stage store). Every entry point validates all of its input before its first
+ * Vulkan call (foliage_draw.c): the shaders read the leaf buffer unchecked. */
+#include <string.h>
+
+#include "foliage_draw.h"
+#include "foliage_vk_debug.h"
+
+extern const unsigned char xyl__shader_vk_foliage_leaf_vert[];
+extern const size_t xyl__shader_vk_foliage_leaf_vert_size;
+extern const unsigned char xyl__shader_vk_foliage_leaf_capture_vert[];
+extern const size_t xyl__shader_vk_foliage_leaf_capture_vert_size;
+extern const unsigned char xyl__shader_vk_foliage_leaf_frag[];
+extern const size_t xyl__shader_vk_foliage_leaf_frag_size;
+
+_Static_assert(sizeof(xyl_foliage_vk_push) == XYL_FOLIAGE_VK_PUSH_SIZE, "push block size");
+_Static_assert(offsetof(xyl_foliage_vk_push, light) == 64, "std430: light follows the mat4");
+_Static_assert(offsetof(xyl_foliage_vk_push, color) == 80, "std430: color");
+_Static_assert(offsetof(xyl_foliage_vk_push, cutoff) == 96, "std430: cutoff");
+_Static_assert(offsetof(xyl_foliage_vk_push, translucency) == 100, "std430: translucency");
+_Static_assert(sizeof(xyl__foliage_vk_captured) == 32, "std430 stride of the captured struct");
+
+#define CAPTURE_BYTES_PER_LEAF (4u * sizeof(xyl__foliage_vk_captured))
+#define MAX_CAPTURE_BYTES ((uint64_t)1 << 31)
+
+typedef struct vk_buffer {
+    VkBuffer buffer;
+    VkDeviceMemory memory;
+} vk_buffer;
+
+typedef struct vk_image {
+    VkImage image;
+    VkDeviceMemory memory;
+    VkImageView view;
+} vk_image;
+
+struct xyl_foliage_vk {
+    xyl_allocator alloc;
+    VkAllocationCallbacks callbacks;
+    const VkAllocationCallbacks *vkalloc; /* &callbacks with a caller's allocator, else NULL */
+    VkPhysicalDevice physical;
+    VkDevice device;
+    VkQueue queue;
+    VkPhysicalDeviceFeatures features;
+    VkPhysicalDeviceMemoryProperties memory;
+    VkDeviceSize max_storage_range;
+    uint32_t max_image_side;
+    VkShaderModule vert, vert_capture, frag;
+    VkDescriptorSetLayout set_layout;
+    VkPipelineLayout layout;
+    VkDescriptorPool pool;
+    VkDescriptorSet set, capture_set; /* the capture's also has the capture buffer */
+    VkPipeline pipeline, capture_pipeline;
+    VkRenderPass capture_pass; /* no attachments: the capture rasterizes nothing */
+    VkFramebuffer capture_framebuffer;
+    VkSampler sampler;
+    VkCommandPool commands;
+    vk_buffer leaves;
+    vk_image texture;
+    xyl__foliage_tables tables; /* leaf_count 0: nothing uploaded */
+};
+
+/* ---- errors and memory -------------------------------------------------------------------- */
+
+/* Vulkan's host allocations through the caller's allocator (core's aligned blocks). */
+static void *VKAPI_PTR vk_alloc(void *user, size_t size, size_t align,
+                                VkSystemAllocationScope scope)
+{
+    (void)scope;
+    return xyl__alloc_aligned(user, size, align);
+}
+
+static void VKAPI_PTR vk_free(void *user, void *p)
+{
+    xyl__free_aligned(user, p);
+}
+
+static void *VKAPI_PTR vk_realloc(void *user, void *old, size_t size, size_t align,
+                                  VkSystemAllocationScope scope)
+{
+    (void)scope;
+    return xyl__realloc_aligned(user, old, size, align);
+}
+
+static xyl_result vk_fail(xyl_diag *diag, VkResult r, const char *what)
+{
+    if (r == VK_ERROR_OUT_OF_HOST_MEMORY || r == VK_ERROR_OUT_OF_DEVICE_MEMORY)
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "%s: out of memory (%d)", what,
+                         (int)r);
+    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s failed: VkResult %d", what, (int)r);
+}
+
+#define VK_TRY(call, what)                                                                     \
+    do {                                                                                       \
+        VkResult vr_ = (call);                                                                 \
+        if (vr_ != VK_SUCCESS) return vk_fail(diag, vr_, what);                                \
+    } while (0)
+
+static xyl_result allocate(const xyl_foliage_vk *vk, VkMemoryRequirements req,
+                           VkMemoryPropertyFlags need, VkDeviceMemory *out, xyl_diag *diag)
+{
+    uint32_t type = 0;
+    while (type < vk->memory.memoryTypeCount &&
+           (!(req.memoryTypeBits & (1u << type)) ||
+            (vk->memory.memoryTypes[type].propertyFlags & need) != need))
+        ++type;
+    if (type == vk->memory.memoryTypeCount)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no memory type fits a leaf buffer");
+    VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    ai.allocationSize = req.size;
+    ai.memoryTypeIndex = type;
+    VK_TRY(vkAllocateMemory(vk->device, &ai, vk->vkalloc, out), "vkAllocateMemory");
+    return XYL_OK;
+}
+
+static void buffer_destroy(const xyl_foliage_vk *vk, vk_buffer *b)
+{
+    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, vk->vkalloc);
+    if (b->memory) vkFreeMemory(vk->device, b->memory, vk->vkalloc);
+    memset(b, 0, sizeof *b);
+}
+
+/* A host-visible, coherent buffer holding `data` (or zero-filled: NULL) of `size` bytes. */
+static xyl_result buffer_create(const xyl_foliage_vk *vk, VkDeviceSize size,
+                                VkBufferUsageFlags usage, const void *data, vk_buffer *out,
+                                xyl_diag *diag)
+{
+    vk_buffer b = {0};
+    VkBufferCreateInfo bi = {.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    bi.size = size;
+    bi.usage = usage;
+    VkResult vr = vkCreateBuffer(vk->device, &bi, vk->vkalloc, &b.buffer);
+    if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkCreateBuffer");
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(vk->device, b.buffer, &req);
+    xyl_result r = allocate(vk, req,
+                            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                                VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                            &b.memory, diag);
+    void *map = NULL;
+    if (r == XYL_OK && (vr = vkBindBufferMemory(vk->device, b.buffer, b.memory, 0)) != VK_SUCCESS)
+        r = vk_fail(diag, vr, "vkBindBufferMemory");
+    if (r == XYL_OK && (vr = vkMapMemory(vk->device, b.memory, 0, size, 0, &map)) != VK_SUCCESS)
+        r = vk_fail(diag, vr, "vkMapMemory");
+    if (r != XYL_OK) {
+        buffer_destroy(vk, &b);
+        return r;
+    }
+    if (data) memcpy(map, data, (size_t)size);
+    else memset(map, 0, (size_t)size);
+    vkUnmapMemory(vk->device, b.memory);
+    *out = b;
+    return XYL_OK;
+}
+
+/* ---- one-off submissions ------------------------------------------------------------------ */
+
+static xyl_result begin_once(const xyl_foliage_vk *vk, VkCommandBuffer *cmd, xyl_diag *diag)
+{
+    VkCommandBufferAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = vk->commands;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    VK_TRY(vkAllocateCommandBuffers(vk->device, &ai, cmd), "vkAllocateCommandBuffers");
+    VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VkResult vr = vkBeginCommandBuffer(*cmd, &bi);
+    if (vr != VK_SUCCESS) {
+        vkFreeCommandBuffers(vk->device, vk->commands, 1, cmd);
+        return vk_fail(diag, vr, "vkBeginCommandBuffer");
+    }
+    return XYL_OK;
+}
+
+/* Ends, submits and waits for cmd, then frees it. */
+static xyl_result submit_wait(const xyl_foliage_vk *vk, VkCommandBuffer cmd, xyl_diag *diag)
+{
+    VkFence fence = VK_NULL_HANDLE;
+    VkFenceCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkResult vr = vkEndCommandBuffer(cmd);
+    const char *what = "vkEndCommandBuffer";
+    if (vr == VK_SUCCESS) {
+        vr = vkCreateFence(vk->device, &fi, vk->vkalloc, &fence);
+        what = "vkCreateFence";
+    }
+    if (vr == VK_SUCCESS) {
+        VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        si.commandBufferCount = 1;
+        si.pCommandBuffers = &cmd;
+        vr = vkQueueSubmit(vk->queue, 1, &si, fence);
+        what = "vkQueueSubmit";
+    }
+    if (vr == VK_SUCCESS) {
+        vr = vkWaitForFences(vk->device, 1, &fence, VK_TRUE, UINT64_MAX);
+        what = "vkWaitForFences";
+    }
+    if (fence) vkDestroyFence(vk->device, fence, vk->vkalloc);
+    vkFreeCommandBuffers(vk->device, vk->commands, 1, &cmd);
+    return vr == VK_SUCCESS ? XYL_OK : vk_fail(diag, vr, what);
+}
+
+/* ---- the leaf texture --------------------------------------------------------------------- */
+
+static void image_destroy(const xyl_foliage_vk *vk, vk_image *im)
+{
+    if (im->view) vkDestroyImageView(vk->device, im->view, vk->vkalloc);
+    if (im->image) vkDestroyImage(vk->device, im->image, vk->vkalloc);
+    if (im->memory) vkFreeMemory(vk->device, im->memory, vk->vkalloc);
+    memset(im, 0, sizeof *im);
+}
+
+static uint32_t mip_levels(uint32_t w, uint32_t h)
+{
+    uint32_t levels = 1;
+    for (uint32_t side = w > h ? w : h; side > 1; side >>= 1) ++levels;
+    return levels;
+}
+
+static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h, vk_image *out,
+                               xyl_diag *diag)
+{
+    VkImageCreateInfo ii = {.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    ii.imageType = VK_IMAGE_TYPE_2D;
+    ii.format = VK_FORMAT_R8G8B8A8_UNORM;
+    ii.extent = (VkExtent3D){w, h, 1};
+    ii.mipLevels = mip_levels(w, h);
+    ii.arrayLayers = 1;
+    ii.samples = VK_SAMPLE_COUNT_1_BIT;
+    ii.usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
+               VK_IMAGE_USAGE_SAMPLED_BIT;
+    VK_TRY(vkCreateImage(vk->device, &ii, vk->vkalloc, &out->image), "vkCreateImage");
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(vk->device, out->image, &req);
+    xyl_result r = allocate(vk, req, 0, &out->memory, diag);
+    if (r != XYL_OK) return r;
+    VK_TRY(vkBindImageMemory(vk->device, out->image, out->memory, 0), "vkBindImageMemory");
+    VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    vi.image = out->image;
+    vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    vi.format = ii.format;
+    vi.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    vi.subresourceRange.levelCount = ii.mipLevels;
+    vi.subresourceRange.layerCount = 1;
+    VK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view), "vkCreateImageView");
+    return XYL_OK;
+}
+
+static void level_barrier(VkCommandBuffer cmd, VkImage image, uint32_t level, uint32_t count,
+                          VkImageLayout from, VkImageLayout to, VkAccessFlags src,
+                          VkAccessFlags dst, VkPipelineStageFlags src_stage,
+                          VkPipelineStageFlags dst_stage)
+{
+    VkImageMemoryBarrier b = {.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
+    b.srcAccessMask = src;
+    b.dstAccessMask = dst;
+    b.oldLayout = from;
+    b.newLayout = to;
+    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = image;
+    b.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    b.subresourceRange.baseMipLevel = level;
+    b.subresourceRange.levelCount = count;
+    b.subresourceRange.layerCount = 1;
+    vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
+}
+
+/* Level 0 from the staging buffer, each further level blitted from the one before, every level
+ * left in SHADER_READ_ONLY layout for the fragment shader. */
+static void record_texture(VkCommandBuffer cmd, VkBuffer staging, VkImage image, uint32_t w,
+                           uint32_t h)
+{
+    const VkPipelineStageFlags xfer = VK_PIPELINE_STAGE_TRANSFER_BIT;
+    const VkImageLayout dst = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                        src = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                        read = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    uint32_t levels = mip_levels(w, h);
+    level_barrier(cmd, image, 0, levels, VK_IMAGE_LAYOUT_UNDEFINED, dst, 0,
+                  VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, xfer);
+    VkBufferImageCopy copy = {0};
+    copy.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    copy.imageSubresource.layerCount = 1;
+    copy.imageExtent = (VkExtent3D){w, h, 1};
+    vkCmdCopyBufferToImage(cmd, staging, image, dst, 1, &copy);
+    int32_t lw = (int32_t)w, lh = (int32_t)h;
+    for (uint32_t i = 1; i < levels; ++i) {
+        level_barrier(cmd, image, i - 1, 1, dst, src, VK_ACCESS_TRANSFER_WRITE_BIT,
+                      VK_ACCESS_TRANSFER_READ_BIT, xfer, xfer);
+        int32_t nw = lw > 1 ? lw / 2 : 1, nh = lh > 1 ? lh / 2 : 1;
+        VkImageBlit blit = {0};
+        blit.srcSubresource = (VkImageSubresourceLayers){VK_IMAGE_ASPECT_COLOR_BIT, i - 1, 0, 1};
+        blit.srcOffsets[1] = (VkOffset3D){lw, lh, 1};
+        blit.dstSubresource = (VkImageSubresourceLayers){VK_IMAGE_ASPECT_COLOR_BIT, i, 0, 1};
+        blit.dstOffsets[1] = (VkOffset3D){nw, nh, 1};
+        vkCmdBlitImage(cmd, image, src, image, dst, 1, &blit, VK_FILTER_LINEAR);
+        level_barrier(cmd, image, i - 1, 1, src, read, VK_ACCESS_TRANSFER_READ_BIT,
+                      VK_ACCESS_SHADER_READ_BIT, xfer, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
+        lw = nw;
+        lh = nh;
+    }
+    level_barrier(cmd, image, levels - 1, 1, dst, read, VK_ACCESS_TRANSFER_WRITE_BIT,
+                  VK_ACCESS_SHADER_READ_BIT, xfer, VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT);
+}
+
+/* Points binding `binding` of both sets at the buffer or the image. */
+static void write_sets(const xyl_foliage_vk *vk, uint32_t binding, VkBuffer buffer,
+                       VkImageView view)
+{
+    VkDescriptorBufferInfo bi = {buffer, 0, VK_WHOLE_SIZE};
+    VkDescriptorImageInfo ii = {vk->sampler, view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    VkWriteDescriptorSet w[2];
+    for (int k = 0; k < 2; ++k) {
+        w[k] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        w[k].dstSet = k ? vk->capture_set : vk->set;
+        w[k].dstBinding = binding;
+        w[k].descriptorCount = 1;
+        w[k].descriptorType = view ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+                                   : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        w[k].pBufferInfo = view ? NULL : &bi;
+        w[k].pImageInfo = view ? &ii : NULL;
+    }
+    vkUpdateDescriptorSets(vk->device, 2, w, 0, NULL);
+}
+
+/* A new image, swapped in only when its upload worked. */
+static xyl_result upload_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32_t w, uint32_t h,
+                                 xyl_diag *diag)
+{
+    vk_buffer staging = {0};
+    vk_image im = {0};
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    xyl_result r = buffer_create(vk, (VkDeviceSize)w * h * 4u, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                                 rgba, &staging, diag);
+    if (r == XYL_OK) r = image_create(vk, w, h, &im, diag);
+    if (r == XYL_OK) r = begin_once(vk, &cmd, diag);
+    if (r == XYL_OK) {
+        record_texture(cmd, staging.buffer, im.image, w, h);
+        r = submit_wait(vk, cmd, diag);
+    }
+    buffer_destroy(vk, &staging);
+    if (r != XYL_OK) {
+        image_destroy(vk, &im);
+        return r;
+    }
+    write_sets(vk, XYL_FOLIAGE_VK_BINDING_TEXTURE, VK_NULL_HANDLE, im.view);
+    image_destroy(vk, &vk->texture);
+    vk->texture = im;
+    return XYL_OK;
+}
+
+/* ---- creation ----------------------------------------------------------------------------- */
+
+static xyl_result check_desc(const xyl_foliage_vk_desc *d, xyl_diag *diag)
+{
+    if (!d->physical_device || !d->device || !d->queue)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc.physical_device, desc.device and desc.queue are required");
+    if (!d->render_pass &&
+        (d->color_format == VK_FORMAT_UNDEFINED || d->depth_format == VK_FORMAT_UNDEFINED))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc.render_pass, or colour and depth formats for dynamic rendering, "
+                         "are required");
+    uint32_t s = (uint32_t)d->samples;
+    if (s != 0 && ((s & (s - 1)) != 0 || s > 64))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc.samples %u is not a power of two up to 64", s);
+    return XYL_OK;
+}
+
+/* The device's version, queue family, sample count and limits, before anything is made. */
+static xyl_result query_device(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
+                               VkSampleCountFlagBits samples, xyl_diag *diag)
+{
+    VkPhysicalDeviceProperties p;
+    vkGetPhysicalDeviceProperties(d->physical_device, &p);
+    if (p.apiVersion < VK_API_VERSION_1_2)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s offers Vulkan %u.%u, not 1.2",
+                         p.deviceName, VK_API_VERSION_MAJOR(p.apiVersion),
+                         VK_API_VERSION_MINOR(p.apiVersion));
+    uint32_t nq = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(d->physical_device, &nq, NULL);
+    VkQueueFamilyProperties q[32];
+    if (nq > 32) nq = 32;
+    vkGetPhysicalDeviceQueueFamilyProperties(d->physical_device, &nq, q);
+    if (d->queue_family >= nq || !(q[d->queue_family].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "queue family %u of %s has no graphics queues", d->queue_family,
+                         p.deviceName);
+    VkSampleCountFlags offered =
+        p.limits.framebufferColorSampleCounts & p.limits.framebufferDepthSampleCounts;
+    if (!(offered & samples))
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s does not offer %u samples",
+                         p.deviceName, (unsigned)samples);
+    vk->max_storage_range = p.limits.maxStorageBufferRange;
+    vk->max_image_side = p.limits.maxImageDimension2D;
+    vkGetPhysicalDeviceMemoryProperties(d->physical_device, &vk->memory);
+    if (d->enabled_features) vk->features = *d->enabled_features;
+    return XYL_OK;
+}
+
+static xyl_result shader(const xyl_foliage_vk *vk, const unsigned char *code, size_t size,
+                         VkShaderModule *out, xyl_diag *diag)
+{
+    VkShaderModuleCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    si.codeSize = size;
+    si.pCode = (const uint32_t *)(const void *)code; /* the embedded arrays are 4-byte aligned */
+    VK_TRY(vkCreateShaderModule(vk->device, &si, vk->vkalloc, out), "vkCreateShaderModule");
+    return XYL_OK;
+}
+
+static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
+{
+    VkDescriptorSetLayoutBinding b[3] = {
+        {XYL_FOLIAGE_VK_BINDING_LEAVES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+         VK_SHADER_STAGE_VERTEX_BIT, NULL},
+        {XYL_FOLIAGE_VK_BINDING_TEXTURE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1,
+         VK_SHADER_STAGE_FRAGMENT_BIT, NULL},
+        {XYL_FOLIAGE_VK_BINDING_CAPTURE, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+         VK_SHADER_STAGE_VERTEX_BIT, NULL}};
+    VkDescriptorSetLayoutCreateInfo li = {
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    li.bindingCount = 3;
+    li.pBindings = b;
+    VK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &vk->set_layout),
+           "vkCreateDescriptorSetLayout");
+    VkPushConstantRange pc = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                              XYL_FOLIAGE_VK_PUSH_SIZE};
+    VkPipelineLayoutCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pi.setLayoutCount = 1;
+    pi.pSetLayouts = &vk->set_layout;
+    pi.pushConstantRangeCount = 1;
+    pi.pPushConstantRanges = &pc;
+    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->layout), "vkCreatePipelineLayout");
+    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 4},
+                                     {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2}};
+    VkDescriptorPoolCreateInfo dp = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+    dp.maxSets = 2;
+    dp.poolSizeCount = 2;
+    dp.pPoolSizes = sizes;
+    VK_TRY(vkCreateDescriptorPool(vk->device, &dp, vk->vkalloc, &vk->pool), "vkCreateDescriptorPool");
+    VkDescriptorSetLayout sl[2] = {vk->set_layout, vk->set_layout};
+    VkDescriptorSet sets[2];
+    VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorPool = vk->pool;
+    ai.descriptorSetCount = 2;
+    ai.pSetLayouts = sl;
+    VK_TRY(vkAllocateDescriptorSets(vk->device, &ai, sets), "vkAllocateDescriptorSets");
+    vk->set = sets[0];
+    vk->capture_set = sets[1];
+    return XYL_OK;
+}
+
+typedef struct pipe_target {
+    VkRenderPass pass;
+    uint32_t subpass;
+    VkFormat color, depth;
+    VkSampleCountFlagBits samples;
+    bool capture; /* vertex stage only, rasterizer off, no attachments */
+} pipe_target;
+
+static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPipeline *out,
+                           xyl_diag *diag)
+{
+    VkPipelineShaderStageCreateInfo st[2] = {
+        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0, VK_SHADER_STAGE_VERTEX_BIT,
+         t->capture ? vk->vert_capture : vk->vert, "main", NULL},
+        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
+         VK_SHADER_STAGE_FRAGMENT_BIT, vk->frag, "main", NULL}};
+    VkPipelineVertexInputStateCreateInfo vi = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo ia = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
+    VkPipelineViewportStateCreateInfo vp = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    vp.viewportCount = vp.scissorCount = 1;
+    VkPipelineRasterizationStateCreateInfo rs = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    rs.rasterizerDiscardEnable = t->capture;
+    rs.polygonMode = VK_POLYGON_MODE_FILL;
+    rs.cullMode = VK_CULL_MODE_NONE; /* double-sided */
+    /* view_proj flips y and Vulkan measures winding with y down: the mirrors cancel, so the
+     * counter-clockwise side is the front, as in GL, and gl_FrontFacing agrees with GL's */
+    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    rs.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo ms = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    ms.rasterizationSamples = t->samples;
+    VkPipelineDepthStencilStateCreateInfo ds = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+    ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
+    ds.depthCompareOp = VK_COMPARE_OP_LESS;
+    VkPipelineColorBlendAttachmentState blend = {0};
+    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                           VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+    VkPipelineColorBlendStateCreateInfo cb = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    cb.attachmentCount = t->capture ? 0 : 1;
+    cb.pAttachments = &blend;
+    VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dy = {VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+                                           NULL, 0, 2, dyn};
+    VkGraphicsPipelineCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+    pi.stageCount = t->capture ? 1 : 2;
+    pi.pStages = st;
+    pi.pVertexInputState = &vi;
+    pi.pInputAssemblyState = &ia;
+    pi.pViewportState = &vp;
+    pi.pRasterizationState = &rs;
+    pi.pMultisampleState = &ms;
+    pi.pDepthStencilState = t->capture ? NULL : &ds;
+    pi.pColorBlendState = &cb;
+    pi.pDynamicState = &dy;
+    pi.layout = vk->layout;
+    pi.renderPass = t->pass;
+    pi.subpass = t->subpass;
+    VkPipelineRenderingCreateInfoKHR ri = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
+    if (!t->pass) { /* dynamic rendering */
+        ri.colorAttachmentCount = 1;
+        ri.pColorAttachmentFormats = &t->color;
+        ri.depthAttachmentFormat = t->depth;
+        pi.pNext = &ri;
+    }
+    VK_TRY(vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, vk->vkalloc, out),
+           "vkCreateGraphicsPipelines");
+    return XYL_OK;
+}
+
+static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
+                          VkSampleCountFlagBits samples, xyl_diag *diag)
+{
+    xyl_result r = shader(vk, xyl__shader_vk_foliage_leaf_vert,
+                          xyl__shader_vk_foliage_leaf_vert_size, &vk->vert, diag);
+    if (r == XYL_OK)
+        r = shader(vk, xyl__shader_vk_foliage_leaf_capture_vert,
+                   xyl__shader_vk_foliage_leaf_capture_vert_size, &vk->vert_capture, diag);
+    if (r == XYL_OK)
+        r = shader(vk, xyl__shader_vk_foliage_leaf_frag, xyl__shader_vk_foliage_leaf_frag_size,
+                   &vk->frag, diag);
+    if (r == XYL_OK) r = layouts(vk, diag);
+    pipe_target t = {d->render_pass, d->subpass, d->color_format, d->depth_format, samples,
+                     false};
+    if (r == XYL_OK) r = pipeline(vk, &t, &vk->pipeline, diag);
+    if (r != XYL_OK) return r;
+    VkSamplerCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    si.magFilter = si.minFilter = VK_FILTER_LINEAR;
+    si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
+    si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    si.maxLod = VK_LOD_CLAMP_NONE;
+    VK_TRY(vkCreateSampler(vk->device, &si, vk->vkalloc, &vk->sampler), "vkCreateSampler");
+    VkCommandPoolCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    ci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
+    ci.queueFamilyIndex = d->queue_family;
+    VK_TRY(vkCreateCommandPool(vk->device, &ci, vk->vkalloc, &vk->commands), "vkCreateCommandPool");
+    const uint8_t white[4] = {255, 255, 255, 255};
+    return upload_texture(vk, white, 1, 1, diag);
+}
+
+xyl_result xyl_foliage_vk_create(const xyl_foliage_vk_desc *desc, xyl_foliage_vk **out,
+                                 xyl_diag *diag)
+{
+    if (!desc || !out)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "desc and out are required");
+    xyl_result r = check_desc(desc, diag);
+    if (r != XYL_OK) return r;
+    VkSampleCountFlagBits samples = desc->samples ? desc->samples : VK_SAMPLE_COUNT_1_BIT;
+    xyl_allocator a = desc->alloc;
+    xyl_foliage_vk *vk = xyl__calloc(&a, 1, sizeof *vk);
+    if (!vk) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    vk->alloc = a;
+    if (a.alloc) { /* else the driver's default: as good as malloc */
+        vk->callbacks.pUserData = &vk->alloc;
+        vk->callbacks.pfnAllocation = vk_alloc;
+        vk->callbacks.pfnReallocation = vk_realloc;
+        vk->callbacks.pfnFree = vk_free;
+        vk->vkalloc = &vk->callbacks;
+    }
+    vk->physical = desc->physical_device;
+    vk->device = desc->device;
+    vk->queue = desc->queue;
+    r = query_device(vk, desc, samples, diag);
+    if (r == XYL_OK) r = objects(vk, desc, samples, diag);
+    if (r != XYL_OK) {
+        xyl_foliage_vk_destroy(vk);
+        return r;
+    }
+    *out = vk;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+void xyl_foliage_vk_destroy(xyl_foliage_vk *vk)
+{
+    if (!vk) return;
+    VkDevice dev = vk->device;
+    buffer_destroy(vk, &vk->leaves);
+    image_destroy(vk, &vk->texture);
+    if (vk->commands) vkDestroyCommandPool(dev, vk->commands, vk->vkalloc);
+    if (vk->sampler) vkDestroySampler(dev, vk->sampler, vk->vkalloc);
+    if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, vk->vkalloc);
+    if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, vk->vkalloc);
+    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, vk->vkalloc);
+    if (vk->pipeline) vkDestroyPipeline(dev, vk->pipeline, vk->vkalloc);
+    if (vk->pool) vkDestroyDescriptorPool(dev, vk->pool, vk->vkalloc);
+    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, vk->vkalloc);
+    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, vk->vkalloc);
+    VkShaderModule mods[3] = {vk->vert, vk->vert_capture, vk->frag};
+    for (int k = 0; k < 3; ++k)
+        if (mods[k]) vkDestroyShaderModule(dev, mods[k], vk->vkalloc);
+    xyl_allocator a = vk->alloc;
+    xyl__foliage_tables_free(&vk->tables, &a);
+    xyl__free(&a, vk);
+}
+
+/* ---- the species' leaves and texture ------------------------------------------------------ */
+
+xyl_result xyl_foliage_vk_set_foliage(xyl_foliage_vk *vk, const xyl_foliage *foliage,
+                                      xyl_diag *diag)
+{
+    if (!vk || !foliage)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "vk and foliage are required");
+    size_t n = foliage->leaf_count;
+    if (n > UINT32_MAX / 4 || (uint64_t)n * sizeof(xyl_foliage_gpu_leaf) > vk->max_storage_range)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%zu leaves exceed the device's storage buffer range (%llu bytes)", n,
+                         (unsigned long long)vk->max_storage_range);
+    xyl__foliage_tables tables;
+    xyl_result r = xyl__foliage_tables_make(foliage, &vk->alloc, &tables, diag);
+    if (r != XYL_OK) return r;
+    xyl_foliage_gpu_leaf *records = xyl__alloc_array(&vk->alloc, n, sizeof *records);
+    if (!records) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
+    vk_buffer b = {0};
+    if (r == XYL_OK)
+        r = buffer_create(vk, (VkDeviceSize)n * sizeof *records,
+                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, records, &b, diag);
+    xyl__free(&vk->alloc, records);
+    if (r != XYL_OK) {
+        xyl__foliage_tables_free(&tables, &vk->alloc);
+        return r;
+    }
+    write_sets(vk, XYL_FOLIAGE_VK_BINDING_LEAVES, b.buffer, VK_NULL_HANDLE);
+    buffer_destroy(vk, &vk->leaves);
+    vk->leaves = b;
+    xyl__foliage_tables_free(&vk->tables, &vk->alloc);
+    vk->tables = tables;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_foliage_vk_set_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32_t width,
+                                      uint32_t height, xyl_diag *diag)
+{
+    if (!vk || !rgba)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "vk and rgba are required");
+    uint32_t cap = XYL_FOLIAGE_VK_MAX_TEXTURE_SIDE;
+    if (vk->max_image_side > 0 && vk->max_image_side < cap) cap = vk->max_image_side;
+    if (width == 0 || height == 0 || width > cap || height > cap)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a leaf texture of %u x %u: each side from 1 to %u", width, height, cap);
+    xyl_result r = upload_texture(vk, rgba, width, height, diag);
+    if (r == XYL_OK) xyl__diag_ok(diag);
+    return r;
+}
+
+/* ---- draws -------------------------------------------------------------------------------- */
+
+static xyl_result check_draw(const xyl_foliage_vk *vk, const xyl_foliage_vk_frame *frame,
+                             const uint32_t *lods, size_t lod_count, xyl_foliage_vk_push *push,
+                             xyl_diag *diag)
+{
+    if (!vk || !frame || !lods)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "vk, frame and lods are required");
+    xyl__foliage_frame f;
+    xyl_result r = xyl__foliage_draw_check(&vk->tables, lods, lod_count, frame->view_proj,
+                                           frame->light_dir, frame->color, frame->alpha_cutoff,
+                                           frame->translucency, &f, diag);
+    if (r != XYL_OK) return r;
+    memset(push, 0, sizeof *push);
+    memcpy(push->view_proj, f.view_proj, sizeof push->view_proj);
+    memcpy(push->light, f.light, sizeof f.light);
+    memcpy(push->color, f.color, sizeof push->color);
+    push->cutoff = f.cutoff;
+    push->translucency = f.translucency;
+    return XYL_OK;
+}
+
+/* Per sector the LOD's two ranges, [base, base + a) and [base + b, base + b + c), each one
+ * instanced draw whose instance index is the record's. */
+static void record_draws(const xyl_foliage_vk *vk, VkCommandBuffer cmd, VkPipeline pipe,
+                         VkDescriptorSet set, const xyl_foliage_vk_push *push,
+                         const uint32_t *lods)
+{
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, vk->layout, 0, 1, &set, 0,
+                            NULL);
+    vkCmdPushConstants(cmd, vk->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                       0, sizeof *push, push);
+    for (uint32_t s = 0; s < vk->tables.sector_count; ++s) {
+        const xyl__foliage_sector_ref *sec = &vk->tables.sectors[s];
+        const xyl__foliage_range *r = &vk->tables.ranges[sec->first_lod + lods[s]];
+        const uint32_t first[2] = {sec->base, sec->base + r->b}, count[2] = {r->a, r->c};
+        for (int k = 0; k < 2; ++k)
+            if (count[k]) vkCmdDraw(cmd, 4, count[k], 0, first[k]);
+    }
+}
+
+xyl_result xyl_foliage_vk_cmd_draw(xyl_foliage_vk *vk, VkCommandBuffer cmd,
+                                   const xyl_foliage_vk_frame *frame, const uint32_t *lods,
+                                   size_t lod_count, xyl_diag *diag)
+{
+    if (!cmd)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "cmd is required");
+    xyl_foliage_vk_push push;
+    xyl_result r = check_draw(vk, frame, lods, lod_count, &push, diag);
+    if (r != XYL_OK) return r;
+    record_draws(vk, cmd, vk->pipeline, vk->set, &push, lods);
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+/* ---- capture ------------------------------------------------------------------------------ */
+
+static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
+{
+    if (vk->capture_pipeline) return XYL_OK;
+    if (!vk->features.vertexPipelineStoresAndAtomics)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "the capture needs vertexPipelineStoresAndAtomics enabled");
+    /* each object once: a call that failed half-way resumes where it stopped */
+    if (!vk->capture_pass) {
+        VkSubpassDescription sub = {0};
+        sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+        VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+        ri.subpassCount = 1;
+        ri.pSubpasses = &sub;
+        VK_TRY(vkCreateRenderPass(vk->device, &ri, vk->vkalloc, &vk->capture_pass),
+               "vkCreateRenderPass");
+    }
+    if (!vk->capture_framebuffer) {
+        VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+        fi.renderPass = vk->capture_pass;
+        fi.width = fi.height = fi.layers = 1;
+        VK_TRY(vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &vk->capture_framebuffer),
+               "vkCreateFramebuffer");
+    }
+    pipe_target t = {vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,
+                     VK_SAMPLE_COUNT_1_BIT, true};
+    return pipeline(vk, &t, &vk->capture_pipeline, diag);
+}
+
+static void record_capture(const xyl_foliage_vk *vk, VkCommandBuffer cmd,
+                           const xyl_foliage_vk_push *push, const uint32_t *lods)
+{
+    VkRenderPassBeginInfo rb = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    rb.renderPass = vk->capture_pass;
+    rb.framebuffer = vk->capture_framebuffer;
+    rb.renderArea.extent = (VkExtent2D){1, 1};
+    vkCmdBeginRenderPass(cmd, &rb, VK_SUBPASS_CONTENTS_INLINE);
+    VkViewport vp = {0.0f, 0.0f, 1.0f, 1.0f, 0.0f, 1.0f};
+    VkRect2D sc = {{0, 0}, {1, 1}};
+    vkCmdSetViewport(cmd, 0, 1, &vp);
+    vkCmdSetScissor(cmd, 0, 1, &sc);
+    record_draws(vk, cmd, vk->capture_pipeline, vk->capture_set, push, lods);
+    vkCmdEndRenderPass(cmd);
+    VkMemoryBarrier mb = {.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+    mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_VERTEX_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0,
+                         1, &mb, 0, NULL, 0, NULL);
+}
+
+xyl_result xyl__foliage_vk_capture(xyl_foliage_vk *vk, const xyl_foliage_vk_frame *frame,
+                                   const uint32_t *lods, size_t lod_count,
+                                   xyl__foliage_vk_captured *out, size_t capacity,
+                                   xyl_diag *diag)
+{
+    xyl_foliage_vk_push push;
+    xyl_result r = check_draw(vk, frame, lods, lod_count, &push, diag);
+    if (r != XYL_OK) return r;
+    size_t entries = 4 * vk->tables.leaf_count;
+    if (!out || capacity < entries)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "out must hold 4 entries per leaf, %zu", entries);
+    uint64_t bytes = (uint64_t)vk->tables.leaf_count * CAPTURE_BYTES_PER_LEAF;
+    if (bytes > MAX_CAPTURE_BYTES)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "a capture of %llu bytes exceeds 2 GiB", (unsigned long long)bytes);
+    r = capture_reserve(vk, diag);
+    if (r != XYL_OK) return r;
+    memset(out, 0xff, entries * sizeof *out); /* leaf UINT32_MAX: no vertex stored */
+    vk_buffer b = {0};
+    r = buffer_create(vk, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, out, &b, diag);
+    VkCommandBuffer cmd = VK_NULL_HANDLE;
+    if (r == XYL_OK) r = begin_once(vk, &cmd, diag);
+    if (r == XYL_OK) {
+        VkDescriptorBufferInfo bi = {b.buffer, 0, VK_WHOLE_SIZE};
+        VkWriteDescriptorSet w = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        w.dstSet = vk->capture_set;
+        w.dstBinding = XYL_FOLIAGE_VK_BINDING_CAPTURE;
+        w.descriptorCount = 1;
+        w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        w.pBufferInfo = &bi;
+        vkUpdateDescriptorSets(vk->device, 1, &w, 0, NULL);
+        record_capture(vk, cmd, &push, lods);
+        r = submit_wait(vk, cmd, diag);
+    }
+    void *map = NULL;
+    VkResult vr = VK_SUCCESS;
+    if (r == XYL_OK && (vr = vkMapMemory(vk->device, b.memory, 0, bytes, 0, &map)) != VK_SUCCESS)
+        r = vk_fail(diag, vr, "vkMapMemory");
+    if (r == XYL_OK) {
+        memcpy(out, map, (size_t)bytes);
+        vkUnmapMemory(vk->device, b.memory);
+    }
+    buffer_destroy(vk, &b);
+    if (r == XYL_OK) xyl__diag_ok(diag);
+    return r;
+}

@@ -1,0 +1,30 @@
+/* xylem render --backend vulkan with leaves: stems (xyl_tess_vk) and leaves (xyl_foliage_vk)
+ * recorded into one command buffer on the CLI's own Vulkan device, as an engine records them
+ * into its own frame. */
+#ifndef XYL_SAMPLES_RENDER_VK_H
+#define XYL_SAMPLES_RENDER_VK_H
+
+#include <xylem/xyl_foliage.h>
+#include <xylem/xyl_tessellate.h>
+
+typedef struct xyl_cli_vk_tree {
+    const xyl_tess_patterns *patterns;
+    const xyl_tess_patches *patches;
+    const xyl_tess_batches *batches;
+    xyl_tess_frame frame;        /* view_proj: Vulkan's clip convention */
+    const xyl_tess_image_desc *image;
+    const xyl_foliage *foliage;
+    const uint32_t *lods;        /* one per sector */
+    const uint8_t *leaf_texture; /* RGBA8, top row first */
+    uint32_t texture_width, texture_height;
+} xyl_cli_vk_tree;
+
+/* Draws the stems, then the leaves, into a colour (R8G8B8A8, image->samples) and depth target
+ * cleared to image->background, resolves it, and writes width * height RGBA8 pixels, top row
+ * first. device_name (at least 256 bytes) gets the device's name, *gpu_ms the render pass's GPU
+ * time from timestamp queries (negative where the queue has none). Errors: the libraries' codes;
+ * XYL_ERR_UNSUPPORTED for a machine without a fitting Vulkan 1.2 device (diag says why). */
+xyl_result xyl_cli_render_vk_tree(const xyl_cli_vk_tree *tree, uint8_t *rgba, char *device_name,
+                                  double *gpu_ms, xyl_diag *diag);
+
+#endif
