@@ -346,12 +346,17 @@ xyl_vec3 unit_or(const Point3 &n, const Point3 &fallback)
     return xyl_vec3{float(n.x / l), float(n.y / l), float(n.z / l)};
 }
 
-/* The cross product of two limit tangents, or zero where they are (numerically) parallel. */
-Point3 tangent_normal(const Point3 &t1, const Point3 &t2)
+/* The cross product of two limit tangents, or zero where they are (numerically) parallel:
+ * |n| <= 1e-9 |t1| |t2|. Far from that bound (|n|^2 >= 1e-17 |t1|^2 |t2|^2 with both sides
+ * normal numbers, a margin of sqrt(10) that no rounding closes) the square roots are skipped:
+ * the answer is the same. */
+inline Point3 tangent_normal(const Point3 &t1, const Point3 &t2)
 {
     Point3 n = cross(t1, t2);
-    double scale = std::sqrt(dot(t1, t1) * dot(t2, t2));
-    if (!(std::sqrt(dot(n, n)) > 1e-9 * scale)) n = Point3{0.0, 0.0, 0.0};
+    const double nn = dot(n, n), tt = dot(t1, t1) * dot(t2, t2);
+    if (tt > 1e-280 && tt < 1e280 && nn >= 1e-17 * tt) return n; /* else the exact test */
+    double scale = std::sqrt(tt);
+    if (!(std::sqrt(nn) > 1e-9 * scale)) n = Point3{0.0, 0.0, 0.0};
     return n;
 }
 
@@ -388,8 +393,7 @@ struct Origin {
     int index;
 };
 
-/* The two levels as the UV and branch passes read them, from Far's refiner. The direct path
- * (below) has its own with the same members. */
+/* The two levels as the UV pass reads them, from Far's refiner. */
 class FarLevels {
 public:
     FarLevels(const Refiner &r, bool face_points, const xyl_allocator *alloc)
@@ -461,6 +465,31 @@ struct FaceFrame {
         }
     }
 
+    /* A face whose edge c runs from corner c to the next (every face of the direct path): its
+     * edges' UVs without looking up their ends (the same two terms summed as above). */
+    struct Consecutive {};
+    FaceFrame(Consecutive, const int *vertices, int size, uint8_t wraps, const float *uvs)
+        : n(size), centre{0.0, 0.0}
+    {
+        double lo = INFINITY, hi = -INFINITY;
+        for (int c = 0; c < n; ++c) {
+            fv[c] = vertices[c];
+            fe[c] = -1;
+            corner[c] = Point2{uvs ? uvs[2 * fv[c]] : 0.0, uvs ? uvs[2 * fv[c] + 1] : 0.0};
+            if (wraps >> c & 1u) corner[c].u += 1.0;
+            lo = corner[c].u < lo ? corner[c].u : lo;
+            hi = corner[c].u > hi ? corner[c].u : hi;
+        }
+        span = hi - lo;
+        const double w = 1.0 / n;
+        for (int c = 0; c < n; ++c) centre.AddWithWeight(corner[c], w);
+        for (int c = 0; c < n; ++c) {
+            edge[c] = Point2{0.0, 0.0};
+            edge[c].AddWithWeight(corner[c], 0.5);
+            edge[c].AddWithWeight(corner[c + 1 < n ? c + 1 : 0], 0.5);
+        }
+    }
+
     Point2 at(const Origin &o) const
     {
         if (o.kind == Origin::FACE) return centre;
@@ -479,8 +508,7 @@ struct FaceFrame {
  * (the smallest of those) and a corner at least half a turn above it wraps, so band faces stay
  * exact. Where no face wraps this is exactly the varying interpolation. Two passes over the
  * base faces (each frame is cheap to make again): the vertices' UVs, then the corners' wraps. */
-template <class Levels>
-bool interpolate_uvs(Levels &t, const xyl__mesh_arrays *in, const Control &control,
+bool interpolate_uvs(FarLevels &t, const xyl__mesh_arrays *in, const Control &control,
                      const xyl_allocator *alloc, Refined *out)
 {
     const size_t n1 = static_cast<size_t>(t.fine_vertices());
@@ -807,11 +835,17 @@ Fit pair_edges(Base *b)
 {
     const int *rs = b->ring_start.get(), *ring = b->ring.get();
     int *twin = b->twin.get(), *edge = b->edge.get(), *ec = b->edge_corner.get();
+    int *head = edge; /* each half-edge's head vertex until the edges are numbered */
+    for (int f = 0; f < b->nf; ++f) {
+        const int s = b->start.get()[f], e = b->start.get()[f + 1];
+        for (int c = s; c + 1 < e; ++c) head[c] = b->vert[c + 1];
+        head[e - 1] = b->vert[s];
+    }
     for (int c = 0; c < b->corners; ++c) {
-        const int from = b->vert[c], to = b->head(c);
+        const int from = b->vert[c], to = head[c];
         int found = 0;
         for (int i = rs[to]; i < rs[to + 1]; ++i)
-            if (b->head(ring[i]) == from) twin[c] = ring[i], ++found;
+            if (head[ring[i]] == from) twin[c] = ring[i], ++found;
         if (found != 1) return Fit::NO;
     }
     for (int c = 0; c < b->corners; ++c) {
@@ -977,45 +1011,6 @@ private:
     bool loop_;
 };
 
-/* Direct's levels as the UV pass reads them (FarLevels' members). */
-class DirectLevels {
-public:
-    DirectLevels(const Base &b, const Direct &d, bool loop, const uint32_t *fine_faces)
-        : b_(b), d_(d), loop_(loop), fine_(fine_faces)
-    {
-    }
-    int faces() const { return b_.nf; }
-    int face_size(int f) const { return b_.size[f]; }
-    int face_vertex(int f, int c) const { return b_.vert[b_.start.get()[f] + c]; }
-    int face_edge(int f, int c) const { return b_.edge.get()[b_.start.get()[f] + c]; }
-    int edge_vertex(int e, int end) const
-    {
-        const int c = b_.edge_corner.get()[2 * e];
-        return end ? b_.head(c) : b_.vert[c];
-    }
-    int child_faces(int f) const { return loop_ ? 4 : b_.size[f]; }
-    int child_face(int f, int i) const { return loop_ ? 4 * f + i : b_.start.get()[f] + i; }
-    int fine_face_size(int) const { return d_.corners(); }
-    int fine_face_vertex(int cf, int c) const
-    {
-        return int(fine_[size_t(cf) * size_t(d_.corners()) + size_t(c)]);
-    }
-    int fine_vertices() const { return d_.vertices(); }
-    bool prepare() { return true; }
-    Origin origin(int v) const
-    {
-        if (v < b_.nv) return Origin{Origin::VERTEX, v};
-        if (!loop_ && v < b_.nv + b_.nf) return Origin{Origin::FACE, v - b_.nv};
-        return Origin{Origin::EDGE, v - b_.nv - (loop_ ? 0 : b_.nf)};
-    }
-
-private:
-    const Base &b_;
-    const Direct &d_;
-    bool loop_;
-    const uint32_t *fine_;
-};
-
 /* Level-1 control points, with PrimvarRefiner::Interpolate's masks and order of sums: face
  * points, edge points (their ends, then their faces' points or opposite vertices), vertex
  * points (face points, far ends of the edges, the vertex itself). */
@@ -1060,39 +1055,70 @@ void direct_points(const Base &b, const Direct &d, bool loop, Masks &masks, cons
 
 /* PrimvarRefiner::Limit's sums for level-1 vertex u with a mask of its valence: the opposite
  * vertices' weights, the edges' far ends', then its own. */
-void apply(const Weights &w, const Point3 *p, int u, const int *edge, const int *opp, Point3 *out)
+/* The limit position and tangents of level-1 vertex u: three masks of one shape applied in one
+ * sweep over its neighbours, each sum in PrimvarRefiner::Limit's order (opposite vertices,
+ * edges' far ends, then u itself). NF, NE: the weights' counts, fixed for the regular cases. */
+template <int NF, int NE>
+[[gnu::always_inline]] inline void limit_sums(const ValenceMasks &m, int nf, int ne,
+                                              const Point3 *p, int u, const int *edge,
+                                              const int *opp, Point3 out[3])
 {
-    out->Clear();
-    for (int i = 0; i < w.nf; ++i) out->AddWithWeight(p[opp[i]], w.f[i]);
-    for (int i = 0; i < w.ne; ++i) out->AddWithWeight(p[edge[i]], w.e[i]);
-    out->AddWithWeight(p[u], w.v[0]);
+    const Weights *w[3] = {&m.pos, &m.tan1, &m.tan2};
+    for (int k = 0; k < 3; ++k) out[k].Clear();
+    for (int i = 0; i < (NF < 0 ? nf : NF); ++i) {
+        const Point3 q = p[opp[i]];
+        for (int k = 0; k < 3; ++k) out[k].AddWithWeight(q, w[k]->f[i]);
+    }
+    for (int i = 0; i < (NE < 0 ? ne : NE); ++i) {
+        const Point3 q = p[edge[i]];
+        for (int k = 0; k < 3; ++k) out[k].AddWithWeight(q, w[k]->e[i]);
+    }
+    for (int k = 0; k < 3; ++k) out[k].AddWithWeight(p[u], w[k]->v[0]);
 }
 
-/* The limit positions of the level-1 points p1 into lim (and, as floats, positions), then the
- * limit normals, oriented by the faces around each vertex at their limit positions as
- * project_to_limit orients them. The tangents are summed in the second pass, where they are
- * used: cheaper than keeping them. */
+/* The same, for any mask (one sum at a time where the three masks differ in shape). */
+void limit_point(const ValenceMasks &m, const Point3 *p, int u, const int *edge, const int *opp,
+                 Point3 out[3])
+{
+    const int nf = m.pos.nf, ne = m.pos.ne;
+    const bool same = m.tan1.nf == nf && m.tan2.nf == nf && m.tan1.ne == ne && m.tan2.ne == ne;
+    if (same && nf == 4 && ne == 4) return limit_sums<4, 4>(m, nf, ne, p, u, edge, opp, out);
+    if (same && nf == 0 && ne == 6) return limit_sums<0, 6>(m, nf, ne, p, u, edge, opp, out);
+    if (same) return limit_sums<-1, -1>(m, nf, ne, p, u, edge, opp, out);
+    const Weights *w[3] = {&m.pos, &m.tan1, &m.tan2};
+    for (int k = 0; k < 3; ++k) {
+        out[k].Clear();
+        for (int i = 0; i < w[k]->nf; ++i) out[k].AddWithWeight(p[opp[i]], w[k]->f[i]);
+        for (int i = 0; i < w[k]->ne; ++i) out[k].AddWithWeight(p[edge[i]], w[k]->e[i]);
+        out[k].AddWithWeight(p[u], w[k]->v[0]);
+    }
+}
+
+/* The limit positions of the level-1 points p1 into lim (and, as floats, positions) with the
+ * cross products of the limit tangents (tn), then the limit normals, oriented by the faces
+ * around each vertex at their limit positions as project_to_limit orients them (each face's
+ * normal made once, into fn). */
 void direct_limit(const Direct &d, Masks &masks, const Point3 *p1, const uint32_t *faces,
-                  Point3 *lim, xyl_vec3 *positions, xyl_vec3 *normals)
+                  Point3 *lim, Point3 *tn, Point3 *fn, xyl_vec3 *positions, xyl_vec3 *normals)
 {
     int edge[kDirectMaxValence], opp[kDirectMaxValence], face[kDirectMaxValence];
     for (int u = 0; u < d.vertices(); ++u) {
         const ValenceMasks &m = masks.valence(d.ring(u, edge, opp, face));
-        apply(m.pos, p1, u, edge, opp, &lim[u]);
-        positions[u] = xyl_vec3{static_cast<float>(lim[u].x), static_cast<float>(lim[u].y),
-                                static_cast<float>(lim[u].z)};
+        Point3 sums[3]; /* position, tangents */
+        limit_point(m, p1, u, edge, opp, sums);
+        lim[u] = sums[0];
+        tn[u] = tangent_normal(sums[1], sums[2]);
+        positions[u] = xyl_vec3{static_cast<float>(sums[0].x), static_cast<float>(sums[0].y),
+                                static_cast<float>(sums[0].z)};
     }
-    const int corners = d.corners();
+    const size_t corners = size_t(d.corners());
+    for (size_t f = 0; f < size_t(d.faces()); ++f)
+        fn[f] = face_normal(faces + f * corners, int(corners), lim);
     for (int u = 0; u < d.vertices(); ++u) {
         const int n = d.ring(u, edge, opp, face);
-        const ValenceMasks &m = masks.valence(n);
-        Point3 t1, t2, ref = {0.0, 0.0, 0.0};
-        apply(m.tan1, p1, u, edge, opp, &t1);
-        apply(m.tan2, p1, u, edge, opp, &t2);
-        for (int i = 0; i < n; ++i)
-            ref.AddWithWeight(face_normal(faces + size_t(face[i]) * size_t(corners), corners, lim),
-                              1.0);
-        normals[u] = oriented_normal(tangent_normal(t1, t2), ref);
+        Point3 ref = {0.0, 0.0, 0.0};
+        for (int i = 0; i < n; ++i) ref.AddWithWeight(fn[face[i]], 1.0);
+        normals[u] = oriented_normal(tn[u], ref);
     }
 }
 
@@ -1116,6 +1142,84 @@ void direct_branches(const Base &b, const Direct &d, bool loop, const xyl__mesh_
     for (int f = 0; f < b.nf; ++f) vb[d.F(f)] = face_branch[f];
 }
 
+/* The UV a child corner takes in its parent face's frame: Catmark's child at corner j holds
+ * the corner, the edge after it, the centre and the edge before it (kind k = 0..3); Loop's
+ * children hold the corners and edges of the table in Direct::loop_faces. */
+Point2 catmark_corner_uv(const FaceFrame &frame, int j, int k)
+{
+    switch (k) {
+    case 0: return frame.corner[j];
+    case 1: return frame.edge[j];
+    case 2: return frame.centre;
+    default: return frame.edge[(j + frame.n - 1) % frame.n];
+    }
+}
+
+Point2 loop_corner_uv(const FaceFrame &frame, int child, int pos)
+{
+    /* corner c as c, edge e as 3 + e, per child face and position */
+    static const int8_t part[4][3] = {{0, 3, 5}, {3, 1, 4}, {5, 4, 2}, {4, 5, 3}};
+    const int x = part[child][pos];
+    return x < 3 ? frame.corner[x] : frame.edge[x - 3];
+}
+
+/* interpolate_uvs for the direct path: the same rule, each (parent face, level-1 vertex) pair
+ * offered once in face order (interpolate_uvs offers a pair once per child face that holds it,
+ * and repeats change nothing), and each child corner's UV read from its place in the parent
+ * face rather than searched for. */
+bool direct_uvs(const Base &b, const Direct &d, bool loop, const xyl__mesh_arrays *in,
+                const Control &control, const xyl_allocator *alloc, Refined *out)
+{
+    const size_t n1 = size_t(d.vertices());
+    Buffer<Point2> uv(alloc, n1);
+    Buffer<double> narrowest(alloc, n1); /* the span of the parent face uv[] came from */
+    Buffer<uint8_t> seen(alloc, n1);
+    if (!uv.get() || !narrowest.get() || !seen.get()) return false;
+    const uint8_t *parent_wraps = control.wraps.get();
+    Point2 *own = uv.get();
+    double *best = narrowest.get();
+    uint8_t *taken = seen.get();
+    auto offer = [&](int v, const Point2 &c, double span) {
+        if (!taken[v] || span < best[v] || (span == best[v] && c.u < own[v].u))
+            own[v] = c, best[v] = span;
+        taken[v] = 1;
+    };
+    for (int f = 0; f < b.nf; ++f) {
+        const int s = b.start.get()[f];
+        const FaceFrame frame(FaceFrame::Consecutive(), b.vert + s, b.size[f], parent_wraps[f],
+                              in->uvs);
+        for (int c = 0; c < frame.n; ++c) {
+            offer(d.V(b.vert[s + c]), frame.corner[c], frame.span);
+            offer(d.edge_of(s + c), frame.edge[c], frame.span);
+        }
+        if (!loop) offer(d.F(f), frame.centre, frame.span);
+    }
+    const uint32_t *faces = out->faces.get();
+    uint8_t *wraps = out->wraps.get();
+    for (int f = 0; f < b.nf; ++f) {
+        const int s = b.start.get()[f];
+        const FaceFrame frame(FaceFrame::Consecutive(), b.vert + s, b.size[f], parent_wraps[f],
+                              in->uvs);
+        const int kids = loop ? 4 : frame.n, first = loop ? 4 * f : s;
+        for (int i = 0; i < kids; ++i) {
+            const size_t kid = size_t(first + i);
+            uint8_t bits = 0;
+            for (int pos = 0; pos < d.corners(); ++pos) {
+                const uint32_t v = faces[kid * size_t(d.corners()) + size_t(pos)];
+                const int k = frame.n == 4 ? (pos - i + 4) & 3 : pos;
+                const Point2 c = loop ? loop_corner_uv(frame, i, pos) : catmark_corner_uv(frame, i, k);
+                if (c.u - own[v].u >= 0.5) bits = static_cast<uint8_t>(bits | 1u << pos);
+            }
+            wraps[kid] = bits;
+        }
+    }
+    for (size_t v = 0; v < n1; ++v) {
+        out->uvs.get()[2 * v] = static_cast<float>(own[v].u);
+        out->uvs.get()[2 * v + 1] = static_cast<float>(own[v].v);
+    }
+    return true;
+}
+
 /* One level by the direct path into fine (allocated for d's counts). */
 bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *in,
                    const Control &control, const xyl_allocator *alloc, Refined *fine)
@@ -1133,10 +1237,10 @@ bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *
     }
     direct_points(b, d, loop, masks, p0.get(), p1.get());
     if (limit) {
-        Buffer<Point3> lim(alloc, n1);
-        if (!lim.get()) return false;
-        direct_limit(d, masks, p1.get(), fine->faces.get(), lim.get(), fine->positions.get(),
-                     fine->normals.get());
+        Buffer<Point3> lim(alloc, n1), tn(alloc, n1), fn(alloc, size_t(d.faces()));
+        if (!lim.get() || !tn.get() || !fn.get()) return false;
+        direct_limit(d, masks, p1.get(), fine->faces.get(), lim.get(), tn.get(), fn.get(),
+                     fine->positions.get(), fine->normals.get());
     } else {
         for (size_t v = 0; v < n1; ++v)
             fine->positions.get()[v] = xyl_vec3{static_cast<float>(p1.get()[v].x),
@@ -1144,8 +1248,7 @@ bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *
                                                 static_cast<float>(p1.get()[v].z)};
     }
     direct_branches(b, d, loop, in, control.branches.get(), fine);
-    DirectLevels levels(b, d, loop, fine->faces.get());
-    return interpolate_uvs(levels, in, control, alloc, fine);
+    return direct_uvs(b, d, loop, in, control, alloc, fine);
 }
 
 /* The direct path's counts, checked against the limits, then its level handed to out. */
