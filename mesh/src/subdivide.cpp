@@ -668,7 +668,8 @@ struct SmoothEdge {
     int GetNumFaces() const { return 2; }
     float GetSharpness() const { return 0.0f; }
     void GetChildSharpnesses(const Sdc::Crease &, float s[2]) const { s[0] = s[1] = 0.0f; }
-    void GetNumVerticesPerFace(int n[2]) const { n[0] = n[1] = 4; } /* asked for TRI_SUB_SMOOTH only */
+    /* asked for only under TRI_SUB_SMOOTH, which xylem does not set */
+    void GetNumVerticesPerFace(int n[2]) const { n[0] = n[1] = 4; }
 };
 
 struct SmoothVertex {
@@ -1207,7 +1208,8 @@ bool direct_uvs(const Base &b, const Direct &d, bool loop, const xyl__mesh_array
             for (int pos = 0; pos < d.corners(); ++pos) {
                 const uint32_t v = faces[kid * size_t(d.corners()) + size_t(pos)];
                 const int k = frame.n == 4 ? (pos - i + 4) & 3 : pos;
-                const Point2 c = loop ? loop_corner_uv(frame, i, pos) : catmark_corner_uv(frame, i, k);
+                const Point2 c =
+                    loop ? loop_corner_uv(frame, i, pos) : catmark_corner_uv(frame, i, k);
                 if (c.u - own[v].u >= 0.5) bits = static_cast<uint8_t>(bits | 1u << pos);
             }
             wraps[kid] = bits;
@@ -1294,7 +1296,8 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit
         if (fit == Fit::NO_MEMORY)
             return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                              "out of memory for the topology");
-        if (fit == Fit::YES) return refine_direct(base, loop, limit, lim, in, control, alloc, out, diag);
+        if (fit == Fit::YES)
+            return refine_direct(base, loop, limit, lim, in, control, alloc, out, diag);
         if (path == XYL__SUBDIVIDE_DIRECT)
             return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                              "the direct path needs a closed oriented manifold whose vertices "

@@ -685,7 +685,8 @@ static void print_targets(const options *o, const uint32_t *depths, size_t n,
     printf("<= %.0fx the plain mesh for Catmull-Clark and Loop pre-subdivision (depth >= %d): ",
            TARGET_SUBDIVISION_RATIO, SUBDIVISION_TARGET_DEPTH);
     if (subdivision_ratio == 0.0) printf("not measured%s\n", o->quick ? " [--quick sizes]" : "");
-    else printf("%s (highest %.1fx)\n", subdivision_ratio <= TARGET_SUBDIVISION_RATIO ? "MET" : "NOT MET",
+    else printf("%s (highest %.1fx)\n", subdivision_ratio <= TARGET_SUBDIVISION_RATIO ? "MET"
+                                                                                : "NOT MET",
                 subdivision_ratio);
 }
 
