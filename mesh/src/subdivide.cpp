@@ -37,6 +37,13 @@ public:
         p_ = static_cast<T *>(xyl__calloc(alloc_, count ? count : 1, sizeof(T)));
         return p_ != nullptr;
     }
+    /* An array the caller writes in full before reading it: not zero-filled. */
+    bool allocate_unset(size_t count)
+    {
+        xyl__free(alloc_, p_);
+        p_ = static_cast<T *>(xyl__alloc_array(alloc_, count ? count : 1, sizeof(T)));
+        return p_ != nullptr;
+    }
     ~Buffer() { xyl__free(alloc_, p_); }
     Buffer(const Buffer &) = delete;
     Buffer &operator=(const Buffer &) = delete;
@@ -894,9 +901,10 @@ Fit build_base(int vertices, const Control &control, Base *b)
     for (int f = 0; f < b->nf; ++f) start[f + 1] = start[f] + b->size[f];
     b->corners = start[b->nf];
     const size_t corners = size_t(b->corners);
-    if (!b->face_of.allocate(corners) || !b->twin.allocate(corners) ||
-        !b->edge.allocate(corners) || !b->edge_corner.allocate(corners) ||
-        !b->ring_start.allocate(size_t(b->nv) + 1) || !b->ring.allocate(corners))
+    /* each written in full before it is read; ring_start counts from zero */
+    if (!b->face_of.allocate_unset(corners) || !b->twin.allocate_unset(corners) ||
+        !b->edge.allocate_unset(corners) || !b->edge_corner.allocate_unset(corners) ||
+        !b->ring_start.allocate(size_t(b->nv) + 1) || !b->ring.allocate_unset(corners))
         return Fit::NO_MEMORY;
     for (int f = 0; f < b->nf; ++f)
         for (int c = start[f]; c < start[f + 1]; ++c) b->face_of.get()[c] = f;
@@ -1172,10 +1180,10 @@ bool direct_uvs(const Base &b, const Direct &d, bool loop, const xyl__mesh_array
                 const Control &control, const xyl_allocator *alloc, Refined *out)
 {
     const size_t n1 = size_t(d.vertices());
-    Buffer<Point2> uv(alloc, n1);
-    Buffer<double> narrowest(alloc, n1); /* the span of the parent face uv[] came from */
-    Buffer<uint8_t> seen(alloc, n1);
-    if (!uv.get() || !narrowest.get() || !seen.get()) return false;
+    Buffer<Point2> uv(alloc);
+    Buffer<double> narrowest(alloc); /* the span of the parent face uv[] came from */
+    Buffer<uint8_t> seen(alloc, n1); /* uv and narrowest are read only where this is set */
+    if (!uv.allocate_unset(n1) || !narrowest.allocate_unset(n1) || !seen.get()) return false;
     const uint8_t *parent_wraps = control.wraps.get();
     Point2 *own = uv.get();
     double *best = narrowest.get();
@@ -1229,8 +1237,8 @@ bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *
     const Direct d(b, loop);
     Masks masks(alloc, loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK);
     const size_t n1 = size_t(d.vertices());
-    Buffer<Point3> p0(alloc, size_t(b.nv)), p1(alloc, n1);
-    if (!masks.ok() || !p0.get() || !p1.get()) return false;
+    Buffer<Point3> p0(alloc), p1(alloc); /* written in full below */
+    if (!masks.ok() || !p0.allocate_unset(size_t(b.nv)) || !p1.allocate_unset(n1)) return false;
     masks.init();
     d.write_faces(fine->faces.get());
     for (int v = 0; v < b.nv; ++v) {
@@ -1239,8 +1247,10 @@ bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *
     }
     direct_points(b, d, loop, masks, p0.get(), p1.get());
     if (limit) {
-        Buffer<Point3> lim(alloc, n1), tn(alloc, n1), fn(alloc, size_t(d.faces()));
-        if (!lim.get() || !tn.get() || !fn.get()) return false;
+        Buffer<Point3> lim(alloc), tn(alloc), fn(alloc); /* written in full by direct_limit */
+        if (!lim.allocate_unset(n1) || !tn.allocate_unset(n1) ||
+            !fn.allocate_unset(size_t(d.faces())))
+            return false;
         direct_limit(d, masks, p1.get(), fine->faces.get(), lim.get(), tn.get(), fn.get(),
                      fine->positions.get(), fine->normals.get());
     } else {
