@@ -1106,9 +1106,9 @@ void limit_point(const ValenceMasks &m, const Point3 *p, int u, const int *edge,
 /* The limit positions of the level-1 points p1 into lim (and, as floats, positions) with the
  * cross products of the limit tangents (tn), then the limit normals, oriented by the faces
  * around each vertex at their limit positions as project_to_limit orients them (each face's
- * normal made once, into fn). */
-void direct_limit(const Direct &d, Masks &masks, const Point3 *p1, const uint32_t *faces,
-                  Point3 *lim, Point3 *tn, Point3 *fn, xyl_vec3 *positions, xyl_vec3 *normals)
+ * normal made once, into p1, which is no longer needed then and has room for one per face). */
+void direct_limit(const Direct &d, Masks &masks, Point3 *p1, const uint32_t *faces, Point3 *lim,
+                  Point3 *tn, xyl_vec3 *positions, xyl_vec3 *normals)
 {
     int edge[kDirectMaxValence], opp[kDirectMaxValence], face[kDirectMaxValence];
     for (int u = 0; u < d.vertices(); ++u) {
@@ -1121,6 +1121,7 @@ void direct_limit(const Direct &d, Masks &masks, const Point3 *p1, const uint32_
                                 static_cast<float>(sums[0].z)};
     }
     const size_t corners = size_t(d.corners());
+    Point3 *fn = p1;
     for (size_t f = 0; f < size_t(d.faces()); ++f)
         fn[f] = face_normal(faces + f * corners, int(corners), lim);
     for (int u = 0; u < d.vertices(); ++u) {
@@ -1237,8 +1238,11 @@ bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *
     const Direct d(b, loop);
     Masks masks(alloc, loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK);
     const size_t n1 = size_t(d.vertices());
-    Buffer<Point3> p0(alloc), p1(alloc); /* written in full below */
-    if (!masks.ok() || !p0.allocate_unset(size_t(b.nv)) || !p1.allocate_unset(n1)) return false;
+    /* p1 is written in full below; with the limit it later holds the faces' normals too */
+    const size_t f1 = size_t(d.faces()), p1_size = limit && f1 > n1 ? f1 : n1;
+    Buffer<Point3> p0(alloc), p1(alloc);
+    if (!masks.ok() || !p0.allocate_unset(size_t(b.nv)) || !p1.allocate_unset(p1_size))
+        return false;
     masks.init();
     d.write_faces(fine->faces.get());
     for (int v = 0; v < b.nv; ++v) {
@@ -1247,11 +1251,9 @@ bool direct_level(const Base &b, bool loop, bool limit, const xyl__mesh_arrays *
     }
     direct_points(b, d, loop, masks, p0.get(), p1.get());
     if (limit) {
-        Buffer<Point3> lim(alloc), tn(alloc), fn(alloc); /* written in full by direct_limit */
-        if (!lim.allocate_unset(n1) || !tn.allocate_unset(n1) ||
-            !fn.allocate_unset(size_t(d.faces())))
-            return false;
-        direct_limit(d, masks, p1.get(), fine->faces.get(), lim.get(), tn.get(), fn.get(),
+        Buffer<Point3> lim(alloc), tn(alloc); /* written in full by direct_limit */
+        if (!lim.allocate_unset(n1) || !tn.allocate_unset(n1)) return false;
+        direct_limit(d, masks, p1.get(), fine->faces.get(), lim.get(), tn.get(),
                      fine->positions.get(), fine->normals.get());
     } else {
         for (size_t v = 0; v < n1; ++v)
