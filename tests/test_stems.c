@@ -5,6 +5,7 @@
 #include "skel_overlap.h"
 #include "test_util.h"
 #include "mesh_internal.h"
+#include "subdivide.h"
 
 /* Checked or not (docs/stems.md, "Checked joints"); st may be NULL. */
 static xyl_mesh *build_with(const xyl_skeleton *sk, uint32_t k, xyl_subdivision sub,
@@ -154,6 +155,111 @@ static void every_preset_is_a_closed_manifold(void **state)
         xyl_skeleton_destroy(sk);
     }
 }
+
+/* ---- the two subdivision paths ------------------------------------------------------------ */
+#if defined(XYL_HAVE_OPENSUBDIV) /* without it both paths answer XYL_ERR_UNSUPPORTED */
+
+/* n elements of size bytes at a and b, bit for bit; NULL only together. */
+static void assert_same_array(const void *a, const void *b, size_t n, size_t size,
+                              const char *what, const char *array)
+{
+    if (!a || !b) {
+        if (a != b) fail_msg("%s: %s is NULL on one path only", what, array);
+        return;
+    }
+    if (n && memcmp(a, b, n * size) != 0) {
+        size_t i = 0;
+        while (memcmp((const char *)a + i * size, (const char *)b + i * size, size) == 0) ++i;
+        fail_msg("%s: %s differ first at element %zu of %zu", what, array, i, n);
+    }
+}
+
+static void assert_same_arrays(const xyl__mesh_arrays *a, const xyl__mesh_arrays *b,
+                               const char *what)
+{
+    assert_int_equal(a->vertex_count, b->vertex_count);
+    assert_int_equal(a->quad_count, b->quad_count);
+    assert_int_equal(a->triangle_count, b->triangle_count);
+    const size_t nv = a->vertex_count, nf = a->quad_count + a->triangle_count;
+    assert_same_array(a->positions, b->positions, nv, sizeof *a->positions, what, "positions");
+    assert_same_array(a->normals, b->normals, nv, sizeof *a->normals, what, "normals");
+    assert_same_array(a->uvs, b->uvs, 2 * nv, sizeof *a->uvs, what, "uvs");
+    assert_same_array(a->branch_ids, b->branch_ids, nv, sizeof *a->branch_ids, what,
+                      "vertex branches");
+    assert_same_array(a->quads, b->quads, 4 * a->quad_count, sizeof *a->quads, what, "quads");
+    assert_same_array(a->triangles, b->triangles, 3 * a->triangle_count, sizeof *a->triangles,
+                      what, "triangles");
+    assert_same_array(a->face_branches, b->face_branches, nf, sizeof *a->face_branches, what,
+                      "face branches");
+    assert_same_array(a->uv_wraps, b->uv_wraps, nf, sizeof *a->uv_wraps, what, "uv wraps");
+}
+
+/* The direct path (the default for stem meshes) against Far's refiner on the same mesh: both
+ * schemes, limit and control points; the direct path must apply and give the same bits. */
+static void assert_paths_agree(const xyl_mesh *m, const char *name)
+{
+    const xyl__mesh_arrays *in = &((const xyl__mesh *)m)->a;
+    static const xyl_subdivision schemes[] = {XYL_SUBDIVIDE_CATMARK, XYL_SUBDIVIDE_LOOP};
+    for (size_t s = 0; s < 2; ++s)
+        for (int limit = 0; limit <= 1; ++limit) {
+            char what[256];
+            snprintf(what, sizeof what, "%s %s%s", name,
+                     schemes[s] == XYL_SUBDIVIDE_LOOP ? "loop" : "catmark",
+                     limit ? " limit" : " control points");
+            xyl__mesh_arrays far, direct;
+            xyl_diag diag = {0};
+            xyl_result r = xyl__subdivide_by(in, schemes[s], limit, NULL, XYL__SUBDIVIDE_FAR,
+                                             NULL, &far, &diag);
+            if (r) fail_msg("%s: far: %s: %s", what, xyl_result_string(r), diag.message);
+            r = xyl__subdivide_by(in, schemes[s], limit, NULL, XYL__SUBDIVIDE_DIRECT, NULL,
+                                  &direct, &diag);
+            if (r) fail_msg("%s: direct: %s: %s", what, xyl_result_string(r), diag.message);
+            assert_same_arrays(&far, &direct, what);
+            xyl__mesh_arrays_free(&far, NULL);
+            xyl__mesh_arrays_free(&direct, NULL);
+        }
+}
+
+typedef struct paths_ctx {
+    uint32_t k;
+    int cases;
+} paths_ctx;
+
+static void check_paths(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    paths_ctx *c = ctx;
+    xyl_mesh *m = build(sk, c->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    char what[160];
+    snprintf(what, sizeof what, "%s k=%u", name, c->k);
+    assert_paths_agree(m, what);
+    xyl_mesh_destroy(m);
+    ++c->cases;
+}
+
+static void direct_subdivision_matches_far_on_every_hard_case(void **state)
+{
+    (void)state;
+    static const uint32_t sides[] = {3, 4, 5, 8, 16};
+    for (size_t i = 0; i < sizeof sides / sizeof sides[0]; ++i) {
+        paths_ctx c = {sides[i], 0};
+        assert_true(tu_for_each_hard_case(check_paths, &c) >= 40);
+    }
+}
+
+static void direct_subdivision_matches_far_on_every_preset(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        for (uint32_t k = 3; k <= 8; ++k) {
+            paths_ctx c = {k, 0};
+            check_paths(name, sk, &c);
+        }
+        xyl_skeleton_destroy(sk);
+    }
+}
+#endif
 
 /* Every array of two meshes, bit for bit. */
 static void assert_same_mesh(const xyl_mesh *a, const xyl_mesh *b, const char *what)
@@ -1440,6 +1546,10 @@ int main(void)
         cmocka_unit_test(simd_loops_give_the_scalar_bits),
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
+#if defined(XYL_HAVE_OPENSUBDIV)
+        cmocka_unit_test(direct_subdivision_matches_far_on_every_hard_case),
+        cmocka_unit_test(direct_subdivision_matches_far_on_every_preset),
+#endif
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k3),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k4),
         cmocka_unit_test(no_hard_case_intersects_at_a_joint_k5),

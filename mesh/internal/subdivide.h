@@ -38,6 +38,23 @@ xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bo
                           const xyl_mesh_limits *limits, const xyl_allocator *alloc,
                           xyl__mesh_arrays *out, xyl_diag *diag);
 
+/* How xyl__subdivide_by refines. ANY (what xyl__subdivide does): the direct path where it
+ * applies, else Far. FAR: Far's TopologyRefiner and PrimvarRefiner, for any mesh. DIRECT: the
+ * one level built from the mesh's own half-edges with OpenSubdiv's Sdc masks, for a closed
+ * oriented manifold whose every vertex lies in one fan of 3 to 64 faces (the stem mesher's
+ * meshes); its output is bit-identical to Far's (docs/subdivision.md, "Two paths"), and on any
+ * other mesh it fails with XYL_ERR_UNSUPPORTED. */
+typedef enum xyl__subdivide_path {
+    XYL__SUBDIVIDE_ANY = 0,
+    XYL__SUBDIVIDE_FAR,
+    XYL__SUBDIVIDE_DIRECT
+} xyl__subdivide_path;
+
+/* xyl__subdivide by the given path (the tests compare the two). */
+xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
+                             const xyl_mesh_limits *limits, xyl__subdivide_path path,
+                             const xyl_allocator *alloc, xyl__mesh_arrays *out, xyl_diag *diag);
+
 /* Measures, with OpenSubdiv's own limit evaluation (Far::PrimvarRefiner::Limit after one
  * Catmark level), the limit radius of a mid-section ring vertex of a long capped prism whose
  * k-gon rings have radius 1, and writes it to *factor. The cubic B-spline limit rule predicts

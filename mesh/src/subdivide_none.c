@@ -23,6 +23,14 @@ xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bo
     return not_built(diag);
 }
 
+xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
+                             const xyl_mesh_limits *limits, xyl__subdivide_path path,
+                             const xyl_allocator *alloc, xyl__mesh_arrays *out, xyl_diag *diag)
+{
+    (void)path;
+    return xyl__subdivide(in, scheme, limit, limits, alloc, out, diag);
+}
+
 xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor)
 {
     if (!factor || k < 3 || k > 32) return XYL_ERR_INVALID_ARGUMENT;

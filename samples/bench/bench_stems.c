@@ -37,6 +37,8 @@
 #define PEER_SETTLE_S 1.0 /* idle time between an ez-tree step's node and our tree */
 #define TARGET_PEER_RATIO 20.0
 #define TARGET_VERTEX_RATE 1e7
+#define TARGET_SUBDIVISION_RATIO 10.0 /* pre-subdivision time over the plain mesh time */
+#define SUBDIVISION_TARGET_DEPTH 15   /* the ratio target holds from this depth up */
 
 /* ABOP figure 2.7 (Aono & Kunii's sympodial tree, the preset abop-2.7-sympodial) with every
  * internode drawn as four segments, as real branches are several segments long, and a light
@@ -340,6 +342,59 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
     return failures;
 }
 
+/* Pre-subdivision over the ladder: the plain mesh (the ladder's figure) against one level of
+ * Catmull-Clark and of Loop on the same tree, k = 4, joints unchecked. *worst is the largest
+ * ratio at SUBDIVISION_TARGET_DEPTH and above (0: not measured). */
+static int bench_subdivision(const options *o, const xyl_grammar *g, const uint32_t *depths,
+                             size_t n, const size_result *by_depth, double *worst)
+{
+    static const struct {
+        const char *label;
+        xyl_subdivision scheme;
+    } schemes[] = {{"catmark", XYL_SUBDIVIDE_CATMARK}, {"loop", XYL_SUBDIVIDE_LOOP}};
+    int failures = 0;
+    *worst = 0.0;
+    printf("\n== pre-subdivision: xyl_stems_build (k = 4, branch normals, joints unchecked), one "
+           "level on the limit surface ==\n");
+    printf("%-9s %10s %9s %-8s %10s %10s %9s %7s %4s\n", "depth", "segments", "plain ms",
+           "scheme", "vertices", "triangles", "median ms", "x plain", "N");
+    for (size_t i = 0; i < n; ++i) {
+        const size_result *plain = &by_depth[depths[i]];
+        if (!plain->ok) continue;
+        xyl_diag diag = {0};
+        xyl_skeleton *sk = NULL;
+        xyl_result r = grow(g, depths[i], &sk, &diag);
+        if (r) {
+            report_error("grow", r, &diag);
+            ++failures;
+            continue;
+        }
+        for (size_t s = 0; s < sizeof schemes / sizeof schemes[0]; ++s) {
+            xyl_stems_desc desc = unchecked;
+            desc.subdivision = schemes[s].scheme;
+            mesh_job j = {0};
+            timing t = {0};
+            r = measure_mesh(o, sk, &desc, &j, &t, &diag);
+            if (r == XYL_ERR_UNSUPPORTED) {
+                printf("depth %-3u skipped: this xylem is built without OpenSubdiv\n", depths[i]);
+                break;
+            }
+            if (r) {
+                report_error(schemes[s].label, r, &diag);
+                ++failures;
+                continue;
+            }
+            double ratio = t.median_s / plain->mesh.median_s;
+            if (depths[i] >= SUBDIVISION_TARGET_DEPTH && ratio > *worst) *worst = ratio;
+            printf("depth %-3u %10zu %9.3f %-8s %10zu %10zu %9.3f %7.1f %4d\n", depths[i],
+                   plain->segments, plain->mesh.median_s * 1e3, schemes[s].label, j.vertices,
+                   j.triangles, t.median_s * 1e3, ratio, t.samples);
+        }
+        xyl_skeleton_destroy(sk);
+    }
+    return failures;
+}
+
 static void bench_pipeline(const uint32_t *depths, size_t n, const size_result *by_depth)
 {
     printf("\n== pipeline: derive + turtle + mesh (k = 4), grammar parsed once ==\n");
@@ -612,7 +667,8 @@ static void print_vertex_target(const options *o, const uint32_t *depths, size_t
 }
 
 static void print_targets(const options *o, const uint32_t *depths, size_t n,
-                          const size_result *by_depth, const peer_summary *peer)
+                          const size_result *by_depth, const peer_summary *peer,
+                          double subdivision_ratio)
 {
     printf("\n== targets ==\n");
     for (int pipe = 0; pipe < 2; ++pipe) {
@@ -626,6 +682,12 @@ static void print_targets(const options *o, const uint32_t *depths, size_t n,
                     o->quick ? " [--quick sizes]" : "");
     }
     print_vertex_target(o, depths, n, by_depth);
+    printf("<= %.0fx the plain mesh for Catmull-Clark and Loop pre-subdivision (depth >= %d): ",
+           TARGET_SUBDIVISION_RATIO, SUBDIVISION_TARGET_DEPTH);
+    if (subdivision_ratio == 0.0) printf("not measured%s\n", o->quick ? " [--quick sizes]" : "");
+    else printf("%s (highest %.1fx)\n", subdivision_ratio <= TARGET_SUBDIVISION_RATIO ? "MET"
+                                                                                : "NOT MET",
+                subdivision_ratio);
 }
 
 int main(int argc, char **argv)
@@ -660,6 +722,8 @@ int main(int argc, char **argv)
     int failures = bench_skeletons(g, depths, n);
     failures += bench_ladder(&o, g, depths, n, by_depth);
     print_linearity(depths, n, by_depth);
+    double subdivision_ratio = 0.0;
+    failures += bench_subdivision(&o, g, depths, n, by_depth, &subdivision_ratio);
     failures += bench_variants(&o, g, o.quick ? MIDDLE_QUICK : MIDDLE_FULL);
     bench_pipeline(depths, n, by_depth);
 
@@ -668,7 +732,7 @@ int main(int argc, char **argv)
     else printf("\n== peer: skipped (--no-peer) ==\n");
     failures += peer.failures;
 
-    print_targets(&o, depths, n, by_depth, &peer);
+    print_targets(&o, depths, n, by_depth, &peer, subdivision_ratio);
     xyl_grammar_destroy(g);
     if (failures) printf("\n%d failure(s)\n", failures);
     return failures ? 1 : 0;

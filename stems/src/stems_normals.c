@@ -83,26 +83,74 @@ xyl_result xyl__stems_normals_with_patches(stems *s, xyl_vec3 **out)
     return XYL_OK;
 }
 
+/* The faces of a that touch a vertex marked in seam (near: scratch, one per face), quads then
+ * triangles in mesh order, with their branches, into view's face arrays (from alloc). */
+static xyl_result near_faces(const xyl__mesh_arrays *a, const uint8_t *seam, uint8_t *near,
+                             const xyl_allocator *alloc, xyl__mesh_arrays *view)
+{
+    size_t nq = 0, nt = 0;
+    for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
+        bool quad = f < a->quad_count;
+        const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
+        for (int c = 0; c < (quad ? 4 : 3); ++c) near[f] = (uint8_t)(near[f] | seam[idx[c]]);
+        if (near[f]) quad ? ++nq : ++nt;
+    }
+    view->quads = xyl__alloc_array(alloc, nq ? nq : 1, 4 * sizeof *view->quads);
+    view->triangles = xyl__alloc_array(alloc, nt ? nt : 1, 3 * sizeof *view->triangles);
+    view->face_branches =
+        xyl__alloc_array(alloc, nq + nt ? nq + nt : 1, sizeof *view->face_branches);
+    if (!view->quads || !view->triangles || !view->face_branches) return XYL_ERR_OUT_OF_MEMORY;
+    view->quad_count = nq;
+    view->triangle_count = nt;
+    size_t q = 0, t = 0;
+    for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
+        if (!near[f]) continue;
+        bool quad = f < a->quad_count;
+        if (quad) memcpy(view->quads + 4 * q, a->quads + 4 * f, 4 * sizeof *view->quads);
+        else memcpy(view->triangles + 3 * t, a->triangles + 3 * (f - a->quad_count),
+                    3 * sizeof *view->triangles);
+        view->face_branches[quad ? q : nq + t] = a->face_branches[f];
+        quad ? ++q : ++t;
+    }
+    return XYL_OK;
+}
+
 /* Per-branch normals on a mesh whose vertices sit on the limit surface: the limit normal
  * (exact) wherever all of a vertex's faces are of its own branch, the own-branch face average
- * at the seams between branches, where the limit normal would lean towards the other branch. */
+ * at the seams between branches, where the limit normal would lean towards the other branch.
+ * The averages are taken over the faces that touch a seam vertex only, in mesh order: a seam
+ * vertex sees all its faces in the same order, so its sums are those of the whole mesh, and
+ * the rest (most of a subdivided mesh) is not summed only to be thrown away. */
 xyl_result xyl__stems_branch_normals_on_limit(stems *s, xyl__mesh_arrays *a)
 {
     xyl_vec3 *limit = a->normals;
+    const size_t faces = a->quad_count + a->triangle_count;
     uint8_t *seam = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, 1);
-    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals); /* zeroed there */
-    xyl_result r = seam && a->normals ? xyl__mesh_normals(a, a->face_branches, &s->alloc, a->normals)
-                                      : XYL_ERR_OUT_OF_MEMORY;
+    uint8_t *near = xyl__calloc(&s->alloc, faces ? faces : 1, 1); /* touches a seam vertex */
+    /* zeroed by xyl__mesh_normals */
+    a->normals = xyl__alloc_array(&s->alloc, a->vertex_count, sizeof *a->normals);
+    xyl__mesh_arrays view = *a; /* positions and branches; its faces are set below */
+    view.normals = NULL;
+    view.uv_wraps = NULL;
+    view.quads = view.triangles = view.face_branches = NULL;
+    xyl_result r = seam && near && a->normals ? XYL_OK : XYL_ERR_OUT_OF_MEMORY;
     if (!r) {
-        for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
+        for (size_t f = 0; f < faces; ++f) {
             bool quad = f < a->quad_count;
             const uint32_t *idx = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
             for (int c = 0; c < (quad ? 4 : 3); ++c)
                 if (a->branch_ids[idx[c]] != a->face_branches[f]) seam[idx[c]] = 1;
         }
+        r = near_faces(a, seam, near, &s->alloc, &view);
+    }
+    if (!r) r = xyl__mesh_normals(&view, view.face_branches, &s->alloc, a->normals);
+    if (!r)
         for (size_t v = 0; v < a->vertex_count; ++v)
             if (!seam[v]) a->normals[v] = limit[v];
-    }
+    xyl__free(&s->alloc, view.quads);
+    xyl__free(&s->alloc, view.triangles);
+    xyl__free(&s->alloc, view.face_branches);
+    xyl__free(&s->alloc, near);
     xyl__free(&s->alloc, seam);
     xyl__free(&s->alloc, limit);
     return r ? xyl__stems_oom(s) : XYL_OK;
