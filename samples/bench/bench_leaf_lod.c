@@ -236,7 +236,7 @@ int main(int argc, char **argv)
         glNamedFramebufferRenderbuffer(t.fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t.rb[1]);
         glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
         glViewport(0, 0, (GLsizei)o.size, (GLsizei)o.size);
-        printf("device: %s; default tree, %zu leaves, %u sector(s), %u x %u px, budget %.2f px, "
+        printf("device: %s; default tree, %zu leaves, %u sector(s), %u x %u px, budget %.3g px, "
                "median of %d frames\n", xyl_gl_context_renderer(ctx), f->original_count, o.sectors,
                o.size, o.size, (double)o.error_px, o.frames);
         printf("%-7s %-14s %8s %9s %8s %10s\n", "view", "mode", "leaves", "RMSE", "changed",
