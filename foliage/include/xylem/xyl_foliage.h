@@ -39,6 +39,10 @@
  *     const xyl_foliage_lod *l = &s->lods[lod[0]];
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
  *
+ *     // or per leaf: the coarsest leaf within the budget in each cluster (count, then fill)
+ *     size_t cut_n = 0;
+ *     xyl_foliage_cut(f, &v, NULL, 0, &cut_n, &diag);
+ *
  *     // how a LOD looks against all the leaves: its leaves (count, then fill), then RMSE and
  *     // coverage over 20 views, and the Hausdorff distance
  *     size_t m = 0;

@@ -17,6 +17,8 @@
  *     uint32_t lod[1];                       // one per sector, from xyl_foliage_pick
  *     xyl_foliage_pick(foliage, &view, lod, 1, &diag);
  *     xyl_foliage_gl_draw(leaves, &fr, lod, 1, &diag);
+ *     // or per leaf, chosen on the GPU (xyl_foliage_cut's test): one compute pass, one draw
+ *     xyl_foliage_gl_draw_adaptive(leaves, &fr, &view, &diag);
  *     xyl_foliage_gl_destroy(leaves);
  *
  * A draw is, per sector, two instanced draws of a 4-vertex triangle strip over the LOD's two
