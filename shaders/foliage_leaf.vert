@@ -2,7 +2,8 @@
 // its quad, a 4-vertex triangle strip: vertex v is the corner st = (v & 1 ? 1 : -1,
 // v & 2 ? 1 : -1), so the strip runs (-1,-1) (1,-1) (-1,1) (1,1), counter-clockwise seen from
 // the side the normal points to. No index buffer, no per-leaf CPU work. GL adds u_base to
-// gl_InstanceID; Vulkan draws each range with firstInstance = its first record, which
+// gl_InstanceID, or with u_list = 1 (the per-leaf cut's indirect draw) reads the record's
+// index at gl_InstanceID of the list foliage_cut.comp wrote; Vulkan draws each range with firstInstance = its first record, which
 // gl_InstanceIndex includes. With XYL_CAPTURE (Vulkan, the tests' capture pipeline) each
 // vertex also stores what it computed at 4 * record + corner.
 
@@ -30,7 +31,11 @@ layout(std430, binding = XYL_FOLIAGE_GL_BINDING_LEAVES) readonly buffer xyl_leaf
 };
 layout(location = XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ) uniform mat4 u_view_proj;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_BASE) uniform uint u_base;
-#define XYL_LEAF_INDEX (u_base + uint(gl_InstanceID))
+layout(location = XYL_FOLIAGE_GL_UNIFORM_LIST) uniform uint u_list;
+layout(std430, binding = XYL_FOLIAGE_GL_BINDING_LIST) readonly buffer xyl_list_buffer {
+    uint xyl_list[];
+};
+#define XYL_LEAF_INDEX (u_list != 0u ? xyl_list[gl_InstanceID] : u_base + uint(gl_InstanceID))
 #define XYL_CORNER gl_VertexID
 #endif
 

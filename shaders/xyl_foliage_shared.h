@@ -35,6 +35,17 @@
 #define XYL_FOLIAGE_GL_UNIFORM_COLOR 3
 #define XYL_FOLIAGE_GL_UNIFORM_CUTOFF 4
 #define XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY 5
+/* The per-leaf cut (foliage_cut.comp, xyl_foliage_gl_draw_adaptive): the drawn records'
+ * indices (the vertex shader reads them when u_list is 1), the collapse forest's nodes, and the
+ * indirect draw command whose instance count the cut counts up. */
+#define XYL_FOLIAGE_GL_UNIFORM_LIST 6
+#define XYL_FOLIAGE_GL_BINDING_LIST 1
+#define XYL_FOLIAGE_GL_BINDING_NODES 2
+#define XYL_FOLIAGE_GL_BINDING_COMMAND 3
+#define XYL_FOLIAGE_GL_UNIFORM_CUT_EYE 0
+#define XYL_FOLIAGE_GL_UNIFORM_CUT_PER_DISTANCE 1
+#define XYL_FOLIAGE_GL_UNIFORM_CUT_COUNT 2
+#define XYL_FOLIAGE_GL_CUT_GROUP 64
 
 /* The Vulkan leaf renderer's (xylem/xyl_foliage_vk.h): descriptor set 0 holds the records, the
  * leaf texture and, in the tests' capture pipeline only, the captured vertices; the draw's

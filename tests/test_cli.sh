@@ -242,10 +242,22 @@ else
 fi
 cmp -s "$tmp/leafy.png" "$tmp/bare.png" && bad "leaves changed nothing" || ok
 expect 0 "render leaves, hardware path, wireframe" -- "$XYLEM" render --tess hardware --wireframe --camera 40,20,0.5 --size 64x64 --out "$tmp/hl.png"
+# per-leaf LOD: the GPU's cut draws fewer leaves than there are from a distance, and leaves
+expect 0 "render per-leaf LOD" -- "$XYLEM" render --foliage adaptive --camera 30,20,1.5 --size 96x96 --out "$tmp/adaptive.png"
+contains "leaves: --foliage adaptive: " "render names the per-leaf mode"
+drawn="$(sed -n 's/.* \([0-9]*\) of 5103 leaves drawn.*/\1/p' "$tmp/out")"
+[ -n "$drawn" ] && [ "$drawn" -gt 0 ] && [ "$drawn" -lt 5103 ] && ok ||
+  bad "--foliage adaptive from 1.5 framing distances drew '$drawn' of 5103 leaves"
+if command -v node >/dev/null; then
+  read -r n_ad g_ad < <(node "$pixels" "$tmp/adaptive.png")
+  [ "$g_ad" -gt 100 ] && ok || bad "--foliage adaptive: $g_ad leaf-green pixels"
+fi
+expect 64 "per-leaf LOD is GL's" -- "$XYLEM" render --backend vulkan --foliage adaptive --out "$tmp/x.png"
+contains "use --backend gl" "Vulkan --foliage adaptive says which backend"
 expect 0 "render a leafless preset" -- "$XYLEM" render --preset abop-1.24a --size 32x32 --out "$tmp/nl.png"
 grep -q "^leaves:" "$tmp/out" && bad "a leafless tree reported leaves" || ok
 expect 64 "render bad --foliage" -- "$XYLEM" render --foliage billboard --out "$tmp/x.png"
-contains "takes full, lod or none" "bad --foliage names the values"
+contains "takes full, lod, adaptive or none" "bad --foliage names the values"
 expect 64 "render --foliage without a value" -- "$XYLEM" render --out "$tmp/x.png" --foliage
 expect 64 "--foliage is not view's" -- "$XYLEM" view --foliage
 expect 64 "render bad camera distance" -- "$XYLEM" render --camera 10,10,0 --out "$tmp/x.png"

@@ -1387,6 +1387,76 @@ static void pick_is_finest_inside_coarsest_far_and_monotone_in_distance(void **s
     free(in);
 }
 
+/* The per-leaf cut on the CPU: every original stood for exactly once by a leaf within the
+ * budget whose ancestors are not, all originals inside the crown, the roots far away, and
+ * count-then-fill with the view's checks. */
+static void cut_is_a_valid_cut_of_the_coarsest_leaves_within_the_budget(void **state)
+{
+    (void)state;
+    uint32_t n = SANITIZED ? 500 : 3000;
+    xyl_leaf *in = new_leaves(n, SET_CROWN, 45);
+    xyl_foliage_desc fd = {0};
+    fd.sectors = 3;
+    xyl_foliage *f = build_ok(in, n, &fd);
+    uint32_t *cut = malloc(f->leaf_count * sizeof *cut);
+    uint8_t *drawn = malloc(f->leaf_count);
+    assert_true(cut && drawn);
+    double per_distance = 0.5 * 2.0 * tan(0.4) / 1080.0; /* the defaults */
+    size_t previous = 0;
+    for (double k = 0.0; k < 1e5; k = k ? k * 3.0 : 0.5) {
+        xyl_foliage_view v = {{f->center.x + (float)(k * f->radius), f->center.y,
+                               f->center.z + (float)(0.5 * k * f->radius)}, 0, 0, 0};
+        size_t count = 0;
+        assert_int_equal(xyl_foliage_cut(f, &v, NULL, 0, &count, NULL), XYL_OK);
+        if (count > 1) {
+            size_t got = 0;
+            xyl_diag d = {0};
+            assert_int_equal(xyl_foliage_cut(f, &v, cut, count - 1, &got, &d),
+                             XYL_ERR_INVALID_ARGUMENT);
+            assert_true(strlen(d.message) > 0);
+        }
+        assert_int_equal(xyl_foliage_cut(f, &v, cut, f->leaf_count, &count, NULL), XYL_OK);
+        memset(drawn, 0, f->leaf_count);
+        for (size_t i = 0; i < count; ++i) {
+            if (i) assert_true(cut[i] > cut[i - 1]);
+            drawn[cut[i]] = 1;
+        }
+        for (size_t i = 0; i < f->leaf_count; ++i) {
+            /* within the budget, by the documented test */
+            const xyl_leaf *l = &f->leaves[i];
+            double dx = v.eye[0] - l->center.x, dy = v.eye[1] - l->center.y,
+                   dz = v.eye[2] - l->center.z;
+            double r = sqrt((double)l->axis.x * l->axis.x + (double)l->axis.y * l->axis.y +
+                            (double)l->axis.z * l->axis.z + (double)l->side.x * l->side.x +
+                            (double)l->side.y * l->side.y + (double)l->side.z * l->side.z) +
+                       f->links[i].error;
+            double dist = sqrt(dx * dx + dy * dy + dz * dz) - r;
+            bool within = f->links[i].error <= per_distance * (dist > 0 ? dist : 0);
+            if (drawn[i]) assert_true(within);
+            if (f->links[i].source == UINT32_MAX) continue;
+            int covered = 0;
+            for (int32_t p = (int32_t)i; p >= 0; p = f->links[p].parent) covered += drawn[p];
+            assert_int_equal(covered, 1);
+        }
+        if (k == 0.0) assert_int_equal(count, f->original_count); /* inside the crown */
+        previous = count;
+    }
+    assert_int_equal(previous, f->coarsest_count); /* far away: the roots */
+    xyl_diag d = {0};
+    size_t count = 0;
+    xyl_foliage_view bad = {{0, 0, 0}, 0, 0, -1.0f};
+    assert_int_equal(xyl_foliage_cut(f, &bad, NULL, 0, &count, &d), XYL_ERR_INVALID_ARGUMENT);
+    bad.error_px = 0.0f;
+    bad.eye[2] = NAN;
+    assert_int_equal(xyl_foliage_cut(f, &bad, NULL, 0, &count, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(xyl_foliage_cut(NULL, NULL, NULL, 0, &count, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_foliage_cut(f, NULL, NULL, 0, NULL, &d), XYL_ERR_INVALID_ARGUMENT);
+    xyl_foliage_destroy(f);
+    free(cut);
+    free(drawn);
+    free(in);
+}
+
 static void pick_rejects_bad_views_and_leaves_lods_untouched(void **state)
 {
     (void)state;
@@ -2088,6 +2158,7 @@ int main(void)
         cmocka_unit_test(bounding_spheres_hold_every_original_leaf),
         cmocka_unit_test(pick_is_finest_inside_coarsest_far_and_monotone_in_distance),
         cmocka_unit_test(pick_rejects_bad_views_and_leaves_lods_untouched),
+        cmocka_unit_test(cut_is_a_valid_cut_of_the_coarsest_leaves_within_the_budget),
         cmocka_unit_test(sectors_split_the_crown_by_azimuth_and_each_draws_its_live_leaves),
         cmocka_unit_test(sectors_without_leaves_have_one_empty_lod),
         cmocka_unit_test(one_sector_is_the_default),

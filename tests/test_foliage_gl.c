@@ -419,6 +419,180 @@ static void expect_no_gl_call(xyl_result got, xyl_result want, const xyl_diag *d
     assert_int_equal(prog, 0); /* the renderer's program was never bound */
 }
 
+/* ---- 3. the per-leaf cut: GPU = CPU, and a valid cut ----------------------------------------- */
+
+/* Leaf k's test of the cut in double and how near it is to a tie: |error - allowed| against
+ * the float roundings of the distance (|eye - c| + r) and of the error. */
+static bool near_tie(const xyl_foliage *f, uint32_t k, const double eye[3], double per_distance)
+{
+    const xyl_leaf *l = &f->leaves[k];
+    double dx = eye[0] - l->center.x, dy = eye[1] - l->center.y, dz = eye[2] - l->center.z;
+    double len = sqrt(dx * dx + dy * dy + dz * dz);
+    double r = xyl__foliage_node_radius(l, &f->links[k]);
+    double d = len - r, allowed = per_distance * (d > 0.0 ? d : 0.0);
+    double e = f->links[k].error;
+    return fabs(e - allowed) <= 1e-5 * (e + per_distance * (len + r));
+}
+
+/* Every original stood for by exactly one drawn leaf: itself or one ancestor. */
+static void expect_valid_cut(const xyl_foliage *f, const uint8_t *drawn)
+{
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        if (f->links[k].source == UINT32_MAX) continue;
+        int covered = 0;
+        for (int32_t p = (int32_t)k; p >= 0; p = f->links[p].parent) covered += drawn[p];
+        if (covered != 1) fail_msg("original %zu is drawn %d times in the cut", k, covered);
+    }
+}
+
+/* The GPU's cut for one eye against xyl_foliage_cut: equal, except below a node whose own test
+ * is a tie within float rounding (near_tie: the CPU decides in double, the GPU in float). */
+static size_t compare_cut(suite *s, const xyl_foliage *f, const xyl_foliage_view *v,
+                          const xyl_foliage_gl_frame *fr, size_t *ties)
+{
+    xyl_diag d = {0};
+    expect(xyl_foliage_gl_draw_adaptive(s->gl, fr, v, &d), XYL_OK, &d);
+    size_t n_gpu = 0, n_cpu = 0;
+    expect(xyl_foliage_gl_last_cut(s->gl, NULL, 0, &n_gpu, &d), XYL_OK, &d);
+    expect(xyl_foliage_cut(f, v, NULL, 0, &n_cpu, &d), XYL_OK, &d);
+    uint32_t *gpu = malloc((n_gpu + 1) * sizeof *gpu), *cpu = malloc((n_cpu + 1) * sizeof *cpu);
+    uint8_t *dg = calloc(f->leaf_count, 1), *dc = calloc(f->leaf_count, 1);
+    assert_true(gpu && cpu && dg && dc);
+    expect(xyl_foliage_gl_last_cut(s->gl, gpu, n_gpu, &n_gpu, &d), XYL_OK, &d);
+    expect(xyl_foliage_cut(f, v, cpu, n_cpu, &n_cpu, &d), XYL_OK, &d);
+    for (size_t i = 0; i < n_gpu; ++i) {
+        assert_true(gpu[i] < f->leaf_count);
+        assert_int_equal(dg[gpu[i]], 0); /* no record twice */
+        dg[gpu[i]] = 1;
+    }
+    for (size_t i = 0; i < n_cpu; ++i) {
+        if (i) assert_true(cpu[i] > cpu[i - 1]);
+        dc[cpu[i]] = 1;
+    }
+    expect_valid_cut(f, dg);
+    expect_valid_cut(f, dc);
+    double eye[3] = {v->eye[0], v->eye[1], v->eye[2]};
+    double per_distance = 0.0;
+    assert_int_equal(xyl__foliage_view_resolve(v, eye, &per_distance, NULL), XYL_OK);
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        if (dg[k] == dc[k]) continue;
+        bool tie = false;
+        for (int32_t p = (int32_t)k; p >= 0 && !tie; p = f->links[p].parent)
+            tie = near_tie(f, (uint32_t)p, eye, per_distance);
+        if (!tie)
+            fail_msg("leaf %zu: GPU %s, CPU %s, and no tie on its path", k,
+                     dg[k] ? "draws" : "skips", dc[k] ? "draws" : "skips");
+        ++*ties;
+    }
+    free(gpu);
+    free(cpu);
+    free(dg);
+    free(dc);
+    return n_cpu;
+}
+
+static void gpu_cut_equals_the_cpu_cut(void **state)
+{
+    suite *s = need_gl(state);
+    own_target t = target_create();
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+    glViewport(0, 0, SIDE, SIDE);
+    for (uint32_t sectors = 1; sectors <= 4; sectors += 3) {
+        xyl_foliage *f = tree_foliage(xyl_lsystem_default_preset(), sectors);
+        xyl_diag d = {0};
+        expect(xyl_foliage_gl_set_foliage(s->gl, f, &d), XYL_OK, &d);
+        /* how often a merged leaf's error is below a child's (the cut does not need it) */
+        size_t below = 0, merged = 0;
+        for (size_t k = 0; k < f->leaf_count; ++k) {
+            const xyl_leaf_link *l = &f->links[k];
+            if (l->children[0] < 0) continue;
+            ++merged;
+            below += l->error < f->links[l->children[0]].error ||
+                     l->error < f->links[l->children[1]].error;
+        }
+        xyl_foliage_gl_frame fr;
+        frame_of(f, 0.7f, 0.3f, &fr);
+        /* the eye at the crown's centre, at its rim, and 1.5, 4, 20 and 1000 radii away; budgets
+         * of 0.5, 1 and 4 pixels */
+        const float dist[6] = {0.0f, 1.0f, 1.5f, 4.0f, 20.0f, 1000.0f};
+        const float budget[3] = {0.5f, 1.0f, 4.0f};
+        size_t ties = 0, first = 0, last = 0;
+        for (int i = 0; i < 6; ++i)
+            for (int b = 0; b < 3; ++b) {
+                xyl_foliage_view v = {{f->center.x + dist[i] * f->radius * 0.6f,
+                                       f->center.y + dist[i] * f->radius * 0.3f,
+                                       f->center.z + dist[i] * f->radius * 0.742f},
+                                      0.8f, 1080, budget[b]};
+                size_t n = compare_cut(s, f, &v, &fr, &ties);
+                if (i == 0 && b == 0) first = n;
+                last = n;
+            }
+        /* inside the crown every original; far away the roots of the forest */
+        assert_int_equal(first, f->original_count);
+        assert_int_equal(last, f->coarsest_count);
+        print_message("%u sector(s): %zu leaves, %zu of %zu merged leaves with an error below a "
+                      "child's, %zu leaves decided by a float tie\n",
+                      sectors, f->leaf_count, below, merged, ties);
+        xyl_foliage_destroy(f);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    target_destroy(&t);
+}
+
+static void adaptive_bad_input_gets_result_codes(void **state)
+{
+    (void)need_gl(state);
+    xyl_diag d = {0};
+    xyl_foliage_gl *fresh = NULL;
+    expect(xyl_foliage_gl_create(NULL, &fresh, &d), XYL_OK, &d);
+    xyl_foliage *f = tree_foliage("faycal-leaves", 1);
+    xyl_foliage_gl_frame fr;
+    frame_of(f, 0.3f, 0.2f, &fr);
+    xyl_foliage_view v = {{0, 1, 30}, 0, 0, 0};
+    own_target t = target_create();
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+    glUseProgram(0);
+    size_t n = 0;
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, &fr, &v, &d), XYL_ERR_INVALID_ARGUMENT,
+                      &d);
+    expect(xyl_foliage_gl_last_cut(fresh, NULL, 0, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_gl_set_foliage(fresh, f, &d), XYL_OK, &d);
+    glUseProgram(0);
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(NULL, &fr, &v, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, NULL, &v, &d), XYL_ERR_INVALID_ARGUMENT,
+                      &d);
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, &fr, NULL, &d), XYL_ERR_INVALID_ARGUMENT,
+                      &d);
+    xyl_foliage_view bad = v;
+    bad.error_px = -1.0f;
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, &fr, &bad, &d), XYL_ERR_INVALID_ARGUMENT,
+                      &d);
+    bad = v;
+    bad.fovy = 4.0f;
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, &fr, &bad, &d), XYL_ERR_INVALID_ARGUMENT,
+                      &d);
+    bad = v;
+    bad.eye[1] = NAN;
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, &fr, &bad, &d), XYL_ERR_NON_FINITE, &d);
+    xyl_foliage_gl_frame zero = {0};
+    expect_no_gl_call(xyl_foliage_gl_draw_adaptive(fresh, &zero, &v, &d), XYL_ERR_INVALID_ARGUMENT,
+                      &d);
+    /* a read-back before any adaptive draw of this upload */
+    expect(xyl_foliage_gl_last_cut(fresh, NULL, 0, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_gl_draw_adaptive(fresh, &fr, &v, &d), XYL_OK, &d);
+    expect(xyl_foliage_gl_last_cut(NULL, NULL, 0, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_gl_last_cut(fresh, NULL, 0, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_gl_last_cut(fresh, NULL, 0, &n, &d), XYL_OK, &d);
+    assert_true(n > 0);
+    uint32_t one = 0;
+    if (n > 1)
+        expect(xyl_foliage_gl_last_cut(fresh, &one, 1, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    target_destroy(&t);
+    xyl_foliage_gl_destroy(fresh);
+    xyl_foliage_destroy(f);
+}
+
 static void bad_input_gets_result_codes(void **state)
 {
     (void)need_gl(state);
@@ -575,6 +749,8 @@ int main(void)
         cmocka_unit_test(alpha_test_discards_the_transparent_half),
         cmocka_unit_test(both_faces_are_lit_and_light_shines_through),
         cmocka_unit_test(bad_input_gets_result_codes),
+        cmocka_unit_test(gpu_cut_equals_the_cpu_cut),
+        cmocka_unit_test(adaptive_bad_input_gets_result_codes),
         cmocka_unit_test(create_without_a_context_is_unsupported),
         cmocka_unit_test(renderer_allocates_through_the_callers_allocator),
     };

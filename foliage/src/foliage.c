@@ -314,12 +314,9 @@ static uint32_t coarsest_within(const xyl_foliage_sector *s, double allowed)
     return lo;
 }
 
-xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
-                            uint32_t *lods, size_t capacity, xyl_diag *diag)
+xyl_result xyl__foliage_view_resolve(const xyl_foliage_view *view, double eye[3],
+                                     double *per_distance, xyl_diag *diag)
 {
-    if (!foliage || !lods || capacity < foliage->sector_count)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "foliage and lods must not be NULL, and lods must hold one LOD a sector");
     xyl_foliage_view zero = {{0, 0, 0}, 0, 0, 0};
     const xyl_foliage_view *v = view ? view : &zero;
     if (!isfinite(v->eye[0]) || !isfinite(v->eye[1]) || !isfinite(v->eye[2]) ||
@@ -332,13 +329,81 @@ xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *
     double height = v->viewport_height ? v->viewport_height : 1080;
     double budget = v->error_px > 0.0f ? v->error_px : 0.5;
     /* world error per unit of distance that the budget allows */
-    double per_distance = budget * 2.0 * tan(0.5 * fovy) / height;
-    xyl__dvec3 eye = xyl__d3(v->eye[0], v->eye[1], v->eye[2]);
+    *per_distance = budget * 2.0 * tan(0.5 * fovy) / height;
+    for (int k = 0; k < 3; ++k) eye[k] = v->eye[k];
+    return XYL_OK;
+}
+
+xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
+                            uint32_t *lods, size_t capacity, xyl_diag *diag)
+{
+    if (!foliage || !lods || capacity < foliage->sector_count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "foliage and lods must not be NULL, and lods must hold one LOD a sector");
+    double e[3], per_distance = 0.0;
+    xyl_result r = xyl__foliage_view_resolve(view, e, &per_distance, diag);
+    if (r != XYL_OK) return r;
+    xyl__dvec3 eye = xyl__d3(e[0], e[1], e[2]);
     for (uint32_t k = 0; k < foliage->sector_count; ++k) {
         const xyl_foliage_sector *s = &foliage->sectors[k];
         double d = xyl__d3_len(xyl__d3_sub(eye, xyl__from_f3(s->center))) - (double)s->radius;
         lods[k] = d > 0.0 ? coarsest_within(s, d * per_distance) : 0;
     }
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+/* ---- the per-leaf cut ----------------------------------------------------------------------- */
+
+double xyl__foliage_node_radius(const xyl_leaf *leaf, const xyl_leaf_link *link)
+{
+    double ax = leaf->axis.x, ay = leaf->axis.y, az = leaf->axis.z;
+    double sx = leaf->side.x, sy = leaf->side.y, sz = leaf->side.z;
+    return sqrt(ax * ax + ay * ay + az * az + sx * sx + sy * sy + sz * sz) + (double)link->error;
+}
+
+/* Leaf k within the budget: its error at most per_distance times the distance from the eye to
+ * its sphere (0 inside it, where only an error of 0 passes). */
+static bool cut_allowed(const xyl_foliage *f, uint32_t k, const double eye[3], double per_distance)
+{
+    const xyl_leaf *l = &f->leaves[k];
+    double dx = eye[0] - l->center.x, dy = eye[1] - l->center.y, dz = eye[2] - l->center.z;
+    double d = sqrt(dx * dx + dy * dy + dz * dz) - xyl__foliage_node_radius(l, &f->links[k]);
+    return (double)f->links[k].error <= per_distance * (d > 0.0 ? d : 0.0);
+}
+
+xyl_result xyl_foliage_cut(const xyl_foliage *f, const xyl_foliage_view *view, uint32_t *out,
+                           size_t capacity, size_t *count, xyl_diag *diag)
+{
+    if (!f || !count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "foliage and count must not be NULL");
+    if (f->leaf_count && (!f->leaves || !f->links))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the foliage's leaves or links are missing");
+    double eye[3], per_distance = 0.0;
+    xyl_result r = xyl__foliage_view_resolve(view, eye, &per_distance, diag);
+    if (r != XYL_OK) return r;
+    size_t n = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+        n = 0;
+        for (size_t k = 0; k < f->leaf_count; ++k) {
+            if (!cut_allowed(f, (uint32_t)k, eye, per_distance)) continue;
+            int32_t p = f->links[k].parent;
+            size_t steps = 0; /* a malformed forest with a cycle must not hang the walk */
+            while (p >= 0 && (size_t)p < f->leaf_count && steps++ < f->leaf_count &&
+                   !cut_allowed(f, (uint32_t)p, eye, per_distance))
+                p = f->links[p].parent;
+            if (p >= 0 && (size_t)p < f->leaf_count && steps <= f->leaf_count) continue;
+            if (pass == 1) out[n] = (uint32_t)k;
+            ++n;
+        }
+        if (pass == 0 && !out) break;
+        if (pass == 0 && capacity < n)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                             "the cut has %zu leaves, out holds %zu", n, capacity);
+    }
+    *count = n;
     xyl__diag_ok(diag);
     return XYL_OK;
 }

@@ -118,6 +118,17 @@ static xyl_result resolve_frame(const float view_proj[16], const float light_dir
     return XYL_OK;
 }
 
+xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t, const float view_proj[16],
+                                    const float light_dir[3], const float color[4],
+                                    float alpha_cutoff, float translucency,
+                                    xyl__foliage_frame *out, xyl_diag *diag)
+{
+    if (t->leaf_count == 0)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no foliage uploaded (set_foliage first)");
+    return resolve_frame(view_proj, light_dir, color, alpha_cutoff, translucency, out, diag);
+}
+
 xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t *lods,
                                    size_t lod_count, const float view_proj[16],
                                    const float light_dir[3], const float color[4],

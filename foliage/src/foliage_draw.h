@@ -46,4 +46,11 @@ xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t 
                                    float alpha_cutoff, float translucency,
                                    xyl__foliage_frame *out, xyl_diag *diag);
 
+/* The same without LODs, for a draw that chooses its leaves itself (the per-leaf cut): an
+ * upload, then the frame's values. */
+xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t, const float view_proj[16],
+                                    const float light_dir[3], const float color[4],
+                                    float alpha_cutoff, float translucency,
+                                    xyl__foliage_frame *out, xyl_diag *diag);
+
 #endif /* XYL_FOLIAGE_DRAW_H */

@@ -12,6 +12,16 @@
 
 extern const unsigned char xyl__shader_gl_foliage_leaf_vert[];
 extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
+extern const unsigned char xyl__shader_gl_foliage_cut_comp[];
+
+/* A node of the collapse forest as foliage_cut.comp reads it (std430). */
+typedef struct cut_node {
+    float sphere[4]; /* centre, radius */
+    float error;
+    int32_t parent;
+    uint32_t pad[2];
+} cut_node;
+_Static_assert(sizeof(cut_node) == 32, "std430 stride of xyl_cut_node");
 
 #define XFB_VERTEX_BYTES 28u /* gl_Position, v_st, v_leaf */
 #define VERTICES_PER_LEAF_CAPTURED 6u /* a strip of 4 is two triangles */
@@ -22,6 +32,8 @@ _Static_assert(offsetof(xyl__foliage_captured, leaf) == 24, "v_leaf follows vec4
 
 struct xyl_foliage_gl {
     GLuint program, vao, leaf_buf, texture, capture_fbo, xfb_buf;
+    GLuint cut_program, node_buf, list_buf, command_buf; /* the per-leaf cut */
+    bool has_cut; /* an adaptive draw ran since the last upload */
     GLuint generated_query, written_query;
     GLint64 max_ssbo_bytes;
     GLint max_texture_side;
@@ -108,6 +120,27 @@ static xyl_result build_program(xyl_foliage_gl *gl, xyl_diag *diag)
     return XYL_OK;
 }
 
+static xyl_result build_cut_program(xyl_foliage_gl *gl, xyl_diag *diag)
+{
+    char log[192] = "";
+    GLuint sh = compile(GL_COMPUTE_SHADER, xyl__shader_gl_foliage_cut_comp, log,
+                        (GLsizei)sizeof log);
+    if (!sh) return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader foliage_cut.comp: %s", log);
+    GLuint p = glCreateProgram();
+    glAttachShader(p, sh);
+    glDeleteShader(sh);
+    glLinkProgram(p);
+    GLint ok = GL_FALSE;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, (GLsizei)sizeof log, NULL, log);
+        glDeleteProgram(p);
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "program foliage_cut: %s", log);
+    }
+    gl->cut_program = p;
+    return XYL_OK;
+}
+
 /* A 1 x 1 opaque white texture: untextured leaves show the frame's colour. */
 static GLuint make_texture(const uint8_t *rgba, uint32_t w, uint32_t h)
 {
@@ -141,6 +174,11 @@ static xyl_result build_objects(xyl_foliage_gl *gl, xyl_diag *diag)
     glCreateVertexArrays(1, &gl->vao); /* core profile draws need one, even without attributes */
     glCreateBuffers(1, &gl->leaf_buf);
     glCreateBuffers(1, &gl->xfb_buf);
+    GLuint *cut_bufs[3] = {&gl->node_buf, &gl->list_buf, &gl->command_buf};
+    for (int k = 0; k < 3; ++k) {
+        glCreateBuffers(1, cut_bufs[k]);
+        glNamedBufferData(*cut_bufs[k], 16, NULL, GL_DYNAMIC_DRAW);
+    }
     glCreateFramebuffers(1, &gl->capture_fbo);
     /* no attachments: captures draw with the rasterizer off, but a draw still needs a complete
      * framebuffer, which a surfaceless context's default one is not */
@@ -168,6 +206,7 @@ xyl_result xyl_foliage_gl_create(const xyl_foliage_gl_desc *desc, xyl_foliage_gl
     gl->alloc = a;
     drain_errors();
     r = build_program(gl, diag);
+    if (r == XYL_OK) r = build_cut_program(gl, diag);
     if (r == XYL_OK) r = build_objects(gl, diag);
     if (r != XYL_OK) {
         xyl_foliage_gl_destroy(gl);
@@ -183,9 +222,10 @@ void xyl_foliage_gl_destroy(xyl_foliage_gl *gl)
     if (!gl) return;
     if (epoxy_gl_version() != 0) { /* GL objects died with the context otherwise */
         glDeleteProgram(gl->program);
+        glDeleteProgram(gl->cut_program);
         glDeleteVertexArrays(1, &gl->vao);
-        GLuint bufs[2] = {gl->leaf_buf, gl->xfb_buf};
-        glDeleteBuffers(2, bufs);
+        GLuint bufs[5] = {gl->leaf_buf, gl->xfb_buf, gl->node_buf, gl->list_buf, gl->command_buf};
+        glDeleteBuffers(5, bufs);
         glDeleteTextures(1, &gl->texture);
         glDeleteFramebuffers(1, &gl->capture_fbo);
         GLuint qs[2] = {gl->generated_query, gl->written_query};
@@ -198,21 +238,48 @@ void xyl_foliage_gl_destroy(xyl_foliage_gl *gl)
 
 /* ---- the species' leaves ------------------------------------------------------------------ */
 
-/* A new buffer, swapped in only when the upload worked. */
+/* The forest as the cut reads it: each leaf's sphere (xyl_foliage_cut's), error and parent.
+ * A parent outside the array (a foliage assembled by hand) is refused: the shader follows the
+ * parents unchecked. */
+static xyl_result make_nodes(const xyl_foliage *f, cut_node *nodes, xyl_diag *diag)
+{
+    if (!f->links)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "the foliage has no links");
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        const xyl_leaf *l = &f->leaves[k];
+        const xyl_leaf_link *ln = &f->links[k];
+        if (ln->parent < -1 || (int64_t)ln->parent >= (int64_t)f->leaf_count ||
+            !(ln->error >= 0.0f) || !isfinite(ln->error))
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)k,
+                             "leaf %zu's link has a parent outside the array or a bad error", k);
+        nodes[k] = (cut_node){{l->center.x, l->center.y, l->center.z,
+                               (float)xyl__foliage_node_radius(l, ln)},
+                              ln->error, ln->parent, {0, 0}};
+    }
+    return XYL_OK;
+}
+
+/* New buffers, swapped in only when the whole upload worked. */
 static xyl_result upload_records(xyl_foliage_gl *gl, const xyl_foliage_gpu_leaf *records,
-                                 size_t count, xyl_diag *diag)
+                                 const cut_node *nodes, size_t count, xyl_diag *diag)
 {
     drain_errors();
-    GLuint buf = 0;
-    glCreateBuffers(1, &buf);
-    glNamedBufferStorage(buf, (GLsizeiptr)(count * sizeof *records), records, 0);
+    GLuint buf[3] = {0, 0, 0};
+    glCreateBuffers(3, buf);
+    glNamedBufferStorage(buf[0], (GLsizeiptr)(count * sizeof *records), records, 0);
+    glNamedBufferData(buf[1], (GLsizeiptr)(count * sizeof *nodes), nodes, GL_STATIC_DRAW);
+    glNamedBufferData(buf[2], (GLsizeiptr)(count * sizeof(uint32_t)), NULL, GL_DYNAMIC_DRAW);
     xyl_result r = gl_check(diag, "uploading the leaves");
     if (r != XYL_OK) {
-        glDeleteBuffers(1, &buf);
+        glDeleteBuffers(3, buf);
         return r;
     }
-    glDeleteBuffers(1, &gl->leaf_buf);
-    gl->leaf_buf = buf;
+    GLuint old[3] = {gl->leaf_buf, gl->node_buf, gl->list_buf};
+    glDeleteBuffers(3, old);
+    gl->leaf_buf = buf[0];
+    gl->node_buf = buf[1];
+    gl->list_buf = buf[2];
+    gl->has_cut = false;
     return XYL_OK;
 }
 
@@ -230,10 +297,13 @@ xyl_result xyl_foliage_gl_set_foliage(xyl_foliage_gl *gl, const xyl_foliage *fol
     xyl_result r = xyl__foliage_tables_make(foliage, &gl->alloc, &tables, diag);
     if (r != XYL_OK) return r;
     xyl_foliage_gpu_leaf *records = xyl__alloc_array(&gl->alloc, n, sizeof *records);
-    if (!records) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    cut_node *nodes = xyl__alloc_array(&gl->alloc, n, sizeof *nodes);
+    if (!records || !nodes) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
-    if (r == XYL_OK) r = upload_records(gl, records, n, diag);
+    if (r == XYL_OK) r = make_nodes(foliage, nodes, diag);
+    if (r == XYL_OK) r = upload_records(gl, records, nodes, n, diag);
     xyl__free(&gl->alloc, records);
+    xyl__free(&gl->alloc, nodes);
     if (r != XYL_OK) {
         xyl__foliage_tables_free(&tables, &gl->alloc);
         return r;
@@ -291,8 +361,10 @@ static void bind_program(const xyl_foliage_gl *gl, const xyl__foliage_frame *rf)
     glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rf->color);
     glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rf->cutoff);
     glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rf->translucency);
+    glProgramUniform1ui(p, XYL_FOLIAGE_GL_UNIFORM_LIST, 0);
     glBindVertexArray(gl->vao);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LEAVES, gl->leaf_buf);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LIST, gl->list_buf);
     glBindTextureUnit(XYL_FOLIAGE_GL_BINDING_TEXTURE, gl->texture);
 }
 
@@ -329,6 +401,92 @@ xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *f
     r = gl_check(diag, "drawing the leaves");
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
+}
+
+/* ---- the per-leaf cut --------------------------------------------------------------------- */
+
+/* The cut into the list and the command's instance count, then one indirect draw of it. */
+static void draw_cut(xyl_foliage_gl *gl, const xyl__foliage_frame *rf, const double eye[3],
+                     double per_distance)
+{
+    const uint32_t command[4] = {4, 0, 0, 0};
+    glNamedBufferSubData(gl->command_buf, 0, sizeof command, command);
+    uint32_t n = (uint32_t)gl->tables.leaf_count;
+    GLuint c = gl->cut_program;
+    glProgramUniform3f(c, XYL_FOLIAGE_GL_UNIFORM_CUT_EYE, (float)eye[0], (float)eye[1],
+                       (float)eye[2]);
+    glProgramUniform1f(c, XYL_FOLIAGE_GL_UNIFORM_CUT_PER_DISTANCE, (float)per_distance);
+    glProgramUniform1ui(c, XYL_FOLIAGE_GL_UNIFORM_CUT_COUNT, n);
+    glUseProgram(c);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_NODES, gl->node_buf);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LIST, gl->list_buf);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_COMMAND, gl->command_buf);
+    glDispatchCompute((n + XYL_FOLIAGE_GL_CUT_GROUP - 1) / XYL_FOLIAGE_GL_CUT_GROUP, 1, 1);
+    glMemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    bind_program(gl, rf);
+    glProgramUniform1ui(gl->program, XYL_FOLIAGE_GL_UNIFORM_LIST, 1);
+    GLint indirect = 0;
+    glGetIntegerv(GL_DRAW_INDIRECT_BUFFER_BINDING, &indirect);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gl->command_buf);
+    glDrawArraysIndirect(GL_TRIANGLE_STRIP, NULL);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, (GLuint)indirect);
+}
+
+xyl_result xyl_foliage_gl_draw_adaptive(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
+                                        const xyl_foliage_view *view, xyl_diag *diag)
+{
+    if (!gl || !frame || !view)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "gl, frame and view are required");
+    xyl__foliage_frame rf;
+    xyl_result r = xyl__foliage_frame_check(&gl->tables, frame->view_proj, frame->light_dir,
+                                            frame->color, frame->alpha_cutoff,
+                                            frame->translucency, &rf, diag);
+    double eye[3], per_distance = 0.0;
+    if (r == XYL_OK) r = xyl__foliage_view_resolve(view, eye, &per_distance, diag);
+    if (r != XYL_OK) return r;
+    drain_errors();
+    GLboolean cull = glIsEnabled(GL_CULL_FACE);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    draw_cut(gl, &rf, eye, per_distance);
+    if (cull) glEnable(GL_CULL_FACE);
+    r = gl_check(diag, "drawing the leaves' cut");
+    gl->has_cut = r == XYL_OK;
+    if (r == XYL_OK) xyl__diag_ok(diag);
+    return r;
+}
+
+xyl_result xyl_foliage_gl_last_cut(xyl_foliage_gl *gl, uint32_t *out, size_t capacity,
+                                   size_t *count, xyl_diag *diag)
+{
+    if (!gl || !count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "gl and count are required");
+    if (!gl->has_cut)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no adaptive draw since the foliage was uploaded");
+    drain_errors();
+    uint32_t command[4] = {0, 0, 0, 0};
+    glGetNamedBufferSubData(gl->command_buf, 0, sizeof command, command);
+    xyl_result r = gl_check(diag, "reading the cut's draw command back");
+    if (r != XYL_OK) return r;
+    size_t n = command[1];
+    if (n > gl->tables.leaf_count)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "the GPU's cut counts %zu of %zu leaves", n, gl->tables.leaf_count);
+    if (out) {
+        if (capacity < n)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                             "the cut has %zu leaves, out holds %zu", n, capacity);
+        if (n) glGetNamedBufferSubData(gl->list_buf, 0, (GLsizeiptr)(n * sizeof *out), out);
+        r = gl_check(diag, "reading the cut back");
+        if (r != XYL_OK) return r;
+    }
+    *count = n;
+    xyl__diag_ok(diag);
+    return XYL_OK;
 }
 
 /* ---- capture ------------------------------------------------------------------------------ */

@@ -267,4 +267,13 @@ xyl_result xyl__collapse_viewpoint(xyl_leaf *leaves, float *error, uint32_t *chi
                                    const xyl__viewpoint_options *o, const xyl_allocator *a,
                                    uint32_t *merges, xyl__viewpoint_stats *stats, xyl_diag *diag);
 
+/* xyl_foliage_view's checks and defaults (xyl_foliage_pick's rules): the eye, and the world
+ * error the budget allows per unit of distance. */
+xyl_result xyl__foliage_view_resolve(const xyl_foliage_view *view, double eye[3],
+                                     double *per_distance, xyl_diag *diag);
+
+/* The radius of leaf k's sphere in the per-leaf cut (xyl_foliage_cut): its quad's half
+ * diagonal grown by its error. */
+double xyl__foliage_node_radius(const xyl_leaf *leaf, const xyl_leaf_link *link);
+
 #endif

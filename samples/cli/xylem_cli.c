@@ -45,8 +45,9 @@ enum {
 };
 
 typedef enum tess_mode { TESS_INSTANCED, TESS_HARDWARE, TESS_CPU } tess_mode;
-/* render --foliage: the LOD the pixel budget picks (default), the finest, or none. */
-typedef enum leaf_mode { LEAVES_LOD, LEAVES_FULL, LEAVES_NONE } leaf_mode;
+/* render --foliage: the LOD the pixel budget picks (default), the finest, none, or per leaf
+ * (the GPU's cut of the collapse forest). */
+typedef enum leaf_mode { LEAVES_LOD, LEAVES_FULL, LEAVES_NONE, LEAVES_ADAPTIVE } leaf_mode;
 
 typedef struct render_options {
     bool vulkan;
@@ -62,7 +63,7 @@ typedef struct render_options {
     uint32_t samples;        /* MSAA samples; 0: 4 */
     uint32_t frames;         /* view: close after N frames (0: when the window closes) */
     const char *screenshot;  /* view: PNG of the last frame */
-    leaf_mode leaves;        /* render --foliage full|lod|none */
+    leaf_mode leaves;        /* render --foliage full|lod|adaptive|none */
 } render_options;
 
 /* The leaves of 'foliage' and 'mesh --foliage'. */
@@ -125,11 +126,13 @@ static const char usage_text[] =
     "           [--backend gl|vulkan]\n"
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION[,DISTANCE]]\n"
-    "           [--size WxH] [--wireframe] [--samples N] [--foliage full|lod|none]\n"
-    "           --out FILE.png\n"
+    "           [--size WxH] [--wireframe] [--samples N]\n"
+    "           [--foliage full|lod|adaptive|none] --out FILE.png\n"
     "                               refine the stem mesh (PN patches) and render it headless,\n"
     "                               with the source's leaves (GL): lod (default) the leaf LOD\n"
-    "                               within the pixel budget, full all of them, none bare stems\n"
+    "                               within the pixel budget, adaptive the coarsest leaf within\n"
+    "                               it per cluster (chosen on the GPU, GL only), full all of\n"
+    "                               them, none bare stems\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -391,7 +394,9 @@ static int parse_options(int argc, char **argv, options *o)
             if (strcmp(val, "lod") == 0) o->render.leaves = LEAVES_LOD;
             else if (strcmp(val, "full") == 0) o->render.leaves = LEAVES_FULL;
             else if (strcmp(val, "none") == 0) o->render.leaves = LEAVES_NONE;
-            else return usage_error("render --foliage takes full, lod or none, not '%s'", val);
+            else if (strcmp(val, "adaptive") == 0) o->render.leaves = LEAVES_ADAPTIVE;
+            else return usage_error("render --foliage takes full, lod, adaptive or none, not '%s'",
+                                    val);
             continue;
         }
         if (strcmp(opt, "--foliage") == 0) {
@@ -942,7 +947,9 @@ typedef struct render_job {
     const char *device;
     leaf_job leaves;      /* the source's leaves (foliage NULL: none, or --foliage none) */
     bool draw_leaves;     /* leaves and a backend that draws them */
-    uint32_t *lods;       /* one per sector: the LOD drawn */
+    uint32_t *lods;       /* one per sector: the LOD drawn (0s with --foliage adaptive) */
+    bool adaptive;        /* --foliage adaptive: the GPU's cut for leaf_view */
+    xyl_foliage_view leaf_view;
     size_t leaves_drawn;
     bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
 } render_job;
@@ -1026,15 +1033,17 @@ static xyl_result pick_leaves(const options *o, render_job *j, xyl_diag *d)
     j->lods = calloc(f->sector_count, sizeof *j->lods);
     if (!j->lods) return XYL_ERR_OUT_OF_MEMORY;
     xyl_result r = XYL_OK;
-    if (o->render.leaves == LEAVES_LOD) {
-        xyl_foliage_view v = {0};
-        memcpy(v.eye, j->camera.eye, sizeof v.eye);
-        v.fovy = j->camera.fovy;
-        v.viewport_height = j->image.height;
-        v.error_px = (float)o->render.error_px;
-        r = xyl_foliage_pick(f, &v, j->lods, f->sector_count, d);
-    }
-    if (r == XYL_OK) r = xyl_foliage_gather(f, j->lods, f->sector_count, NULL, 0, &j->leaves_drawn, d);
+    xyl_foliage_view *v = &j->leaf_view;
+    memcpy(v->eye, j->camera.eye, sizeof v->eye);
+    v->fovy = j->camera.fovy;
+    v->viewport_height = j->image.height;
+    v->error_px = (float)o->render.error_px;
+    j->adaptive = o->render.leaves == LEAVES_ADAPTIVE;
+    if (o->render.leaves == LEAVES_LOD) r = xyl_foliage_pick(f, v, j->lods, f->sector_count, d);
+    /* adaptive: the CPU's cut here; the GPU's count replaces it after the draw */
+    if (r == XYL_OK && j->adaptive) r = xyl_foliage_cut(f, v, NULL, 0, &j->leaves_drawn, d);
+    else if (r == XYL_OK)
+        r = xyl_foliage_gather(f, j->lods, f->sector_count, NULL, 0, &j->leaves_drawn, d);
     return r;
 }
 
@@ -1179,7 +1188,12 @@ static xyl_result draw_tree(render_job *j, xyl_tess_gl *gl, xyl_foliage_gl *leav
         memcpy(lf.view_proj, j->frame.view_proj, sizeof lf.view_proj);
         memcpy(lf.light_dir, j->frame.light_dir, sizeof lf.light_dir);
         lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
-        r = xyl_foliage_gl_draw(leaves, &lf, j->lods, j->leaves.foliage->sector_count, d);
+        if (j->adaptive) {
+            r = xyl_foliage_gl_draw_adaptive(leaves, &lf, &j->leaf_view, d);
+            if (r == XYL_OK) r = xyl_foliage_gl_last_cut(leaves, NULL, 0, &j->leaves_drawn, d);
+        } else {
+            r = xyl_foliage_gl_draw(leaves, &lf, j->lods, j->leaves.foliage->sector_count, d);
+        }
     }
     if (r == XYL_OK) {
         read_image(&t, j);
@@ -1285,7 +1299,11 @@ static xyl_result render_vk(render_job *j, xyl_diag *d)
 
 static void print_render(const options *o, const render_job *j, const char *path)
 {
-    if (j->draw_leaves) {
+    if (j->draw_leaves && j->adaptive) {
+        printf("leaves: --foliage adaptive: the coarsest leaf within the budget per cluster, "
+               "%zu of %zu leaves drawn (LOD array built in %.3f ms)\n", j->leaves_drawn,
+               j->leaves.foliage->original_count, j->leaves.build_ms);
+    } else if (j->draw_leaves) {
         const xyl_foliage *f = j->leaves.foliage;
         uint32_t lo = UINT32_MAX, hi = 0, top = 0;
         for (uint32_t s = 0; s < f->sector_count; ++s) {
@@ -1365,6 +1383,9 @@ static int cmd_render(const options *o)
         return usage_error("%s", "--tess hardware is the GL backend's; use --backend gl");
     if (ro->frames || ro->screenshot)
         return usage_error("%s", "--frames and --screenshot are options of 'view'");
+    if (ro->vulkan && ro->leaves == LEAVES_ADAPTIVE)
+        return usage_error("%s", "--foliage adaptive chooses the leaves with a GL compute pass; "
+                                 "use --backend gl");
     render_job j;
     memset(&j, 0, sizeof j);
     j.image.width = ro->width ? ro->width : 1024;

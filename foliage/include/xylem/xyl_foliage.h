@@ -39,6 +39,10 @@
  *     const xyl_foliage_lod *l = &s->lods[lod[0]];
  *     draw(s->base, l->a); draw(s->base + l->b, l->c);
  *
+ *     // or per leaf: the coarsest leaf within the budget in each cluster (count, then fill)
+ *     size_t cut_n = 0;
+ *     xyl_foliage_cut(f, &v, NULL, 0, &cut_n, &diag);
+ *
  *     // how a LOD looks against all the leaves: its leaves (count, then fill), then RMSE and
  *     // coverage over 20 views, and the Hausdorff distance
  *     size_t m = 0;
@@ -386,6 +390,31 @@ typedef struct xyl_foliage_view {
  * untouched. Allocates nothing. */
 XYL_API xyl_result xyl_foliage_pick(const xyl_foliage *foliage, const xyl_foliage_view *view,
                                     uint32_t *lods, size_t capacity, xyl_diag *diag);
+
+/* ---- choosing per leaf (the cut) -------------------------------------------------------------
+ *
+ * Per-leaf LOD in the spirit of BroadLeaf: instead of one LOD per sector, each cluster of the
+ * collapse forest shows the coarsest leaf that is within the budget from where the eye is. Leaf
+ * k is within the budget when
+ *     links[k].error <= error_px * 2 tan(fovy / 2) / viewport_height * max(d_k, 0),
+ *     d_k = |eye - leaves[k].center| - r_k,  r_k = sqrt(|axis|^2 + |side|^2) + links[k].error,
+ * the distance from the eye to a sphere around the leaf's quad grown by its error, which holds
+ * every original it stands for. The cut draws leaf k when it is within the budget and none of
+ * its ancestors (parent, parent's parent, ...) is: on every path from an original up to its
+ * root the topmost leaf within the budget. Originals (error 0) always pass, so every original
+ * is stood for by exactly one drawn leaf, whatever the errors and spheres (no monotonicity is
+ * assumed: a leaf's error is its own bound against the originals, not against its children).
+ * The same test as xyl_foliage_gl_draw_adaptive, in double here. */
+
+/* The leaves of the cut, as indices into f->leaves in increasing order. Count-then-fill: with
+ * out == NULL sets *count and returns XYL_OK; with capacity < *count,
+ * XYL_ERR_INVALID_ARGUMENT. view as xyl_foliage_pick takes it (NULL: the defaults, eye at the
+ * origin) with the same errors (XYL_ERR_NON_FINITE, XYL_ERR_INVALID_ARGUMENT); NULL f or count:
+ * XYL_ERR_INVALID_ARGUMENT. An empty foliage gives *count = 0. Allocates nothing; time
+ * O(leaves + drawn leaves * depth of the forest). */
+XYL_API xyl_result xyl_foliage_cut(const xyl_foliage *f, const xyl_foliage_view *view,
+                                   uint32_t *out, size_t capacity, size_t *count,
+                                   xyl_diag *diag);
 
 /* ---- the leaves of a LOD and its image error --------------------------------------------- */
 

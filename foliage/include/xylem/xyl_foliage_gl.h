@@ -17,6 +17,8 @@
  *     uint32_t lod[1];                       // one per sector, from xyl_foliage_pick
  *     xyl_foliage_pick(foliage, &view, lod, 1, &diag);
  *     xyl_foliage_gl_draw(leaves, &fr, lod, 1, &diag);
+ *     // or per leaf, chosen on the GPU (xyl_foliage_cut's test): one compute pass, one draw
+ *     xyl_foliage_gl_draw_adaptive(leaves, &fr, &view, &diag);
  *     xyl_foliage_gl_destroy(leaves);
  *
  * A draw is, per sector, two instanced draws of a 4-vertex triangle strip over the LOD's two
@@ -93,6 +95,29 @@ XYL_API xyl_result xyl_foliage_gl_set_texture(xyl_foliage_gl *gl, const uint8_t 
  * XYL_ERR_OUT_OF_MEMORY (GL_OUT_OF_MEMORY). */
 XYL_API xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
                                        const uint32_t *lods, size_t lod_count, xyl_diag *diag);
+
+/* Per-leaf LOD (docs/foliage.md, "Per-leaf LOD"): a compute pass over the uploaded collapse
+ * forest keeps, per cluster, the coarsest leaf within the view's budget (the cut of
+ * xyl_foliage_cut, in float), writes the chosen records' indices to a buffer and their count
+ * into an indirect draw command, and one glDrawArraysIndirect draws them as instanced 4-vertex
+ * strips. No LOD table, nothing per leaf on the CPU, no read-back. view gives the eye in the
+ * foliage's coordinates, fovy, viewport height and pixel budget as xyl_foliage_pick takes them
+ * (zero fields: its defaults). The same GL state as xyl_foliage_gl_draw. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL gl, frame or view, no foliage uploaded, the frame's and the
+ * view's bad values as xyl_foliage_gl_draw and xyl_foliage_pick refuse them), XYL_ERR_NON_FINITE,
+ * XYL_ERR_OUT_OF_MEMORY (GL). Uses GL_SHADER_STORAGE_BUFFER bindings 0 to 3; restores the
+ * draw-indirect buffer binding. */
+XYL_API xyl_result xyl_foliage_gl_draw_adaptive(xyl_foliage_gl *gl,
+                                                const xyl_foliage_gl_frame *frame,
+                                                const xyl_foliage_view *view, xyl_diag *diag);
+
+/* The record indices the last xyl_foliage_gl_draw_adaptive drew, in the GPU's order (not
+ * sorted: invocations append as they finish), read back (this waits for the GPU). For
+ * statistics and tests, not for every frame. Count-then-fill: out NULL sets *count only; with
+ * capacity < *count, XYL_ERR_INVALID_ARGUMENT. Errors: XYL_ERR_INVALID_ARGUMENT (NULL gl or
+ * count, no adaptive draw since the last upload), XYL_ERR_UNSUPPORTED (a GL error). */
+XYL_API xyl_result xyl_foliage_gl_last_cut(xyl_foliage_gl *gl, uint32_t *out, size_t capacity,
+                                           size_t *count, xyl_diag *diag);
 
 #ifdef __cplusplus
 }
