@@ -241,6 +241,13 @@ else
   bad "node (scripts/setup.sh installs it) is needed to read the rendered leaves back"
 fi
 cmp -s "$tmp/leafy.png" "$tmp/bare.png" && bad "leaves changed nothing" || ok
+# from ten times the framing distance the tree is small but drawn (the far plane once stayed
+# where it was and the picture came out empty)
+expect 0 "render from far away" -- "$XYLEM" render --camera 30,10,10 --size 256x256 --out "$tmp/far.png"
+if command -v node >/dev/null; then
+  read -r n_far g_far < <(node "$pixels" "$tmp/far.png")
+  [ "$g_far" -gt 20 ] && ok || bad "from far away: $g_far leaf-green pixels of $n_far"
+fi
 expect 0 "render leaves, hardware path, wireframe" -- "$XYLEM" render --tess hardware --wireframe --camera 40,20,0.5 --size 64x64 --out "$tmp/hl.png"
 # per-leaf LOD: the GPU's cut draws fewer leaves than there are from a distance, and leaves
 expect 0 "render per-leaf LOD" -- "$XYLEM" render --foliage adaptive --camera 30,20,1.5 --size 96x96 --out "$tmp/adaptive.png"

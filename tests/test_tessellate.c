@@ -703,6 +703,23 @@ static void camera_maps_target_to_the_centre_in_both_conventions(void **state)
         clip(gl, p, c);
         for (int k = 0; k < 3; ++k) assert_true(fabsf(c[k] / c[3]) <= 1.0f);
     }
+    /* zooming out 10x or in 0.3x keeps the box between the planes (out, it once fell past the
+     * far plane: an empty picture), and the centre on the axis */
+    const float factors[] = {10.0f, 0.3f, 100.0f};
+    for (int z = 0; z < 3; ++z) {
+        xyl_tess_camera zc = cam;
+        xyl_tess_camera_zoom(&zc, factors[z]);
+        assert_int_equal(xyl_tess_camera_matrix(&zc, XYL_TESS_CLIP_GL, gl, NULL), XYL_OK);
+        for (int i = 0; i < 8; ++i) {
+            float p[3] = {i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]};
+            clip(gl, p, c);
+            assert_true(c[3] > 0.0f && fabsf(c[2] / c[3]) <= 1.0f);
+        }
+    }
+    xyl_tess_camera same = cam;
+    xyl_tess_camera_zoom(&same, -1.0f);
+    xyl_tess_camera_zoom(&same, NAN);
+    assert_memory_equal(&same, &cam, sizeof cam);
 }
 
 /* ---- bad input ------------------------------------------------------------------------------ */

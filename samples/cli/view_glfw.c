@@ -108,9 +108,7 @@ static void camera_of(const viewer *v, int width, int height, xyl_tess_camera *c
 {
     xyl_tess_camera_frame(v->lo, v->hi, v->azimuth, v->elevation, 0.8f,
                           (float)width / (float)(height ? height : 1), cam);
-    for (int k = 0; k < 3; ++k)
-        cam->eye[k] = cam->target[k] + v->zoom * (cam->eye[k] - cam->target[k]);
-    cam->near_plane *= v->zoom;
+    if (v->zoom != 1.0f) xyl_tess_camera_zoom(cam, v->zoom);
 }
 
 static int draw_frame(viewer *v, int width, int height)

@@ -237,10 +237,7 @@ static void camera_of(const tuner *t, int width, int height, xyl_tess_camera *ca
     bool leaves = leaves_shown(t);
     xyl_tess_camera_frame(leaves ? t->leaf_lo : t->lo, leaves ? t->leaf_hi : t->hi, t->p.azimuth,
                           t->p.elevation, 0.8f, (float)width / (float)(height ? height : 1), cam);
-    if (t->p.zoom == 1.0f) return; /* the framed eye itself, bit for bit */
-    for (int k = 0; k < 3; ++k)
-        cam->eye[k] = cam->target[k] + t->p.zoom * (cam->eye[k] - cam->target[k]);
-    cam->near_plane *= t->p.zoom;
+    if (t->p.zoom != 1.0f) xyl_tess_camera_zoom(cam, t->p.zoom); /* else the framed eye, bit for bit */
 }
 
 static void fill_frame(const tuner *t, xyl_tess_frame *f)

@@ -991,12 +991,8 @@ static void frame_camera(const options *o, render_job *j)
     double el = o->render.has_camera ? o->render.elevation : 10.0;
     xyl_tess_camera_frame(lo, hi, (float)(az * deg), (float)(el * deg), 0.8f,
                           (float)j->image.width / (float)j->image.height, &j->camera);
-    if (o->render.has_camera && o->render.zoom != 1.0) {
-        xyl_tess_camera *c = &j->camera;
-        for (int k = 0; k < 3; ++k)
-            c->eye[k] = c->target[k] + (float)o->render.zoom * (c->eye[k] - c->target[k]);
-        c->near_plane *= (float)o->render.zoom;
-    }
+    if (o->render.has_camera && o->render.zoom != 1.0)
+        xyl_tess_camera_zoom(&j->camera, (float)o->render.zoom);
 }
 
 /* Levels for the view (or the fixed level), timed: the per-frame CPU cost of the technique. */

@@ -1,4 +1,5 @@
 /* Cameras: look-at + perspective in either API's clip convention. */
+#include <math.h>
 #include <string.h>
 
 #include "tess_internal.h"
@@ -90,4 +91,17 @@ void xyl_tess_camera_frame(const float lo[3], const float hi[3], float azimuth, 
     camera->aspect = (float)as;
     camera->near_plane = (float)(0.01 * d);
     camera->far_plane = (float)(d + 2.0 * r);
+}
+
+void xyl_tess_camera_zoom(xyl_tess_camera *camera, float factor)
+{
+    if (!camera || !(factor > 0.0f) || !isfinite(factor)) return;
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        double e = (double)camera->eye[k] - camera->target[k];
+        d2 += e * e;
+        camera->eye[k] = (float)((double)camera->target[k] + factor * e);
+    }
+    camera->near_plane *= factor;
+    camera->far_plane = (float)((double)camera->far_plane + ((double)factor - 1.0) * sqrt(d2));
 }

@@ -218,6 +218,12 @@ XYL_API void xyl_tess_camera_frame(const float lo[3], const float hi[3], float a
                                    float elevation, float fovy, float aspect,
                                    xyl_tess_camera *camera);
 
+/* Moves the eye along its line to the target to factor times its distance (> 1 away, < 1
+ * closer) and scales the near plane with it; the far plane moves by the eye's change in
+ * distance, so what was between the planes stays between them. A factor that is not finite or
+ * not > 0 leaves the camera as it is. */
+XYL_API void xyl_tess_camera_zoom(xyl_tess_camera *camera, float factor);
+
 typedef enum xyl_tess_path {
     XYL_TESS_PATH_INSTANCED = 0, /* one pattern per level, drawn once per patch */
     XYL_TESS_PATH_HARDWARE = 1   /* TCS/TES: GL only */
