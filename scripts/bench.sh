@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Benchmarks: installs the peers (npm packages lindenmayer and @dgreenheck/ez-tree, pinned in
-# samples/bench/), builds bench_lsystem, bench_stems, bench_tess and bench_foliage in Release
+# samples/bench/), builds bench_lsystem, bench_stems, bench_tess, bench_foliage and
+# bench_leaf_lod (leaves on the GL backend, headless) in Release
 # and runs them one after the other; the figures go to the terminal and to
 # $BUILD_DIR/<name>.txt, bench_tess's rows also to $BUILD_DIR/bench_tess.dat (+ .front), plotted
 # by gnuplot into $BUILD_DIR/bench_tess.png, and bench_foliage's comparison with meshoptimizer
@@ -65,7 +66,7 @@ if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; the
     generator=(-G Ninja)
 fi
 cmake -S . -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess bench_foliage
+cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess bench_foliage bench_leaf_lod
 
 if commit="$(git rev-parse --short HEAD 2>/dev/null)"; then
     git diff --quiet HEAD || commit="$commit (with local changes)"
@@ -123,4 +124,8 @@ if run_bench bench_foliage "${foliage_args[@]}"; then
 else
     status=$?
 fi
+echo
+leaf_args=()
+for a in "$@"; do [ "$a" = --quick ] && leaf_args+=(--quick); done
+run_bench bench_leaf_lod "${leaf_args[@]}" || status=$?
 exit "$status"
