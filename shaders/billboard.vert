@@ -7,7 +7,7 @@
 layout(location = 0) uniform mat4 u_view_proj;
 layout(location = 1) uniform vec3 u_eye;
 layout(location = 2) uniform vec3 u_center;
-layout(location = 3) uniform float u_half;
+layout(location = 3) uniform vec2 u_half; // half width, half height
 layout(location = 4) uniform int u_kind;
 layout(location = 5) uniform int u_planes;
 
@@ -37,7 +37,7 @@ void main()
         }
     }
     vec3 right = normalize(cross(up, d));
-    vec3 p = u_center + u_half * (st.x * right + st.y * up);
+    vec3 p = u_center + u_half.x * st.x * right + u_half.y * st.y * up;
     gl_Position = u_view_proj * vec4(p, 1.0);
     v_uv = st * 0.5 + 0.5;
     v_right = right;

@@ -18,7 +18,7 @@ struct xyl_billboard_gl {
     GLuint program, vao, color_tex, normal_tex;
     xyl_billboard_kind kind;
     uint32_t views, resolution;
-    float center[3], half; /* the quads' centre and half side */
+    float center[3], half[2]; /* the quads' centre, half width and half height */
     xyl_allocator alloc;
 };
 
@@ -134,12 +134,12 @@ static void view_dir(const xyl_billboard_gl *bb, uint32_t v, float d[3])
 }
 
 /* Orthographic world-to-clip matrix (column-major, GL clip) looking along -d at the centre,
- * the square of side 2 * half filling the view and depth [-radius, radius] around the centre. */
+ * the quad's rectangle (2 * half[0] by 2 * half[1]) filling the view and depth [-radius, radius] around the centre. */
 static void bake_matrix(const xyl_billboard_gl *bb, const float d[3], float radius, float m[16])
 {
     const float right[3] = {d[2], 0.0f, -d[0]}, up[3] = {0.0f, 1.0f, 0.0f};
     const float *rows[3] = {right, up, d};
-    const float scale[3] = {1.0f / bb->half, 1.0f / bb->half, -1.0f / radius};
+    const float scale[3] = {1.0f / bb->half[0], 1.0f / bb->half[1], -1.0f / radius};
     memset(m, 0, 16 * sizeof *m);
     for (int r = 0; r < 3; ++r) {
         float c = 0.0f;
@@ -179,12 +179,13 @@ static xyl_result target_make(bake_target *t, uint32_t side, xyl_diag *diag)
 }
 
 /* Normals from the depth buffer (rows bottom to top, depth in [0, 1], 1 = nothing): the height
- * towards the camera h = (1 - 2 depth) * radius, n ~ (-dh/dx, -dh/dy, 1) in texel units
- * `step`. A neighbour that is empty or lies across a jump of more than `jump` is not used. */
-static void depth_to_normals(const float *depth, uint32_t n, float radius, float step,
+ * towards the camera h = (1 - 2 depth) * radius, n ~ (-dh/dx, -dh/dy, 1), texels step[0] wide
+ * and step[1] high in world units. A neighbour that is empty or lies across a jump of more
+ * than four texels' size is not used. */
+static void depth_to_normals(const float *depth, uint32_t n, float radius, const float step[2],
                              uint8_t *out)
 {
-    const float jump = 4.0f * step;
+    const float jump = 4.0f * fmaxf(step[0], step[1]);
     for (uint32_t y = 0; y < n; ++y)
         for (uint32_t x = 0; x < n; ++x) {
             size_t i = (size_t)y * n + x;
@@ -208,7 +209,7 @@ static void depth_to_normals(const float *depth, uint32_t n, float radius, float
                     sum += dh;
                     ++used;
                 }
-                g[axis] = used ? sum / (float)used / step : 0.0f;
+                g[axis] = used ? sum / (float)used / step[axis] : 0.0f;
             }
             float v[3] = {-g[0], -g[1], 1.0f};
             float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -300,7 +301,7 @@ static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_d
     uint32_t n = bb->resolution;
     bake_target t = {0};
     xyl_result r = target_make(&t, n, diag);
-    float step = 2.0f * bb->half / (float)n;
+    const float step[2] = {2.0f * bb->half[0] / (float)n, 2.0f * bb->half[1] / (float)n};
     for (uint32_t v = 0; r == XYL_OK && v < bb->views; ++v) {
         float d[3], m[16];
         view_dir(bb, v, d);
@@ -362,7 +363,8 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
         bb->center[k] = 0.5f * (desc->lo[k] + desc->hi[k]);
         ext[k] = 0.5f * (desc->hi[k] - desc->lo[k]);
     }
-    bb->half = fmaxf(ext[1], sqrtf(ext[0] * ext[0] + ext[2] * ext[2]));
+    bb->half[0] = sqrtf(ext[0] * ext[0] + ext[2] * ext[2]); /* any turn about the axis fits */
+    bb->half[1] = ext[1];
     float radius = sqrtf(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]) * 1.01f;
     size_t texels = (size_t)bb->resolution * bb->resolution;
     uint8_t *rgba = xyl__alloc_array(&a, texels, 8);
@@ -482,7 +484,7 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     glProgramUniformMatrix4fv(p, U_VIEW_PROJ, 1, GL_FALSE, frame->view_proj);
     glProgramUniform3fv(p, U_EYE, 1, frame->eye);
     glProgramUniform3fv(p, U_CENTER, 1, bb->center);
-    glProgramUniform1f(p, U_HALF, bb->half);
+    glProgramUniform2fv(p, U_HALF, 1, bb->half);
     glProgramUniform1i(p, U_KIND, (GLint)bb->kind);
     glProgramUniform1i(p, U_PLANES, (GLint)bb->views);
     glProgramUniform3fv(p, U_LIGHT, 1, l);

@@ -20,14 +20,15 @@
  *     xyl_billboard_gl_destroy(bb);
  *
  * The billboard's axis is the vertical (+Y) line through the centre of the box; its quads are
- * squares of side max(box height, twice the box's horizontal half-diagonal), centred on the
- * box's centre. Kinds:
+ * rectangles as high as the box and as wide as the diagonal of the box's horizontal section
+ * (so the tree fits whichever way a quad turns), centred on the box's centre. Kinds:
  *   - spherical: one quad facing the eye (its up vector is world +Y made perpendicular to the
  *     line of sight), showing the one view baked from the side (+Z);
  *   - cylindrical: one quad turning about the axis to face the eye, the same +Z side view;
  *   - cross: planes vertical quads through the axis, plane k at pi * k / planes from the XY
  *     plane about +Y, each showing the orthographic view baked perpendicular to it.
- * Each baked view is an orthographic render of the tree into a square RGBA8 colour texture
+ * Each baked view is an orthographic render of the tree into a resolution x resolution RGBA8 colour texture
+ * stretched over the rectangle
  * (alpha: covered or not) and an RGBA8 normal map: the quad-space normal (x along the quad's
  * right, y up, z towards the bake camera) in RGB as n * 0.5 + 0.5, reconstructed from the
  * bake's depth buffer by central differences. The bake lights the tree from the bake camera
