@@ -263,8 +263,28 @@ expect 64 "per-leaf LOD is GL's" -- "$XYLEM" render --backend vulkan --foliage a
 contains "use --backend gl" "Vulkan --foliage adaptive says which backend"
 expect 0 "render a leafless preset" -- "$XYLEM" render --preset abop-1.24a --size 32x32 --out "$tmp/nl.png"
 grep -q "^leaves:" "$tmp/out" && bad "a leafless tree reported leaves" || ok
-expect 64 "render bad --foliage" -- "$XYLEM" render --foliage billboard --out "$tmp/x.png"
-contains "takes full, lod, adaptive or none" "bad --foliage names the values"
+expect 64 "render bad --foliage" -- "$XYLEM" render --foliage impostor --out "$tmp/x.png"
+contains "takes full, lod, adaptive, none or billboard" "bad --foliage names the values"
+# the tree as its billboard: baked from the tree, drawn in its place (GL only)
+for kind in spherical cylindrical cross; do
+  expect 0 "render --foliage billboard --billboard $kind" -- "$XYLEM" render --foliage billboard --billboard $kind --billboard-size 64 --size 64x64 --out "$tmp/bb_$kind.png"
+  contains "billboard: $kind" "billboard $kind named"
+done
+contains "4 views of 64 x 64 texels" "a cross has 4 planes by default"
+cmp -s "$tmp/bb_cross.png" "$tmp/bb_spherical.png" && bad "cross and spherical billboards look the same" || ok
+expect 0 "render a 3-plane cross with its image error" -- "$XYLEM" render --foliage billboard --planes 3 --billboard-size 32 --billboard-error --size 32x32 --out "$tmp/bb3.png"
+contains "3 views of 32 x 32 texels" "--planes 3 bakes three views"
+contains "20 dodecahedron views" "--billboard-error prints the table"
+contains "mean " "--billboard-error prints the mean"
+expect 64 "billboard with 1 plane" -- "$XYLEM" render --foliage billboard --planes 1 --out "$tmp/x.png"
+expect 64 "billboard with 9 planes" -- "$XYLEM" render --foliage billboard --planes 9 --out "$tmp/x.png"
+expect 64 "billboard of absurd resolution" -- "$XYLEM" render --foliage billboard --billboard-size 100000 --out "$tmp/x.png"
+contains "--billboard-size takes" "a bad billboard size is named"
+expect 64 "bad billboard kind" -- "$XYLEM" render --foliage billboard --billboard sprite --out "$tmp/x.png"
+expect 64 "--planes on a spherical billboard" -- "$XYLEM" render --foliage billboard --billboard spherical --planes 3 --out "$tmp/x.png"
+expect 64 "--billboard without --foliage billboard" -- "$XYLEM" render --billboard cross --out "$tmp/x.png"
+expect 64 "billboard on Vulkan" -- "$XYLEM" render --backend vulkan --foliage billboard --out "$tmp/x.png"
+[ ! -e "$tmp/x.png" ] && ok || bad "a refused billboard render left x.png"
 expect 64 "render --foliage without a value" -- "$XYLEM" render --out "$tmp/x.png" --foliage
 expect 64 "--foliage is not view's" -- "$XYLEM" view --foliage
 expect 64 "render bad camera distance" -- "$XYLEM" render --camera 10,10,0 --out "$tmp/x.png"

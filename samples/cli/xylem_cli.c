@@ -20,6 +20,7 @@
 #include <xylem/xyl_tess_gl.h>
 #ifdef XYL_HAVE_GL
 #include <epoxy/gl.h>
+#include <xylem/xyl_billboard_gl.h>
 #include <xylem/xyl_foliage_gl.h>
 #endif
 #ifdef XYL_HAVE_VULKAN
@@ -45,9 +46,11 @@ enum {
 };
 
 typedef enum tess_mode { TESS_INSTANCED, TESS_HARDWARE, TESS_CPU } tess_mode;
-/* render --foliage: the LOD the pixel budget picks (default), the finest, none, or per leaf
- * (the GPU's cut of the collapse forest). */
-typedef enum leaf_mode { LEAVES_LOD, LEAVES_FULL, LEAVES_NONE, LEAVES_ADAPTIVE } leaf_mode;
+/* render --foliage: the LOD the pixel budget picks (default), the finest, none, per leaf (the
+ * GPU's cut of the collapse forest), or the tree's billboard. */
+typedef enum leaf_mode {
+    LEAVES_LOD, LEAVES_FULL, LEAVES_NONE, LEAVES_ADAPTIVE, LEAVES_BILLBOARD
+} leaf_mode;
 
 typedef struct render_options {
     bool vulkan;
@@ -63,7 +66,11 @@ typedef struct render_options {
     uint32_t samples;        /* MSAA samples; 0: 4 */
     uint32_t frames;         /* view: close after N frames (0: when the window closes) */
     const char *screenshot;  /* view: PNG of the last frame */
-    leaf_mode leaves;        /* render --foliage full|lod|adaptive|none */
+    leaf_mode leaves;        /* render --foliage full|lod|adaptive|none|billboard */
+    int billboard_kind;      /* --billboard: 1 + an xyl_billboard_kind; 0: cross */
+    uint32_t planes;         /* --planes: the cross's, 0: 4 */
+    uint32_t billboard_size; /* --billboard-size: texels per baked view, 0: 512 */
+    bool billboard_error;    /* --billboard-error: the 20-view image error table */
 } render_options;
 
 /* The leaves of 'foliage' and 'mesh --foliage'. */
@@ -127,12 +134,18 @@ static const char usage_text[] =
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION[,DISTANCE]]\n"
     "           [--size WxH] [--wireframe] [--samples N]\n"
-    "           [--foliage full|lod|adaptive|none] --out FILE.png\n"
+    "           [--foliage full|lod|adaptive|none|billboard]\n"
+    "           [--billboard spherical|cylindrical|cross] [--planes N] [--billboard-size N]\n"
+    "           [--billboard-error] --out FILE.png\n"
     "                               refine the stem mesh (PN patches) and render it headless,\n"
     "                               with the source's leaves (GL): lod (default) the leaf LOD\n"
     "                               within the pixel budget, adaptive the coarsest leaf within\n"
     "                               it per cluster (chosen on the GPU, GL only), full all of\n"
-    "                               them, none bare stems\n"
+    "                               them, none bare stems, billboard the tree as a billboard\n"
+    "                               baked from it (GL only; --billboard kind, default cross;\n"
+    "                               --planes of a cross, 2..8, default 4; --billboard-size\n"
+    "                               texels per baked view, default 512; --billboard-error: its\n"
+    "                               image error over 20 views)\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -270,6 +283,20 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
         if (!parse_u64(val, 16, &u) || u < 1 || (u & (u - 1)))
             return usage_error("--samples takes 1, 2, 4, 8 or 16, not '%s'", val);
         r->samples = (uint32_t)u;
+    } else if (strcmp(opt, "--billboard") == 0) {
+        if (strcmp(val, "spherical") == 0) r->billboard_kind = 1;
+        else if (strcmp(val, "cylindrical") == 0) r->billboard_kind = 2;
+        else if (strcmp(val, "cross") == 0) r->billboard_kind = 3;
+        else return usage_error("--billboard takes spherical, cylindrical or cross, not '%s'", val);
+    } else if (strcmp(opt, "--planes") == 0) {
+        if (!parse_u64(val, 8, &u) || u < 2)
+            return usage_error("--planes takes a whole number from 2 to 8, not '%s'", val);
+        r->planes = (uint32_t)u;
+    } else if (strcmp(opt, "--billboard-size") == 0) {
+        if (!parse_u64(val, 4096, &u) || u < 8)
+            return usage_error("--billboard-size takes a whole number from 8 to 4096, not '%s'",
+                               val);
+        r->billboard_size = (uint32_t)u;
     } else if (strcmp(opt, "--screenshot") == 0) {
         r->screenshot = val;
     } else if (strcmp(opt, "--size") == 0) {
@@ -395,8 +422,13 @@ static int parse_options(int argc, char **argv, options *o)
             else if (strcmp(val, "full") == 0) o->render.leaves = LEAVES_FULL;
             else if (strcmp(val, "none") == 0) o->render.leaves = LEAVES_NONE;
             else if (strcmp(val, "adaptive") == 0) o->render.leaves = LEAVES_ADAPTIVE;
-            else return usage_error("render --foliage takes full, lod, adaptive or none, not '%s'",
-                                    val);
+            else if (strcmp(val, "billboard") == 0) o->render.leaves = LEAVES_BILLBOARD;
+            else return usage_error("render --foliage takes full, lod, adaptive, none or "
+                                    "billboard, not '%s'", val);
+            continue;
+        }
+        if (strcmp(opt, "--billboard-error") == 0) {
+            o->render.billboard_error = true;
             continue;
         }
         if (strcmp(opt, "--foliage") == 0) {
@@ -967,9 +999,9 @@ static void render_job_free(render_job *j)
     free(j->lods);
 }
 
-static void frame_camera(const options *o, render_job *j)
+/* The box of the stems and the leaves drawn with them. */
+static void tree_bounds(const render_job *j, float lo[3], float hi[3])
 {
-    float lo[3], hi[3];
     xyl_mesh_bounds(j->mesh, lo, hi);
     const xyl_foliage *f = j->draw_leaves ? j->leaves.foliage : NULL;
     for (uint32_t s = 0; f && s < f->sector_count; ++s) { /* leaves reach out past the twigs */
@@ -986,6 +1018,12 @@ static void frame_camera(const options *o, render_job *j)
             }
         }
     }
+}
+
+static void frame_camera(const options *o, render_job *j)
+{
+    float lo[3], hi[3];
+    tree_bounds(j, lo, hi);
     double deg = 3.14159265358979323846 / 180.0;
     double az = o->render.has_camera ? o->render.azimuth : 30.0;
     double el = o->render.has_camera ? o->render.elevation : 10.0;
@@ -1162,41 +1200,181 @@ static xyl_result leaf_renderer(const render_job *j, xyl_foliage_gl **out, xyl_d
     return r;
 }
 
-/* The stems, then the leaves, with one camera and light. */
-static xyl_result draw_tree(render_job *j, xyl_tess_gl *gl, xyl_foliage_gl *leaves,
-                            xyl_tess_path path, xyl_diag *d)
+/* What draws the whole tree into the bound framebuffer: the stems, then the leaves. */
+typedef struct tree_gl {
+    render_job *j;
+    xyl_tess_gl *gl;
+    xyl_foliage_gl *leaves;
+    xyl_tess_path path;
+    bool wireframe;
+} tree_gl;
+
+static xyl_result draw_stems_leaves(const tree_gl *t, const float view_proj[16],
+                                    const float light[3], xyl_diag *d)
 {
-    own_target t;
-    memset(&t, 0, sizeof t);
-    xyl_result r = own_target_make(&t, j->image.width, j->image.height, j->image.samples, d);
+    xyl_tess_frame stems = t->j->frame;
+    memcpy(stems.view_proj, view_proj, sizeof stems.view_proj);
+    memcpy(stems.light_dir, light, 3 * sizeof *light);
+    if (t->wireframe) stems.flags |= XYL_TESS_FLAG_WIREFRAME;
+    xyl_result r = xyl_tess_gl_draw(t->gl, t->j->batches, &stems, t->path, d);
+    if (r == XYL_OK && t->leaves) {
+        xyl_foliage_gl_frame lf = {0};
+        memcpy(lf.view_proj, view_proj, sizeof lf.view_proj);
+        memcpy(lf.light_dir, light, sizeof lf.light_dir);
+        lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
+        render_job *j = t->j;
+        if (j->adaptive) {
+            r = xyl_foliage_gl_draw_adaptive(t->leaves, &lf, &j->leaf_view, d);
+            if (r == XYL_OK) r = xyl_foliage_gl_last_cut(t->leaves, NULL, 0, &j->leaves_drawn, d);
+        } else {
+            r = xyl_foliage_gl_draw(t->leaves, &lf, j->lods, j->leaves.foliage->sector_count, d);
+        }
+    }
+    return r;
+}
+
+/* The billboard's bake callback: the tree without wireframe, as a caller's engine draws it. */
+static xyl_result bake_tree(void *user, const float view_proj[16], const float light[3],
+                            xyl_diag *d)
+{
+    tree_gl t = *(const tree_gl *)user;
+    t.wireframe = false;
+    return draw_stems_leaves(&t, view_proj, light, d);
+}
+
+/* One picture into rgba with the job's current frame: the tree, or (bb) its billboard. */
+static xyl_result draw_picture(const tree_gl *t, xyl_billboard_gl *bb, uint8_t *rgba,
+                               xyl_diag *d)
+{
+    render_job *j = t->j;
+    own_target tg;
+    memset(&tg, 0, sizeof tg);
+    xyl_result r = own_target_make(&tg, j->image.width, j->image.height, j->image.samples, d);
     if (r == XYL_OK) {
-        glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+        glBindFramebuffer(GL_FRAMEBUFFER, tg.fbo);
         glViewport(0, 0, (GLsizei)j->image.width, (GLsizei)j->image.height);
         const float *bg = j->image.background;
         glClearColor(bg[0], bg[1], bg[2], bg[3]);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        xyl_tess_frame stems = j->frame;
-        if (j->image.wireframe) stems.flags |= XYL_TESS_FLAG_WIREFRAME;
-        r = xyl_tess_gl_draw(gl, j->batches, &stems, path, d);
-    }
-    if (r == XYL_OK) {
-        xyl_foliage_gl_frame lf = {0};
-        memcpy(lf.view_proj, j->frame.view_proj, sizeof lf.view_proj);
-        memcpy(lf.light_dir, j->frame.light_dir, sizeof lf.light_dir);
-        lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
-        if (j->adaptive) {
-            r = xyl_foliage_gl_draw_adaptive(leaves, &lf, &j->leaf_view, d);
-            if (r == XYL_OK) r = xyl_foliage_gl_last_cut(leaves, NULL, 0, &j->leaves_drawn, d);
+        if (bb) {
+            xyl_billboard_gl_frame bf = {0};
+            memcpy(bf.view_proj, j->frame.view_proj, sizeof bf.view_proj);
+            memcpy(bf.eye, j->camera.eye, sizeof bf.eye);
+            memcpy(bf.light_dir, j->frame.light_dir, sizeof bf.light_dir);
+            r = xyl_billboard_gl_draw(bb, &bf, d);
         } else {
-            r = xyl_foliage_gl_draw(leaves, &lf, j->lods, j->leaves.foliage->sector_count, d);
+            r = draw_stems_leaves(t, j->frame.view_proj, j->frame.light_dir, d);
         }
     }
     if (r == XYL_OK) {
-        read_image(&t, j);
-        j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl); /* the stems' share */
+        uint8_t *keep = j->rgba;
+        j->rgba = rgba;
+        read_image(&tg, j);
+        j->rgba = keep;
+        j->gpu_ms = xyl_tess_gl_last_gpu_ms(t->gl); /* the stems' share */
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    own_target_free(&t);
+    own_target_free(&tg);
+    return r;
+}
+
+static xyl_result bake_billboard(const options *o, tree_gl *t, xyl_billboard_gl **bb,
+                                 xyl_diag *d)
+{
+    const render_options *ro = &o->render;
+    xyl_billboard_gl_desc bd = {0};
+    bd.kind = ro->billboard_kind ? (xyl_billboard_kind)(ro->billboard_kind - 1)
+                                 : XYL_BILLBOARD_CROSS;
+    bd.planes = bd.kind == XYL_BILLBOARD_CROSS ? (ro->planes ? ro->planes : 4) : 0;
+    bd.resolution = ro->billboard_size ? ro->billboard_size : 512;
+    tree_bounds(t->j, bd.lo, bd.hi);
+    double t0 = now_seconds();
+    xyl_result r = xyl_billboard_gl_bake(&bd, bake_tree, t, bb, d);
+    if (r == XYL_OK)
+        printf("billboard: %s%s, %u views of %u x %u texels, baked in %.1f ms\n",
+               bd.kind == XYL_BILLBOARD_SPHERICAL ? "spherical" :
+               bd.kind == XYL_BILLBOARD_CYLINDRICAL ? "cylindrical" : "cross",
+               bd.kind == XYL_BILLBOARD_CROSS ? " planes" : " (one side view, +Z)",
+               xyl_billboard_gl_view_count(*bb), bd.resolution, bd.resolution,
+               (now_seconds() - t0) * 1e3);
+    return r;
+}
+
+/* RMSE of colour (RGB in [0, 1], over every pixel) and of coverage (a pixel covered when it
+ * differs from the background by more than 2/255 in a channel) between two pictures. */
+static void image_rmse(const uint8_t *a, const uint8_t *b, size_t pixels, const float bg[4],
+                       double *colour, double *coverage)
+{
+    double sc = 0.0, sv = 0.0;
+    for (size_t i = 0; i < pixels; ++i) {
+        int ca = 0, cb = 0;
+        for (int k = 0; k < 3; ++k) {
+            double e = (a[4 * i + k] - b[4 * i + k]) / 255.0;
+            sc += e * e;
+            int g = (int)lrintf(bg[k] * 255.0f);
+            ca |= abs(a[4 * i + k] - g) > 2;
+            cb |= abs(b[4 * i + k] - g) > 2;
+        }
+        sv += ca != cb;
+    }
+    *colour = sqrt(sc / (3.0 * (double)pixels));
+    *coverage = sqrt(sv / (double)pixels);
+}
+
+/* --billboard-error: the tree and its billboard from the 20 vertices of a dodecahedron around
+ * the tree's box (framed as render frames it), one row each and the mean. */
+static xyl_result billboard_error(const options *o, tree_gl *t, xyl_billboard_gl *bb,
+                                  xyl_diag *d)
+{
+    render_job *j = t->j;
+    const double phi = 1.6180339887498949, ip = 1.0 / phi;
+    double dirs[20][3];
+    int n = 0;
+    for (int i = 0; i < 8; ++i)
+        dirs[n][0] = i & 1 ? -1 : 1, dirs[n][1] = i & 2 ? -1 : 1, dirs[n][2] = i & 4 ? -1 : 1, ++n;
+    for (int i = 0; i < 4; ++i) {
+        double s1 = i & 1 ? -1 : 1, s2 = i & 2 ? -1 : 1;
+        dirs[n][0] = 0, dirs[n][1] = s1 * ip, dirs[n][2] = s2 * phi, ++n;
+        dirs[n][0] = s1 * ip, dirs[n][1] = s2 * phi, dirs[n][2] = 0, ++n;
+        dirs[n][0] = s1 * phi, dirs[n][1] = 0, dirs[n][2] = s2 * ip, ++n;
+    }
+    size_t pixels = (size_t)j->image.width * j->image.height;
+    uint8_t *tree = malloc(pixels * 4), *board = malloc(pixels * 4);
+    xyl_result r = tree && board ? XYL_OK : XYL_ERR_OUT_OF_MEMORY;
+    float lo[3], hi[3];
+    tree_bounds(j, lo, hi);
+    xyl_tess_camera keep = j->camera;
+    double sum_c = 0.0, sum_v = 0.0, max_c = 0.0, max_v = 0.0;
+    printf("billboard image error, %u x %u, 20 dodecahedron views:\n"
+           "view  azimuth elevation  colour RMSE  coverage RMSE\n", j->image.width,
+           j->image.height);
+    for (int v = 0; r == XYL_OK && v < 20; ++v) {
+        double *p = dirs[v], len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        double el = asin(p[1] / len), az = atan2(p[0], p[2]);
+        xyl_tess_camera_frame(lo, hi, (float)az, (float)el, 0.8f,
+                              (float)j->image.width / (float)j->image.height, &j->camera);
+        r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, d);
+        if (r == XYL_OK)
+            r = select_levels(o, j, j->drawn, j->drawn == j->patches ? o->render.level : 1, d);
+        if (r == XYL_OK) r = draw_picture(t, NULL, tree, d);
+        if (r == XYL_OK) r = draw_picture(t, bb, board, d);
+        if (r != XYL_OK) break;
+        double c, cov;
+        image_rmse(tree, board, pixels, j->image.background, &c, &cov);
+        printf("%4d  %7.1f %9.1f  %11.4f  %13.4f\n", v, az * 180.0 / 3.14159265358979323846,
+               el * 180.0 / 3.14159265358979323846, c, cov);
+        sum_c += c, sum_v += cov;
+        max_c = fmax(max_c, c), max_v = fmax(max_v, cov);
+    }
+    if (r == XYL_OK)
+        printf("mean              %11.4f  %13.4f\nmax               %11.4f  %13.4f\n",
+               sum_c / 20.0, sum_v / 20.0, max_c, max_v);
+    free(tree);
+    free(board);
+    j->camera = keep;
+    if (r == XYL_OK) r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, d);
+    if (r == XYL_OK)
+        r = select_levels(o, j, j->drawn, j->drawn == j->patches ? o->render.level : 1, d);
     return r;
 }
 
@@ -1205,18 +1383,24 @@ static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
     xyl_gl_context *ctx = NULL;
     xyl_tess_gl *gl = NULL;
     xyl_foliage_gl *leaves = NULL;
+    xyl_billboard_gl *bb = NULL;
     xyl_result r = xyl_gl_context_create_headless(NULL, &ctx, d);
     if (r == XYL_OK) r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, d);
     if (r == XYL_OK) r = xyl_tess_gl_create(NULL, j->patterns, &gl, d);
     if (r == XYL_OK) r = xyl_tess_gl_set_patches(gl, j->drawn, d);
     if (r == XYL_OK && j->draw_leaves) r = leaf_renderer(j, &leaves, d);
-    xyl_tess_path path = o->render.tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE
-                                                         : XYL_TESS_PATH_INSTANCED;
+    tree_gl t = {j, gl, leaves,
+                 o->render.tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE : XYL_TESS_PATH_INSTANCED,
+                 j->image.wireframe};
+    bool billboard = o->render.leaves == LEAVES_BILLBOARD;
+    if (r == XYL_OK && billboard) r = bake_billboard(o, &t, &bb, d);
+    if (r == XYL_OK && bb && o->render.billboard_error) r = billboard_error(o, &t, bb, d);
     double t0 = now_seconds();
-    if (r == XYL_OK && leaves) r = draw_tree(j, gl, leaves, path, d);
+    if (r == XYL_OK && (leaves || bb)) r = draw_picture(&t, bb, j->rgba, d);
     else if (r == XYL_OK)
-        r = xyl_tess_gl_render_rgba(gl, j->batches, &j->frame, path, &j->image, j->rgba, d);
+        r = xyl_tess_gl_render_rgba(gl, j->batches, &j->frame, t.path, &j->image, j->rgba, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
+    xyl_billboard_gl_destroy(bb);
     if (leaves) xyl_foliage_gl_destroy(leaves);
     if (r == XYL_OK) {
         if (!leaves) j->gpu_ms = xyl_tess_gl_last_gpu_ms(gl);
@@ -1311,7 +1495,9 @@ static void print_render(const options *o, const render_job *j, const char *path
         if (lo == hi) snprintf(which, sizeof which, "LOD %u", lo);
         else snprintf(which, sizeof which, "LODs %u..%u", lo, hi);
         printf("leaves: --foliage %s: %s of 0..%u, %zu of %zu leaves drawn (LOD array built in "
-               "%.3f ms)\n", o->render.leaves == LEAVES_FULL ? "full" : "lod", which, top,
+               "%.3f ms)\n", o->render.leaves == LEAVES_FULL ? "full" :
+                         o->render.leaves == LEAVES_BILLBOARD ? "billboard (baked from)" : "lod",
+               which, top,
                j->leaves_drawn, f->original_count, j->leaves.build_ms);
     }
     uint32_t lo = 64, hi = 0;
@@ -1382,6 +1568,14 @@ static int cmd_render(const options *o)
     if (ro->vulkan && ro->leaves == LEAVES_ADAPTIVE)
         return usage_error("%s", "--foliage adaptive chooses the leaves with a GL compute pass; "
                                  "use --backend gl");
+    bool billboard = ro->leaves == LEAVES_BILLBOARD;
+    if (billboard && ro->vulkan)
+        return usage_error("%s", "--foliage billboard is drawn with the GL backend only");
+    if (!billboard && (ro->billboard_kind || ro->planes || ro->billboard_size || ro->billboard_error))
+        return usage_error("%s", "--billboard, --planes, --billboard-size and --billboard-error "
+                                 "go with --foliage billboard");
+    if (ro->planes && ro->billboard_kind && ro->billboard_kind != 3)
+        return usage_error("%s", "--planes is the cross billboard's");
     render_job j;
     memset(&j, 0, sizeof j);
     j.image.width = ro->width ? ro->width : 1024;

@@ -1,0 +1,123 @@
+/* xyl_billboard_gl.h: a whole tree (stems and leaves) as a billboard, baked by rendering the
+ * tree itself into textures and drawn with OpenGL 4.5 core (docs/foliage.md, "Billboards").
+ *
+ * How to use
+ *     // a current GL 4.5 core context, and a function that draws the whole tree into the bound
+ *     // framebuffer with a given world-to-clip matrix and light (stems and leaves, depth-tested)
+ *     static xyl_result draw_tree(void *user, const float view_proj[16],
+ *                                 const float light_dir[3], xyl_diag *diag);
+ *     xyl_billboard_gl_desc bd = {0};
+ *     bd.kind = XYL_BILLBOARD_CROSS;
+ *     bd.planes = 4;                              // cross only: 2..XYL_BILLBOARD_MAX_PLANES
+ *     bd.resolution = 512;                        // texels per side of each baked view
+ *     memcpy(bd.lo, lo, sizeof bd.lo);            // the tree's box (stems and leaves)
+ *     memcpy(bd.hi, hi, sizeof bd.hi);
+ *     xyl_billboard_gl *bb = NULL;
+ *     if (xyl_billboard_gl_bake(&bd, draw_tree, tree, &bb, &diag)) puts(diag.message);
+ *     // each frame
+ *     xyl_billboard_gl_frame fr = {0};            // view_proj, eye, light
+ *     xyl_billboard_gl_draw(bb, &fr, &diag);
+ *     xyl_billboard_gl_destroy(bb);
+ *
+ * The billboard's axis is the vertical (+Y) line through the centre of the box; its quads are
+ * rectangles as high as the box and as wide as the diagonal of the box's horizontal section
+ * (so the tree fits whichever way a quad turns), centred on the box's centre. Kinds:
+ *   - spherical: one quad facing the eye (its up vector is world +Y made perpendicular to the
+ *     line of sight), showing the one view baked from the side (+Z);
+ *   - cylindrical: one quad turning about the axis to face the eye, the same +Z side view;
+ *   - cross: planes vertical quads through the axis, plane k at pi * k / planes from the XY
+ *     plane about +Y, each showing the orthographic view baked perpendicular to it.
+ * Each baked view is an orthographic render of the tree into a resolution x resolution RGBA8 colour texture
+ * stretched over the rectangle
+ * (alpha: covered or not) and an RGBA8 normal map: the quad-space normal (x along the quad's
+ * right, y up, z towards the bake camera) in RGB as n * 0.5 + 0.5, reconstructed from the
+ * bake's depth buffer by central differences. The bake lights the tree from the bake camera
+ * (light_dir = the view direction), and the draw relights each texel with the frame's light
+ * and the reconstructed normal by the ratio of the stems' shading (Lambert plus a sky term)
+ * under the two lights.
+ *
+ * The bake binds and clears its own framebuffer and restores the caller's framebuffer and
+ * viewport; every call checks its input before its first GL call, and must come from the
+ * thread where the context is current.
+ *
+ * Copyright (c) xylem authors. MIT licence, see LICENSE.
+ */
+#ifndef XYL_BILLBOARD_GL_H
+#define XYL_BILLBOARD_GL_H
+
+#include "xylem/xyl_foliage.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define XYL_BILLBOARD_MAX_PLANES 8
+#define XYL_BILLBOARD_MIN_RESOLUTION 8
+#define XYL_BILLBOARD_MAX_RESOLUTION 4096 /* and the driver's GL_MAX_TEXTURE_SIZE */
+
+typedef enum xyl_billboard_kind {
+    XYL_BILLBOARD_SPHERICAL = 0,
+    XYL_BILLBOARD_CYLINDRICAL = 1,
+    XYL_BILLBOARD_CROSS = 2
+} xyl_billboard_kind;
+
+/* Draws the whole tree into the bound framebuffer (its viewport already set) with this
+ * column-major world-to-clip matrix (GL clip convention) and light direction (towards the
+ * light, unit length). Anything but XYL_OK stops the bake and is returned as is. */
+typedef xyl_result (*xyl_billboard_draw_fn)(void *user, const float view_proj[16],
+                                            const float light_dir[3], xyl_diag *diag);
+
+typedef struct xyl_billboard_gl_desc {
+    xyl_billboard_kind kind;
+    uint32_t planes;     /* cross: 2..XYL_BILLBOARD_MAX_PLANES; spherical, cylindrical: 0 or 1 */
+    uint32_t resolution; /* texels per side of each baked view, XYL_BILLBOARD_MIN_RESOLUTION..
+                            XYL_BILLBOARD_MAX_RESOLUTION (and the driver's limit) */
+    float lo[3], hi[3];  /* the tree's box, lo < hi on every axis, finite */
+    xyl_allocator alloc; /* every host allocation, as long as the billboard lives */
+} xyl_billboard_gl_desc;
+
+typedef struct xyl_billboard_gl xyl_billboard_gl;
+
+/* The uniforms of a draw. */
+typedef struct xyl_billboard_gl_frame {
+    float view_proj[16]; /* column-major world-to-clip matrix (GL clip convention); all 0 refused */
+    float eye[3];        /* the camera's position: spherical and cylindrical quads face it */
+    float light_dir[3];  /* towards the light, normalised by the call; default (all 0): +Y */
+    float alpha_cutoff;  /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5 */
+} xyl_billboard_gl_frame;
+
+/* Bakes the billboard: one view (spherical, cylindrical) or desc->planes views (cross), each a
+ * call of draw into an offscreen resolution x resolution target. Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL desc, draw or out, an unknown kind, planes out of range for
+ * the kind, a resolution out of range, an empty or inverted box), XYL_ERR_NON_FINITE (a box
+ * coordinate), XYL_ERR_UNSUPPORTED (no current GL 4.5 core context, a shader that does not
+ * compile or link, an incomplete framebuffer), XYL_ERR_OUT_OF_MEMORY (host or GL), whatever
+ * draw returns. On failure *out is untouched and nothing is left behind. */
+XYL_API xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc,
+                                         xyl_billboard_draw_fn draw, void *user,
+                                         xyl_billboard_gl **out, xyl_diag *diag);
+/* NULL is fine. Deletes its GL objects when a context is current (else they died with it). */
+XYL_API void xyl_billboard_gl_destroy(xyl_billboard_gl *bb);
+
+/* How many views were baked: 1, or the cross's planes. 0 for NULL. */
+XYL_API uint32_t xyl_billboard_gl_view_count(const xyl_billboard_gl *bb);
+
+/* A baked view read back: colour (normal false) or normal map (normal true), resolution *
+ * resolution RGBA8 texels, top row first, into rgba (4 * resolution^2 bytes). Errors:
+ * XYL_ERR_INVALID_ARGUMENT (NULL bb or rgba, view >= xyl_billboard_gl_view_count). */
+XYL_API xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32_t view,
+                                              bool normal, uint8_t *rgba, xyl_diag *diag);
+
+/* Draws the billboard into the bound framebuffer with the current viewport: depth test
+ * (GL_LESS) and writes on, no face culling (restored), no blending, alpha test at the frame's
+ * cutoff. Errors: XYL_ERR_INVALID_ARGUMENT (NULL bb or frame, an all-zero matrix, a cutoff
+ * outside [0, 1]), XYL_ERR_NON_FINITE (a matrix, eye or light entry), XYL_ERR_OUT_OF_MEMORY
+ * (GL_OUT_OF_MEMORY). */
+XYL_API xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb,
+                                         const xyl_billboard_gl_frame *frame, xyl_diag *diag);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* XYL_BILLBOARD_GL_H */

@@ -1,0 +1,500 @@
+/* A tree as a billboard (xyl_billboard_gl.h): orthographic bakes of the caller's own tree draw
+ * into 2D array textures (colour with coverage alpha, and normals reconstructed from depth),
+ * drawn as vertex-shader expanded quads. The bake takes a draw callback because foliage/ does
+ * not see tessellate/, whose renderer draws the stems. */
+#include <epoxy/gl.h>
+#include <math.h>
+#include <string.h>
+
+#include "foliage_internal.h"
+#include "xylem/xyl_billboard_gl.h"
+
+extern const unsigned char xyl__shader_gl_billboard_vert[];
+extern const unsigned char xyl__shader_gl_billboard_frag[];
+
+enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF };
+
+struct xyl_billboard_gl {
+    GLuint program, vao, color_tex, normal_tex;
+    xyl_billboard_kind kind;
+    uint32_t views, resolution;
+    float center[3], half[2]; /* the quads' centre, half width and half height */
+    xyl_allocator alloc;
+};
+
+static void drain_errors(void)
+{
+    for (int i = 0; i < 32 && glGetError() != GL_NO_ERROR; ++i) {}
+}
+
+static xyl_result gl_check(xyl_diag *diag, const char *what)
+{
+    GLenum e = glGetError();
+    if (e == GL_NO_ERROR) return XYL_OK;
+    drain_errors();
+    if (e == GL_OUT_OF_MEMORY)
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "GL out of memory while %s", what);
+    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "GL error 0x%04x while %s", (unsigned)e,
+                     what);
+}
+
+static xyl_result need_context(xyl_diag *diag)
+{
+    int v = epoxy_gl_version(); /* 0 without a current context */
+    if (v == 0)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no current OpenGL context");
+    if (!epoxy_is_desktop_gl() || v < 45)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "OpenGL 4.5 is needed, the current context is %s %d.%d",
+                         epoxy_is_desktop_gl() ? "OpenGL" : "OpenGL ES", v / 10, v % 10);
+    return XYL_OK;
+}
+
+static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
+{
+    if (d->kind != XYL_BILLBOARD_SPHERICAL && d->kind != XYL_BILLBOARD_CYLINDRICAL &&
+        d->kind != XYL_BILLBOARD_CROSS)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "unknown billboard kind %d (spherical 0, cylindrical 1, cross 2)",
+                         (int)d->kind);
+    if (d->kind == XYL_BILLBOARD_CROSS &&
+        (d->planes < 2 || d->planes > XYL_BILLBOARD_MAX_PLANES))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a cross billboard has 2 to %d planes, not %u", XYL_BILLBOARD_MAX_PLANES,
+                         d->planes);
+    if (d->kind != XYL_BILLBOARD_CROSS && d->planes > 1)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "%u planes: only a cross billboard has more than one", d->planes);
+    if (d->resolution < XYL_BILLBOARD_MIN_RESOLUTION || d->resolution > XYL_BILLBOARD_MAX_RESOLUTION)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a billboard resolution of %u: from %d to %d texels", d->resolution,
+                         XYL_BILLBOARD_MIN_RESOLUTION, XYL_BILLBOARD_MAX_RESOLUTION);
+    for (int k = 0; k < 3; ++k) {
+        if (!isfinite(d->lo[k]) || !isfinite(d->hi[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the tree's box is not finite");
+        if (!(d->lo[k] < d->hi[k]))
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, k,
+                             "the tree's box is empty or inverted on axis %d (%g .. %g)", k,
+                             (double)d->lo[k], (double)d->hi[k]);
+    }
+    return XYL_OK;
+}
+
+/* ---- program ------------------------------------------------------------------------------ */
+
+static GLuint compile(GLenum stage, const unsigned char *text, char *log, GLsizei log_size)
+{
+    GLuint sh = glCreateShader(stage);
+    const GLchar *src = (const GLchar *)text;
+    glShaderSource(sh, 1, &src, NULL);
+    glCompileShader(sh);
+    GLint ok = GL_FALSE;
+    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
+    if (ok) return sh;
+    glGetShaderInfoLog(sh, log_size, NULL, log);
+    glDeleteShader(sh);
+    return 0;
+}
+
+static xyl_result build_program(xyl_billboard_gl *bb, xyl_diag *diag)
+{
+    char log[192] = "";
+    const GLenum stages[2] = {GL_VERTEX_SHADER, GL_FRAGMENT_SHADER};
+    const unsigned char *texts[2] = {xyl__shader_gl_billboard_vert, xyl__shader_gl_billboard_frag};
+    const char *names[2] = {"billboard.vert", "billboard.frag"};
+    GLuint p = glCreateProgram();
+    for (int i = 0; i < 2; ++i) {
+        GLuint sh = compile(stages[i], texts[i], log, (GLsizei)sizeof log);
+        if (!sh) {
+            glDeleteProgram(p);
+            return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader %s: %s", names[i], log);
+        }
+        glAttachShader(p, sh);
+        glDeleteShader(sh);
+    }
+    glLinkProgram(p);
+    GLint ok = GL_FALSE;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, (GLsizei)sizeof log, NULL, log);
+        glDeleteProgram(p);
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "program billboard: %s", log);
+    }
+    bb->program = p;
+    return XYL_OK;
+}
+
+/* ---- bake --------------------------------------------------------------------------------- */
+
+/* The direction from the axis towards the camera of view v, horizontal. */
+static void view_dir(const xyl_billboard_gl *bb, uint32_t v, float d[3])
+{
+    double a = bb->kind == XYL_BILLBOARD_CROSS ? 3.14159265358979323846 * v / bb->views : 0.0;
+    d[0] = (float)sin(a), d[1] = 0.0f, d[2] = (float)cos(a);
+}
+
+/* Orthographic world-to-clip matrix (column-major, GL clip) looking along -d at the centre,
+ * the quad's rectangle (2 * half[0] by 2 * half[1]) filling the view and depth [-radius, radius] around the centre. */
+static void bake_matrix(const xyl_billboard_gl *bb, const float d[3], float radius, float m[16])
+{
+    const float right[3] = {d[2], 0.0f, -d[0]}, up[3] = {0.0f, 1.0f, 0.0f};
+    const float *rows[3] = {right, up, d};
+    const float scale[3] = {1.0f / bb->half[0], 1.0f / bb->half[1], -1.0f / radius};
+    memset(m, 0, 16 * sizeof *m);
+    for (int r = 0; r < 3; ++r) {
+        float c = 0.0f;
+        for (int k = 0; k < 3; ++k) {
+            m[k * 4 + r] = rows[r][k] * scale[r];
+            c += rows[r][k] * bb->center[k];
+        }
+        m[12 + r] = -c * scale[r];
+    }
+    m[15] = 1.0f;
+}
+
+typedef struct bake_target {
+    GLuint fbo, rb[2];
+} bake_target;
+
+static void target_free(bake_target *t)
+{
+    glDeleteFramebuffers(1, &t->fbo);
+    glDeleteRenderbuffers(2, t->rb);
+}
+
+static xyl_result target_make(bake_target *t, uint32_t side, xyl_diag *diag)
+{
+    glCreateRenderbuffers(2, t->rb);
+    glNamedRenderbufferStorage(t->rb[0], GL_RGBA8, (GLsizei)side, (GLsizei)side);
+    glNamedRenderbufferStorage(t->rb[1], GL_DEPTH_COMPONENT32F, (GLsizei)side, (GLsizei)side);
+    glCreateFramebuffers(1, &t->fbo);
+    glNamedFramebufferRenderbuffer(t->fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->rb[0]);
+    glNamedFramebufferRenderbuffer(t->fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->rb[1]);
+    xyl_result r = gl_check(diag, "making the bake target");
+    if (r == XYL_OK &&
+        glCheckNamedFramebufferStatus(t->fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        r = xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                      "a %u x %u bake framebuffer is incomplete", side, side);
+    return r;
+}
+
+/* Normals from the depth buffer (rows bottom to top, depth in [0, 1], 1 = nothing): the height
+ * towards the camera h = (1 - 2 depth) * radius, n ~ (-dh/dx, -dh/dy, 1), texels step[0] wide
+ * and step[1] high in world units. A neighbour that is empty or lies across a jump of more
+ * than four texels' size is not used. */
+static void depth_to_normals(const float *depth, uint32_t n, float radius, const float step[2],
+                             uint8_t *out)
+{
+    const float jump = 4.0f * fmaxf(step[0], step[1]);
+    for (uint32_t y = 0; y < n; ++y)
+        for (uint32_t x = 0; x < n; ++x) {
+            size_t i = (size_t)y * n + x;
+            uint8_t *o = out + 4 * i;
+            if (depth[i] >= 1.0f) {
+                o[0] = 128, o[1] = 128, o[2] = 255, o[3] = 0;
+                continue;
+            }
+            float h = (1.0f - 2.0f * depth[i]) * radius, g[2] = {0.0f, 0.0f};
+            for (int axis = 0; axis < 2; ++axis) {
+                float sum = 0.0f;
+                int used = 0;
+                for (int s = -1; s <= 1; s += 2) {
+                    int64_t xx = (int64_t)x + (axis == 0 ? s : 0);
+                    int64_t yy = (int64_t)y + (axis == 1 ? s : 0);
+                    if (xx < 0 || yy < 0 || xx >= (int64_t)n || yy >= (int64_t)n) continue;
+                    float dn = depth[(size_t)yy * n + (size_t)xx];
+                    if (dn >= 1.0f) continue;
+                    float dh = ((1.0f - 2.0f * dn) * radius - h) * (float)s;
+                    if (fabsf(dh) > jump) continue;
+                    sum += dh;
+                    ++used;
+                }
+                g[axis] = used ? sum / (float)used / step[axis] : 0.0f;
+            }
+            float v[3] = {-g[0], -g[1], 1.0f};
+            float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            for (int k = 0; k < 3; ++k)
+                o[k] = (uint8_t)lrintf((v[k] / len * 0.5f + 0.5f) * 255.0f);
+            o[3] = 255;
+        }
+}
+
+/* Coverage from depth into the colour's alpha; empty texels take the mean colour of their
+ * covered neighbours, so linear filtering and mipmaps do not pull in the clear colour. */
+static void colour_coverage(const float *depth, uint32_t n, uint8_t *rgba)
+{
+    for (size_t i = 0; i < (size_t)n * n; ++i) rgba[4 * i + 3] = depth[i] < 1.0f ? 255 : 0;
+    for (uint32_t y = 0; y < n; ++y)
+        for (uint32_t x = 0; x < n; ++x) {
+            uint8_t *o = rgba + 4 * ((size_t)y * n + x);
+            if (o[3]) continue;
+            unsigned sum[3] = {0, 0, 0}, used = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int64_t xx = (int64_t)x + dx, yy = (int64_t)y + dy;
+                    if (xx < 0 || yy < 0 || xx >= (int64_t)n || yy >= (int64_t)n) continue;
+                    size_t j = (size_t)yy * n + (size_t)xx;
+                    if (depth[j] >= 1.0f) continue;
+                    for (int k = 0; k < 3; ++k) sum[k] += rgba[4 * j + k];
+                    ++used;
+                }
+            for (int k = 0; k < 3; ++k) o[k] = used ? (uint8_t)(sum[k] / used) : 0;
+        }
+}
+
+static GLuint make_array(uint32_t side, uint32_t layers)
+{
+    GLsizei levels = 1;
+    for (uint32_t s = side; s > 1; s >>= 1) ++levels;
+    GLuint t = 0;
+    glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &t);
+    glTextureStorage3D(t, levels, GL_RGBA8, (GLsizei)side, (GLsizei)side, (GLsizei)layers);
+    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return t;
+}
+
+typedef struct saved_state {
+    GLint draw_fbo, read_fbo, viewport[4], pack_align, unpack_align, unpack_row, pack_buf,
+        unpack_buf;
+    GLfloat clear[4];
+} saved_state;
+
+static void save_state(saved_state *s)
+{
+    glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &s->draw_fbo);
+    glGetIntegerv(GL_READ_FRAMEBUFFER_BINDING, &s->read_fbo);
+    glGetIntegerv(GL_VIEWPORT, s->viewport);
+    glGetIntegerv(GL_PACK_ALIGNMENT, &s->pack_align);
+    glGetIntegerv(GL_UNPACK_ALIGNMENT, &s->unpack_align);
+    glGetIntegerv(GL_UNPACK_ROW_LENGTH, &s->unpack_row);
+    glGetIntegerv(GL_PIXEL_PACK_BUFFER_BINDING, &s->pack_buf);
+    glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &s->unpack_buf);
+    glGetFloatv(GL_COLOR_CLEAR_VALUE, s->clear);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+}
+
+static void restore_state(const saved_state *s)
+{
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, (GLuint)s->draw_fbo);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, (GLuint)s->read_fbo);
+    glViewport(s->viewport[0], s->viewport[1], s->viewport[2], s->viewport[3]);
+    glPixelStorei(GL_PACK_ALIGNMENT, s->pack_align);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, s->unpack_align);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, s->unpack_row);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, (GLuint)s->pack_buf);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, (GLuint)s->unpack_buf);
+    glClearColor(s->clear[0], s->clear[1], s->clear[2], s->clear[3]);
+}
+
+/* Every view: clear, the caller's draw, read colour and depth back, fill the layers. */
+static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_draw_fn draw,
+                             void *user, uint8_t *rgba, uint8_t *nrm, float *depth,
+                             xyl_diag *diag)
+{
+    uint32_t n = bb->resolution;
+    bake_target t = {0};
+    xyl_result r = target_make(&t, n, diag);
+    const float step[2] = {2.0f * bb->half[0] / (float)n, 2.0f * bb->half[1] / (float)n};
+    for (uint32_t v = 0; r == XYL_OK && v < bb->views; ++v) {
+        float d[3], m[16];
+        view_dir(bb, v, d);
+        bake_matrix(bb, d, radius, m);
+        glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
+        glViewport(0, 0, (GLsizei)n, (GLsizei)n);
+        glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+        glClearDepth(1.0);
+        glDepthMask(GL_TRUE);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        r = draw(user, m, d, diag);
+        if (r != XYL_OK) break;
+        drain_errors(); /* the caller's draw reports its own */
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, t.fbo);
+        glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+        glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
+        colour_coverage(depth, n, rgba);
+        depth_to_normals(depth, n, radius, step, nrm);
+        glTextureSubImage3D(bb->color_tex, 0, 0, 0, (GLint)v, (GLsizei)n, (GLsizei)n, 1, GL_RGBA,
+                            GL_UNSIGNED_BYTE, rgba);
+        glTextureSubImage3D(bb->normal_tex, 0, 0, 0, (GLint)v, (GLsizei)n, (GLsizei)n, 1,
+                            GL_RGBA, GL_UNSIGNED_BYTE, nrm);
+        r = gl_check(diag, "baking a billboard view");
+    }
+    if (r == XYL_OK) {
+        glGenerateTextureMipmap(bb->color_tex);
+        glGenerateTextureMipmap(bb->normal_tex);
+        r = gl_check(diag, "making the billboard's mipmaps");
+    }
+    target_free(&t);
+    return r;
+}
+
+xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboard_draw_fn draw,
+                                 void *user, xyl_billboard_gl **out, xyl_diag *diag)
+{
+    if (!desc || !draw || !out)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc, draw and out are required");
+    xyl_result r = check_desc(desc, diag);
+    if (r == XYL_OK) r = need_context(diag);
+    if (r != XYL_OK) return r;
+    GLint max_side = 0, max_layers = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_side);
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    if (max_side > 0 && desc->resolution > (uint32_t)max_side)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a billboard resolution of %u exceeds the driver's %d",
+                         desc->resolution, max_side);
+    xyl_allocator a = desc->alloc;
+    xyl_billboard_gl *bb = xyl__calloc(&a, 1, sizeof *bb);
+    if (!bb) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    bb->alloc = a;
+    bb->kind = desc->kind;
+    bb->views = desc->kind == XYL_BILLBOARD_CROSS ? desc->planes : 1;
+    bb->resolution = desc->resolution;
+    float ext[3];
+    for (int k = 0; k < 3; ++k) {
+        bb->center[k] = 0.5f * (desc->lo[k] + desc->hi[k]);
+        ext[k] = 0.5f * (desc->hi[k] - desc->lo[k]);
+    }
+    bb->half[0] = sqrtf(ext[0] * ext[0] + ext[2] * ext[2]); /* any turn about the axis fits */
+    bb->half[1] = ext[1];
+    float radius = sqrtf(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]) * 1.01f;
+    size_t texels = (size_t)bb->resolution * bb->resolution;
+    uint8_t *rgba = xyl__alloc_array(&a, texels, 8);
+    float *depth = xyl__alloc_array(&a, texels, sizeof *depth);
+    if (!rgba || !depth) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    saved_state saved;
+    if (r == XYL_OK) {
+        drain_errors();
+        save_state(&saved);
+        r = build_program(bb, diag);
+        if (r == XYL_OK) {
+            glCreateVertexArrays(1, &bb->vao);
+            bb->color_tex = make_array(bb->resolution, bb->views);
+            bb->normal_tex = make_array(bb->resolution, bb->views);
+            r = gl_check(diag, "making the billboard's textures");
+        }
+        if (r == XYL_OK)
+            r = bake_views(bb, radius, draw, user, rgba, rgba + 4 * texels, depth, diag);
+        restore_state(&saved);
+    }
+    xyl__free(&a, rgba);
+    xyl__free(&a, depth);
+    if (r != XYL_OK) {
+        xyl_billboard_gl_destroy(bb);
+        return r;
+    }
+    *out = bb;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+void xyl_billboard_gl_destroy(xyl_billboard_gl *bb)
+{
+    if (!bb) return;
+    if (epoxy_gl_version() != 0) {
+        glDeleteProgram(bb->program);
+        glDeleteVertexArrays(1, &bb->vao);
+        GLuint t[2] = {bb->color_tex, bb->normal_tex};
+        glDeleteTextures(2, t);
+    }
+    xyl_allocator a = bb->alloc;
+    xyl__free(&a, bb);
+}
+
+uint32_t xyl_billboard_gl_view_count(const xyl_billboard_gl *bb)
+{
+    return bb ? bb->views : 0;
+}
+
+xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32_t view, bool normal,
+                                      uint8_t *rgba, xyl_diag *diag)
+{
+    if (!bb || !rgba)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "bb and rgba are required");
+    if (view >= bb->views)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "view %u of a billboard with %u", view, bb->views);
+    drain_errors();
+    GLint align = 4, pack_buf = 0;
+    glGetIntegerv(GL_PACK_ALIGNMENT, &align);
+    glGetIntegerv(GL_PIXEL_PACK_BUFFER_BINDING, &pack_buf);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    GLsizei n = (GLsizei)bb->resolution;
+    size_t bytes = 4u * (size_t)n * (size_t)n;
+    glGetTextureSubImage(normal ? bb->normal_tex : bb->color_tex, 0, 0, 0, (GLint)view, n, n, 1,
+                         GL_RGBA, GL_UNSIGNED_BYTE, (GLsizei)bytes, rgba);
+    glPixelStorei(GL_PACK_ALIGNMENT, align);
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, (GLuint)pack_buf);
+    xyl_result r = gl_check(diag, "reading a billboard view");
+    if (r != XYL_OK) return r;
+    size_t row = 4u * (size_t)n; /* stored bottom row first */
+    for (GLsizei y = 0; y < n / 2; ++y) {
+        uint8_t *p = rgba + (size_t)y * row, *q = rgba + (size_t)(n - 1 - y) * row;
+        for (size_t i = 0; i < row; ++i) {
+            uint8_t c = p[i];
+            p[i] = q[i];
+            q[i] = c;
+        }
+    }
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_frame *frame,
+                                 xyl_diag *diag)
+{
+    if (!bb || !frame)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "bb and frame are required");
+    bool any = false;
+    for (int i = 0; i < 16; ++i) {
+        if (!isfinite(frame->view_proj[i]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, i, "view_proj[%d] is not finite", i);
+        any = any || frame->view_proj[i] != 0.0f;
+    }
+    if (!any)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "view_proj is all zero");
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(frame->eye[k]) || !isfinite(frame->light_dir[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "eye or light_dir is not finite");
+    if (!(frame->alpha_cutoff >= 0.0f && frame->alpha_cutoff <= 1.0f))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "alpha_cutoff %g is outside [0, 1]", (double)frame->alpha_cutoff);
+    float l[3] = {frame->light_dir[0], frame->light_dir[1], frame->light_dir[2]};
+    float len = sqrtf(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
+    if (!(len > 0.0f) || !isfinite(len)) l[0] = 0.0f, l[1] = 1.0f, l[2] = 0.0f, len = 1.0f;
+    for (int k = 0; k < 3; ++k) l[k] /= len;
+    float cutoff = frame->alpha_cutoff > 0.0f ? frame->alpha_cutoff : 0.5f;
+    drain_errors();
+    GLboolean cull = glIsEnabled(GL_CULL_FACE);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    GLuint p = bb->program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, U_VIEW_PROJ, 1, GL_FALSE, frame->view_proj);
+    glProgramUniform3fv(p, U_EYE, 1, frame->eye);
+    glProgramUniform3fv(p, U_CENTER, 1, bb->center);
+    glProgramUniform2fv(p, U_HALF, 1, bb->half);
+    glProgramUniform1i(p, U_KIND, (GLint)bb->kind);
+    glProgramUniform1i(p, U_PLANES, (GLint)bb->views);
+    glProgramUniform3fv(p, U_LIGHT, 1, l);
+    glProgramUniform1f(p, U_CUTOFF, cutoff);
+    glBindVertexArray(bb->vao);
+    glBindTextureUnit(0, bb->color_tex);
+    glBindTextureUnit(1, bb->normal_tex);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)bb->views);
+    if (cull) glEnable(GL_CULL_FACE);
+    xyl_result r = gl_check(diag, "drawing the billboard");
+    if (r == XYL_OK) xyl__diag_ok(diag);
+    return r;
+}

@@ -1,0 +1,36 @@
+// A tree's billboard, alpha-tested and relit: the bake lit the tree from its camera, so a
+// texel's colour is albedo * shade(n, towards the bake camera); it is drawn as
+// colour * shade(n, u_light) / shade(n, towards the bake camera), shade being the stems'
+// Lambert-plus-sky term (tess_shade.frag), n the baked normal turned into world space.
+
+layout(binding = 0) uniform sampler2DArray u_color_map;
+layout(binding = 1) uniform sampler2DArray u_normal_map;
+layout(location = 6) uniform vec3 u_light;
+layout(location = 7) uniform float u_cutoff;
+
+layout(location = 0) in vec2 v_uv;
+layout(location = 1) flat in vec3 v_right;
+layout(location = 2) flat in vec3 v_up;
+layout(location = 3) flat in vec3 v_facing;
+layout(location = 4) flat in int v_layer;
+layout(location = 0) out vec4 out_color;
+
+float shade(vec3 n, vec3 l)
+{
+    float hemi = 0.5 + 0.5 * n.y;
+    return 0.65 * max(dot(n, l), 0.0) + 0.35 * mix(0.35, 1.0, hemi);
+}
+
+void main()
+{
+    // seen from behind, a cross plane shows its view mirrored: u runs the other way in the
+    // quad's frame, and the normals' z points away from this side
+    vec4 texel = texture(u_color_map, vec3(v_uv, float(v_layer)));
+    if (texel.a < u_cutoff) discard;
+    vec3 q = texture(u_normal_map, vec3(v_uv, float(v_layer))).xyz * 2.0 - 1.0;
+    float side = gl_FrontFacing ? 1.0 : -1.0;
+    vec3 n = normalize(q.x * v_right + q.y * v_up + side * q.z * v_facing);
+    vec3 bake_dir = side * v_facing;
+    float ratio = shade(n, u_light) / max(shade(n, bake_dir), 0.05);
+    out_color = vec4(min(texel.rgb * clamp(ratio, 0.0, 4.0), vec3(1.0)), 1.0);
+}
