@@ -48,12 +48,14 @@ typedef enum xyl_joint_check {
  * the root's plane: through the root node, square to the root's first segment. */
 typedef enum xyl_stems_base {
     XYL_STEMS_BASE_CLOSED = 0, /* default: a cap that stays on the plane's upper side (a flat
-                                  fan for k < 5, a shallow inward cone for k >= 5); after
-                                  pre-subdivision the ring's edges are kept as infinitely sharp
-                                  creases, so the subdivided base is still the ring, in the plane */
+                                  fan for k < 5, a cone whose apex lies a tenth of the radius
+                                  inside for k >= 5). Pre-subdivision still rounds this base off
+                                  and lifts it (docs/stems.md, "The base") */
     XYL_STEMS_BASE_OPEN = 1    /* no cap: the mesh is closed but for one k-edge boundary loop
-                                  per root (for trees sunk into terrain); subdivision keeps
-                                  boundaries sharp, so the loop stays in the plane */
+                                  per root (for trees sunk into terrain). Subdivision keeps
+                                  boundaries sharp, so the loop stays in the plane; such a mesh
+                                  is refined by OpenSubdiv's Far, whose memory does not come
+                                  from alloc */
 } xyl_stems_base;
 
 /* What a checked build did (all 0 but builds when unchecked). Face counts are of the mesh
