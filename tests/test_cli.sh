@@ -102,6 +102,17 @@ contains "the written mesh has 0 pairs at joints" "joint summary says what the w
 expect 0 "unchecked joints" -- "$XYLEM" mesh --preset faycal-leaves --joints unchecked --out "$tmp/f.glb"
 grep -qF "laterals start later" "$tmp/out" && { failed=$((failed + 1)); echo "FAIL: unchecked build reports joints"; } || passed=$((passed + 1))
 expect 64 "bad joint check" -- "$XYLEM" mesh --joints some --out "$tmp/x.glb"
+# --base: the default tree stands on y = 0 (its root) with a closed or an open base; the open
+# .obj has one face fewer (the root's cap, one quad at k = 4).
+expect 0 "closed base" -- "$XYLEM" mesh --base closed --out "$tmp/closed.obj"
+expect 0 "open base" -- "$XYLEM" mesh --base open --out "$tmp/open.obj"
+for f in closed open; do
+    low=$(awk '/^v /{if (m == "" || $3 < m) m = $3} END {print m}' "$tmp/$f.obj")
+    [ "$low" = "0" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: $f base: lowest y $low, not 0"; }
+done
+fc=$(grep -c '^f ' "$tmp/closed.obj"); fo=$(grep -c '^f ' "$tmp/open.obj")
+[ "$fo" -eq $((fc - 1)) ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: open base has $fo faces, closed $fc"; }
+expect 64 "bad base" -- "$XYLEM" mesh --base flat --out "$tmp/x.glb"
 expect 64 "mesh needs --out" -- "$XYLEM" mesh
 expect 64 "skeleton and preset" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --preset abop-1.24a --out "$tmp/x.glb"
 expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out "$tmp/x.glb"

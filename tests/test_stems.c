@@ -156,6 +156,187 @@ static void every_preset_is_a_closed_manifold(void **state)
     }
 }
 
+/* ---- the base: the tree stands on its root --------------------------------------------------- */
+
+/* How far (in root radii) a vertex may pass below the root's plane, and a root ring vertex lie
+ * off it: float rounding of positions a few hundred radii from the origin. */
+#define BASE_TOL 1e-3
+
+/* The root's plane of root node i: through the node, square to its first segment (to the first
+ * node of its own branch at another position). False for a root without such a node. */
+static bool root_plane(const xyl_skeleton *sk, uint32_t i, double p[3], double n[3])
+{
+    const xyl_skel_node *nodes = sk->nodes, *root = &nodes[i];
+    uint32_t at = i;
+    for (;;) {
+        uint32_t next = UINT32_MAX;
+        for (uint32_t c = at + 1; c < sk->node_count; ++c)
+            if (nodes[c].parent == (int32_t)at && nodes[c].branch == root->branch) next = c;
+        if (next == UINT32_MAX) return false;
+        double d[3] = {nodes[next].pos.x - root->pos.x, nodes[next].pos.y - root->pos.y,
+                       nodes[next].pos.z - root->pos.z};
+        double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (len > 1e-6 * root->radius) {
+            p[0] = root->pos.x, p[1] = root->pos.y, p[2] = root->pos.z;
+            for (int a = 0; a < 3; ++a) n[a] = d[a] / len;
+            return true;
+        }
+        at = next;
+    }
+}
+
+/* Whether a node that grows from root i comes back down to within its radius of the root's
+ * plane: such a tree (a stem turning back down, a lateral forking backwards) is not one to
+ * stand on its root. */
+static bool grows_below(const xyl_skeleton *sk, uint32_t i, const double p[3], const double n[3])
+{
+    bool *from = calloc(sk->node_count, sizeof *from), below = false;
+    assert_non_null(from);
+    from[i] = true;
+    for (uint32_t j = i + 1; j < sk->node_count && !below; ++j) {
+        const xyl_skel_node *nd = &sk->nodes[j];
+        if (nd->parent < 0 || !from[nd->parent]) continue;
+        from[j] = true;
+        const xyl_skel_node *up = &sk->nodes[nd->parent];
+        double h = (nd->pos.x - p[0]) * n[0] + (nd->pos.y - p[1]) * n[1] + (nd->pos.z - p[2]) * n[2];
+        double hp = (up->pos.x - p[0]) * n[0] + (up->pos.y - p[1]) * n[1] + (up->pos.z - p[2]) * n[2];
+        below = h < nd->radius && h < hp; /* on its way back down, near the plane */
+    }
+    free(from);
+    return below;
+}
+
+typedef struct base_ctx {
+    uint32_t k;
+    xyl_subdivision sub;
+    xyl_stems_base base;
+    bool whole_tree; /* every vertex above the plane, not only the root branch's near the root */
+    size_t roots;    /* roots checked */
+    size_t skipped;  /* roots whose tree grows below their plane */
+} base_ctx;
+
+/* Every root's ring lies in the root's plane (at least k vertices within BASE_TOL r of it,
+ * about r from the root), and no vertex passes below the plane by more than BASE_TOL r: of the
+ * whole tree, or (hard cases, some of which grow back below their root) of the root's branch
+ * within 3 r of the root. */
+static void check_base(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    base_ctx *b = ctx;
+    xyl_stems_desc d = {0};
+    d.sides = b->k;
+    d.subdivision = b->sub;
+    d.base = b->base;
+    d.joints = XYL_JOINTS_UNCHECKED;
+    xyl_mesh *m = NULL;
+    xyl_diag diag = {0};
+    if (xyl_stems_build(sk, &d, &m, NULL, &diag) != XYL_OK) fail_msg("%s: %s", name, diag.message);
+    for (uint32_t i = 0; i < sk->node_count; ++i) {
+        double p[3], n[3];
+        if (sk->nodes[i].parent >= 0 || !root_plane(sk, i, p, n)) continue;
+        double r = sk->nodes[i].radius, lowest = INFINITY;
+        if (grows_below(sk, i, p, n)) {
+            b->skipped++;
+            continue;
+        }
+        size_t on_plane = 0;
+        for (size_t v = 0; v < m->vertex_count; ++v) {
+            double e[3] = {m->positions[v].x - p[0], m->positions[v].y - p[1],
+                           m->positions[v].z - p[2]};
+            double h = e[0] * n[0] + e[1] * n[1] + e[2] * n[2];
+            double dist = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+            bool near = m->branch_ids[v] == sk->nodes[i].branch && dist <= 3.0 * r;
+            if (b->whole_tree || near) lowest = fmin(lowest, h);
+            if (near && fabs(h) <= BASE_TOL * r && dist >= 0.5 * r) on_plane++;
+        }
+        if (lowest < -BASE_TOL * r)
+            fail_msg("%s k=%u subdivision=%d base=%d: a vertex %.3g r below root %u's plane", name,
+                     b->k, (int)b->sub, (int)b->base, -lowest / r, i);
+        if (on_plane < b->k)
+            fail_msg("%s k=%u subdivision=%d base=%d: %zu vertices on root %u's plane, fewer "
+                     "than its ring's %u", name, b->k, (int)b->sub, (int)b->base, on_plane, i, b->k);
+        b->roots++;
+    }
+    xyl_mesh_destroy(m);
+}
+
+/* Plain meshes, closed and open base, k = 3..8: every hard case near its roots, every preset
+ * as a whole (docs/stems.md, "The base"). */
+static void every_tree_stands_on_its_root_plane(void **state)
+{
+    (void)state;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        for (int open = 0; open < 2; ++open) {
+            base_ctx b = {k, XYL_SUBDIVIDE_NONE, open ? XYL_STEMS_BASE_OPEN : XYL_STEMS_BASE_CLOSED,
+                          false, 0, 0};
+            tu_for_each_hard_case(check_base, &b);
+            assert_true(b.roots >= 40);
+            if (k == 4 && !open)
+                print_message("  base: %zu hard-case roots checked, %zu grow below their plane\n",
+                              b.roots, b.skipped);
+            b.whole_tree = true;
+            b.skipped = 0;
+            for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+                const char *name = xyl_lsystem_preset_name(i);
+                xyl_skeleton *sk = grow_preset(name);
+                check_base(name, sk, &b);
+                xyl_skeleton_destroy(sk);
+            }
+            assert_int_equal(b.skipped, 0); /* every preset stands */
+        }
+    }
+}
+
+/* Subdivided, an open base keeps its boundary loop in the root's plane (boundaries are sharp). */
+static void an_open_base_stays_on_the_root_plane_after_subdivision(void **state)
+{
+    (void)state;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        for (int loop = 0; loop < 2; ++loop) {
+            base_ctx b = {k, loop ? XYL_SUBDIVIDE_LOOP : XYL_SUBDIVIDE_CATMARK, XYL_STEMS_BASE_OPEN,
+                          false, 0, 0};
+            tu_for_each_hard_case(check_base, &b);
+            assert_true(b.roots >= 40);
+        }
+    }
+    base_ctx b = {4, XYL_SUBDIVIDE_CATMARK, XYL_STEMS_BASE_OPEN, true, 0, 0};
+    xyl_skeleton *sk = grow_preset("abop-2.8-ternary");
+    check_base("abop-2.8-ternary", sk, &b);
+    assert_int_equal(b.roots, 1);
+    xyl_skeleton_destroy(sk);
+}
+
+/* An open base has no root cap: one boundary loop of k edges per root, closed elsewhere. */
+static void an_open_base_leaves_one_boundary_loop_per_root(void **state)
+{
+    (void)state;
+    static const xyl_skel_node nodes[] = {
+        {{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 0.5f, 0}, 0.1f, 0, 0, 0}, {{0, 1, 0}, 0.1f, 1, 0, 0},
+        {{2, 0, 0}, 0.1f, -1, 0, 0}, {{2, 0.5f, 0}, 0.1f, 3, 0, 0}, {{2, 1, 0}, 0.1f, 4, 0, 0}};
+    xyl_skeleton *sk = skeleton_of(nodes, 6);
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_stems_desc d = {0};
+        d.sides = k;
+        d.base = XYL_STEMS_BASE_OPEN;
+        xyl_mesh *open = NULL, *closed = NULL;
+        assert_int_equal(xyl_stems_build(sk, &d, &open, NULL, NULL), XYL_OK);
+        d.base = XYL_STEMS_BASE_CLOSED;
+        assert_int_equal(xyl_stems_build(sk, &d, &closed, NULL, NULL), XYL_OK);
+        xyl_mesh_report rep = {0};
+        assert_int_equal(xyl_mesh_check(open, NULL, &rep, NULL), XYL_OK);
+        assert_int_equal(rep.boundary_edges, 2 * k);
+        assert_true(open->quad_count + open->triangle_count <
+                    closed->quad_count + closed->triangle_count);
+        xyl_mesh_destroy(open);
+        xyl_mesh_destroy(closed);
+    }
+    xyl_stems_desc bad = {0};
+    bad.base = (xyl_stems_base)2;
+    xyl_mesh *m = NULL;
+    assert_int_equal(xyl_stems_build(sk, &bad, &m, NULL, NULL), XYL_ERR_INVALID_ARGUMENT);
+    assert_null(m);
+    xyl_skeleton_destroy(sk);
+}
+
 /* ---- the two subdivision paths ------------------------------------------------------------ */
 #if defined(XYL_HAVE_OPENSUBDIV) /* without it both paths answer XYL_ERR_UNSUPPORTED */
 
@@ -1546,6 +1727,9 @@ int main(void)
         cmocka_unit_test(simd_loops_give_the_scalar_bits),
         cmocka_unit_test(every_hard_case_stays_closed_after_subdivision),
         cmocka_unit_test(every_preset_is_a_closed_manifold),
+        cmocka_unit_test(every_tree_stands_on_its_root_plane),
+        cmocka_unit_test(an_open_base_leaves_one_boundary_loop_per_root),
+        cmocka_unit_test(an_open_base_stays_on_the_root_plane_after_subdivision),
 #if defined(XYL_HAVE_OPENSUBDIV)
         cmocka_unit_test(direct_subdivision_matches_far_on_every_hard_case),
         cmocka_unit_test(direct_subdivision_matches_far_on_every_preset),

@@ -117,11 +117,13 @@ static const char usage_text[] =
     "                               grow the branch skeleton and write it\n"
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
-    "           [--joints checked|unchecked] [--foliage [foliage options]]\n"
-    "           --out FILE.glb|FILE.obj\n"
+    "           [--joints checked|unchecked] [--base closed|open]\n"
+    "           [--foliage [foliage options]] --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
     "                               checked (default): laterals whose joints intersect\n"
-    "                               start later or are left out; --foliage (.glb only): the\n"
+    "                               start later or are left out; --base open: no cap at the\n"
+    "                               root (one boundary loop per root, for trees sunk into\n"
+    "                               terrain); --foliage (.glb only): the\n"
     "                               leaves of 'foliage' too, in the same file\n"
     "  foliage  [source | --skeleton FILE.skel | --leaf-mesh FILE.obj] [--seed N] [--sectors N]\n"
     "           [--aspect A | --leaf-template FILE.obj] [--cost hidalgo|viewpoint]\n"
@@ -333,6 +335,10 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
         if (strcmp(val, "checked") == 0) m->joints = XYL_JOINTS_CHECKED;
         else if (strcmp(val, "unchecked") == 0) m->joints = XYL_JOINTS_UNCHECKED;
         else return usage_error("--joints takes checked or unchecked, not '%s'", val);
+    } else if (strcmp(opt, "--base") == 0) {
+        if (strcmp(val, "closed") == 0) m->base = XYL_STEMS_BASE_CLOSED;
+        else if (strcmp(val, "open") == 0) m->base = XYL_STEMS_BASE_OPEN;
+        else return usage_error("--base takes closed or open, not '%s'", val);
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
     } else if (strcmp(opt, "--mesh") == 0) {

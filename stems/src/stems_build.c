@@ -164,9 +164,9 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
     if (k < 3 || k > 32)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "sides must be 3..32, not %u", k);
     if ((unsigned)d->normals > XYL_NORMALS_SMOOTH || (unsigned)d->subdivision > XYL_SUBDIVIDE_LOOP ||
-        (unsigned)d->joints > XYL_JOINTS_UNCHECKED)
+        (unsigned)d->joints > XYL_JOINTS_UNCHECKED || (unsigned)d->base > XYL_STEMS_BASE_OPEN)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "unknown normal mode, scheme or joint check");
+                         "unknown normal mode, scheme, joint check or base");
     return XYL_OK;
 }
 
@@ -316,6 +316,7 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     s.unit_per_branch = s.sum_normals && s.k % 2 == 0; /* index_children may still veto */
     s.inflate = inflate ? 1.0 / limit_mean_radius(s.k) : 1.0;
     s.limit_centres = inflate;
+    s.open_base = desc->base == XYL_STEMS_BASE_OPEN;
     r = build_all(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)
         r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,

@@ -81,6 +81,7 @@ typedef struct stems {
     bool lonely;        /* some vertex has no own-branch face normal (see xyl__mesh_normals) */
     uint32_t apex[2];   /* the domed caps' apexes of the branch being built (root, tip), or
                            UINT32_MAX (k < 5, no root cap) */
+    bool open_base;     /* roots get no cap (XYL_STEMS_BASE_OPEN) */
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     uint8_t *qwrap; /* per quad: its uv_wraps bits, set as it is made */
@@ -155,6 +156,11 @@ void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3
  * seams"). */
 #define XYL__STEMS_MAX_DV 65536.0
 #define XYL__JOINT_DROP 3
+
+/* How far a closed base's apex (k >= 5) lies inside the root ring, in ring radii: enough for
+ * its faces to meet at an angle (a flat fan's coplanar faces sharing a vertex cannot be told
+ * from touching once rounded), little enough to look flat. */
+#define XYL__STEMS_BASE_DEPTH 0.1
 
 /* What xyl__stems_judge_joints found in one mesh. */
 typedef struct xyl__joint_tally {

@@ -377,10 +377,12 @@ static xyl_result put_flat_cap(stems *s, uint32_t ring, bool forward, uint32_t b
     return XYL_OK;
 }
 
-/* The apex of a domed cap: a quarter of the ring's radius beyond its centre, outwards. */
+/* The apex of a domed cap. A tip's: a quarter of the ring's radius beyond its centre, outwards.
+ * A root's: a tenth of the radius inwards, so the base is a shallow inward cone that no point
+ * of passes below the root's plane (the tree stands on its root ring). */
 static uint32_t put_apex(stems *s, const stems_ring *ring, bool forward, uint32_t branch)
 {
-    double h = (forward ? 0.25 : -0.25) * ring->radius * s->inflate;
+    double h = (forward ? 0.25 : XYL__STEMS_BASE_DEPTH) * ring->radius * s->inflate;
     size_t v = s->nv;
     s->pos[v] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, h)));
     s->uv[2 * v] = 0.5f;
@@ -414,6 +416,7 @@ static xyl_result put_dome_cap(stems *s, const stems_ring *ring, bool forward, u
 static xyl_result put_cap(stems *s, size_t i, bool forward, uint32_t branch)
 {
     const stems_ring *ring = &s->rings[i];
+    if (!forward && s->open_base) return XYL_OK;
     if (s->k < 5) return put_flat_cap(s, ring->first, forward, branch);
     xyl_result r = put_dome_cap(s, ring, forward, branch);
     if (s->unit_per_branch) s->apex[forward] = (uint32_t)s->nv - 1;
@@ -452,6 +455,25 @@ static xyl_result emit_rings(stems *s, size_t from, uint32_t branch)
 
 /* ---- a branch ------------------------------------------------------------------------------ */
 
+/* Turns a root's first ring square to its first segment, so that the base lies in the root's
+ * plane (the ring faced the direction to the chain's end, tilted wherever the trunk bends: 22.5
+ * degrees above a 90-degree kink). Its frame is carried back from the second ring; the rings
+ * after it keep the frames carried from the tilted ring, so the rest of the tube, and every
+ * lateral placed on it, stays as it was. A root that forks at its first station keeps
+ * its fork's rings. */
+static void square_root_ring(stems *s, const stems_fork_span *spans, size_t nspans)
+{
+    if (s->nstations < 2 || s->nrings < 2 || (nspans && spans[0].station == 0)) return;
+    stems_ring *ring = &s->rings[0];
+    xyl__dvec3 t;
+    if (!xyl__d3_normalize_ok(xyl__d3_sub(s->stations[1].p, s->stations[0].p), &t)) return;
+    if (memcmp(&t, &ring->tangent, sizeof t) == 0) return;
+    /* carried back from the ring after it, so that the first band is not twisted */
+    const stems_ring *next = &s->rings[1];
+    ring->u = transport(next->u, next->centre, next->tangent, ring->centre, t);
+    ring->tangent = t;
+}
+
 xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *from)
 {
     uint32_t branch = s->sk->nodes[start].branch;
@@ -485,6 +507,7 @@ xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *f
     stems_fork_span *spans = s->spans;
     size_t nspans = 0;
     r = branch_rings(s, dir, spans, &nspans);
+    if (!r && !from) square_root_ring(s, spans, nspans);
     if (!r && s->limit_centres) limit_centres(s);
     if (!r) r = emit_rings(s, from ? 1 : 0, branch);
     if (!r && !xyl__stems_reserve(s, s->nv + 2, s->nq + s->k)) /* the caps */

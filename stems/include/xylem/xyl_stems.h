@@ -44,6 +44,20 @@ typedef enum xyl_joint_check {
                                 (docs/BENCHMARKS.md); the presets then have pairs at joints */
 } xyl_joint_check;
 
+/* The base of every root's tube (docs/stems.md, "The base"). Either way the root ring lies in
+ * the root's plane: through the root node, square to the root's first segment. */
+typedef enum xyl_stems_base {
+    XYL_STEMS_BASE_CLOSED = 0, /* default: a cap that stays on the plane's upper side (a flat
+                                  fan for k < 5, a cone whose apex lies a tenth of the radius
+                                  inside for k >= 5). Pre-subdivision still rounds this base off
+                                  and lifts it (docs/stems.md, "The base") */
+    XYL_STEMS_BASE_OPEN = 1    /* no cap: the mesh is closed but for one k-edge boundary loop
+                                  per root (for trees sunk into terrain). Subdivision keeps
+                                  boundaries sharp, so the loop stays in the plane; such a mesh
+                                  is refined by OpenSubdiv's Far, whose memory does not come
+                                  from alloc */
+} xyl_stems_base;
+
 /* What a checked build did (all 0 but builds when unchecked). Face counts are of the mesh
  * before subdivision. */
 typedef struct xyl_stems_stats {
@@ -74,6 +88,7 @@ typedef struct xyl_stems_desc {
     bool keep_control_points;     /* default false: subdivided vertices sit on the limit
                                      surface (see xyl_subdivide_desc) */
     xyl_joint_check joints;
+    xyl_stems_base base;          /* default: closed, flat on the root's plane */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_stems_desc;
