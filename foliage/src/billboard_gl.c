@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "foliage_gl_util.h"
 #include "foliage_internal.h"
 #include "xylem/xyl_billboard_gl.h"
 
@@ -21,34 +22,6 @@ struct xyl_billboard_gl {
     float center[3], half[2]; /* the quads' centre, half width and half height */
     xyl_allocator alloc;
 };
-
-static void drain_errors(void)
-{
-    for (int i = 0; i < 32 && glGetError() != GL_NO_ERROR; ++i) {}
-}
-
-static xyl_result gl_check(xyl_diag *diag, const char *what)
-{
-    GLenum e = glGetError();
-    if (e == GL_NO_ERROR) return XYL_OK;
-    drain_errors();
-    if (e == GL_OUT_OF_MEMORY)
-        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "GL out of memory while %s", what);
-    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "GL error 0x%04x while %s", (unsigned)e,
-                     what);
-}
-
-static xyl_result need_context(xyl_diag *diag)
-{
-    int v = epoxy_gl_version(); /* 0 without a current context */
-    if (v == 0)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no current OpenGL context");
-    if (!epoxy_is_desktop_gl() || v < 45)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
-                         "OpenGL 4.5 is needed, the current context is %s %d.%d",
-                         epoxy_is_desktop_gl() ? "OpenGL" : "OpenGL ES", v / 10, v % 10);
-    return XYL_OK;
-}
 
 static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
 {
@@ -82,20 +55,6 @@ static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
 
 /* ---- program ------------------------------------------------------------------------------ */
 
-static GLuint compile(GLenum stage, const unsigned char *text, char *log, GLsizei log_size)
-{
-    GLuint sh = glCreateShader(stage);
-    const GLchar *src = (const GLchar *)text;
-    glShaderSource(sh, 1, &src, NULL);
-    glCompileShader(sh);
-    GLint ok = GL_FALSE;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (ok) return sh;
-    glGetShaderInfoLog(sh, log_size, NULL, log);
-    glDeleteShader(sh);
-    return 0;
-}
-
 static xyl_result build_program(xyl_billboard_gl *bb, xyl_diag *diag)
 {
     char log[192] = "";
@@ -104,7 +63,7 @@ static xyl_result build_program(xyl_billboard_gl *bb, xyl_diag *diag)
     const char *names[2] = {"billboard.vert", "billboard.frag"};
     GLuint p = glCreateProgram();
     for (int i = 0; i < 2; ++i) {
-        GLuint sh = compile(stages[i], texts[i], log, (GLsizei)sizeof log);
+        GLuint sh = xyl__fgl_compile(stages[i], texts[i], log, (GLsizei)sizeof log);
         if (!sh) {
             glDeleteProgram(p);
             return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader %s: %s", names[i], log);
@@ -170,7 +129,7 @@ static xyl_result target_make(bake_target *t, uint32_t side, xyl_diag *diag)
     glCreateFramebuffers(1, &t->fbo);
     glNamedFramebufferRenderbuffer(t->fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, t->rb[0]);
     glNamedFramebufferRenderbuffer(t->fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, t->rb[1]);
-    xyl_result r = gl_check(diag, "making the bake target");
+    xyl_result r = xyl__fgl_check(diag, "making the bake target");
     if (r == XYL_OK &&
         glCheckNamedFramebufferStatus(t->fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         r = xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
@@ -314,7 +273,7 @@ static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_d
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         r = draw(user, m, d, diag);
         if (r != XYL_OK) break;
-        drain_errors(); /* the caller's draw reports its own */
+        xyl__fgl_drain_errors(); /* the caller's draw reports its own */
         glBindFramebuffer(GL_READ_FRAMEBUFFER, t.fbo);
         glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
         glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
@@ -324,12 +283,12 @@ static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_d
                             GL_UNSIGNED_BYTE, rgba);
         glTextureSubImage3D(bb->normal_tex, 0, 0, 0, (GLint)v, (GLsizei)n, (GLsizei)n, 1,
                             GL_RGBA, GL_UNSIGNED_BYTE, nrm);
-        r = gl_check(diag, "baking a billboard view");
+        r = xyl__fgl_check(diag, "baking a billboard view");
     }
     if (r == XYL_OK) {
         glGenerateTextureMipmap(bb->color_tex);
         glGenerateTextureMipmap(bb->normal_tex);
-        r = gl_check(diag, "making the billboard's mipmaps");
+        r = xyl__fgl_check(diag, "making the billboard's mipmaps");
     }
     target_free(&t);
     return r;
@@ -342,7 +301,7 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "desc, draw and out are required");
     xyl_result r = check_desc(desc, diag);
-    if (r == XYL_OK) r = need_context(diag);
+    if (r == XYL_OK) r = xyl__fgl_need_context(diag);
     if (r != XYL_OK) return r;
     GLint max_side = 0, max_layers = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_side);
@@ -372,14 +331,14 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
     if (!rgba || !depth) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     saved_state saved;
     if (r == XYL_OK) {
-        drain_errors();
+        xyl__fgl_drain_errors();
         save_state(&saved);
         r = build_program(bb, diag);
         if (r == XYL_OK) {
             glCreateVertexArrays(1, &bb->vao);
             bb->color_tex = make_array(bb->resolution, bb->views);
             bb->normal_tex = make_array(bb->resolution, bb->views);
-            r = gl_check(diag, "making the billboard's textures");
+            r = xyl__fgl_check(diag, "making the billboard's textures");
         }
         if (r == XYL_OK)
             r = bake_views(bb, radius, draw, user, rgba, rgba + 4 * texels, depth, diag);
@@ -422,7 +381,7 @@ xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32_t view,
     if (view >= bb->views)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "view %u of a billboard with %u", view, bb->views);
-    drain_errors();
+    xyl__fgl_drain_errors();
     GLint align = 4, pack_buf = 0;
     glGetIntegerv(GL_PACK_ALIGNMENT, &align);
     glGetIntegerv(GL_PIXEL_PACK_BUFFER_BINDING, &pack_buf);
@@ -434,7 +393,7 @@ xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32_t view,
                          GL_RGBA, GL_UNSIGNED_BYTE, (GLsizei)bytes, rgba);
     glPixelStorei(GL_PACK_ALIGNMENT, align);
     glBindBuffer(GL_PIXEL_PACK_BUFFER, (GLuint)pack_buf);
-    xyl_result r = gl_check(diag, "reading a billboard view");
+    xyl_result r = xyl__fgl_check(diag, "reading a billboard view");
     if (r != XYL_OK) return r;
     size_t row = 4u * (size_t)n; /* stored bottom row first */
     for (GLsizei y = 0; y < n / 2; ++y) {
@@ -473,7 +432,7 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     if (!(len > 0.0f) || !isfinite(len)) l[0] = 0.0f, l[1] = 1.0f, l[2] = 0.0f, len = 1.0f;
     for (int k = 0; k < 3; ++k) l[k] /= len;
     float cutoff = frame->alpha_cutoff > 0.0f ? frame->alpha_cutoff : 0.5f;
-    drain_errors();
+    xyl__fgl_drain_errors();
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
     glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
@@ -494,7 +453,7 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     glBindTextureUnit(1, bb->normal_tex);
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)bb->views);
     if (cull) glEnable(GL_CULL_FACE);
-    xyl_result r = gl_check(diag, "drawing the billboard");
+    xyl_result r = xyl__fgl_check(diag, "drawing the billboard");
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }

@@ -8,6 +8,7 @@
 
 #include "foliage_draw.h"
 #include "foliage_gl_debug.h"
+#include "foliage_gl_util.h"
 #include "foliage_internal.h"
 
 extern const unsigned char xyl__shader_gl_foliage_leaf_vert[];
@@ -41,52 +42,7 @@ struct xyl_foliage_gl {
     xyl_allocator alloc;
 };
 
-/* ---- errors and context ------------------------------------------------------------------- */
-
-/* Errors left by the caller's own GL code would otherwise be reported as ours. */
-static void drain_errors(void)
-{
-    for (int i = 0; i < 32 && glGetError() != GL_NO_ERROR; ++i) {}
-}
-
-static xyl_result gl_check(xyl_diag *diag, const char *what)
-{
-    GLenum e = glGetError();
-    if (e == GL_NO_ERROR) return XYL_OK;
-    drain_errors();
-    if (e == GL_OUT_OF_MEMORY)
-        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "GL out of memory while %s", what);
-    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "GL error 0x%04x while %s", (unsigned)e,
-                     what);
-}
-
-static xyl_result need_context(xyl_diag *diag)
-{
-    int v = epoxy_gl_version(); /* 0 without a current context */
-    if (v == 0)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no current OpenGL context");
-    if (!epoxy_is_desktop_gl() || v < 45)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
-                         "OpenGL 4.5 is needed, the current context is %s %d.%d",
-                         epoxy_is_desktop_gl() ? "OpenGL" : "OpenGL ES", v / 10, v % 10);
-    return XYL_OK;
-}
-
 /* ---- program ------------------------------------------------------------------------------ */
-
-static GLuint compile(GLenum stage, const unsigned char *text, char *log, GLsizei log_size)
-{
-    GLuint sh = glCreateShader(stage);
-    const GLchar *src = (const GLchar *)text;
-    glShaderSource(sh, 1, &src, NULL);
-    glCompileShader(sh);
-    GLint ok = GL_FALSE;
-    glGetShaderiv(sh, GL_COMPILE_STATUS, &ok);
-    if (ok) return sh;
-    glGetShaderInfoLog(sh, log_size, NULL, log);
-    glDeleteShader(sh);
-    return 0;
-}
 
 /* One program draws and captures: the feedback varyings only matter while feedback is on. */
 static xyl_result build_program(xyl_foliage_gl *gl, xyl_diag *diag)
@@ -98,7 +54,7 @@ static xyl_result build_program(xyl_foliage_gl *gl, xyl_diag *diag)
     const char *names[2] = {"foliage_leaf.vert", "foliage_leaf.frag"};
     GLuint p = glCreateProgram();
     for (int i = 0; i < 2; ++i) {
-        GLuint sh = compile(stages[i], texts[i], log, (GLsizei)sizeof log);
+        GLuint sh = xyl__fgl_compile(stages[i], texts[i], log, (GLsizei)sizeof log);
         if (!sh) {
             glDeleteProgram(p);
             return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader %s: %s", names[i], log);
@@ -123,7 +79,7 @@ static xyl_result build_program(xyl_foliage_gl *gl, xyl_diag *diag)
 static xyl_result build_cut_program(xyl_foliage_gl *gl, xyl_diag *diag)
 {
     char log[192] = "";
-    GLuint sh = compile(GL_COMPUTE_SHADER, xyl__shader_gl_foliage_cut_comp, log,
+    GLuint sh = xyl__fgl_compile(GL_COMPUTE_SHADER, xyl__shader_gl_foliage_cut_comp, log,
                         (GLsizei)sizeof log);
     if (!sh) return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader foliage_cut.comp: %s", log);
     GLuint p = glCreateProgram();
@@ -190,21 +146,21 @@ static xyl_result build_objects(xyl_foliage_gl *gl, xyl_diag *diag)
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &gl->max_texture_side);
     const uint8_t white[4] = {255, 255, 255, 255};
     gl->texture = make_texture(white, 1, 1);
-    return gl_check(diag, "creating the leaf renderer's objects");
+    return xyl__fgl_check(diag, "creating the leaf renderer's objects");
 }
 
 xyl_result xyl_foliage_gl_create(const xyl_foliage_gl_desc *desc, xyl_foliage_gl **out,
                                  xyl_diag *diag)
 {
     if (!out) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out is required");
-    xyl_result r = need_context(diag);
+    xyl_result r = xyl__fgl_need_context(diag);
     if (r != XYL_OK) return r;
     xyl_allocator a = {0};
     if (desc) a = desc->alloc;
     xyl_foliage_gl *gl = xyl__calloc(&a, 1, sizeof *gl);
     if (!gl) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     gl->alloc = a;
-    drain_errors();
+    xyl__fgl_drain_errors();
     r = build_program(gl, diag);
     if (r == XYL_OK) r = build_cut_program(gl, diag);
     if (r == XYL_OK) r = build_objects(gl, diag);
@@ -263,13 +219,13 @@ static xyl_result make_nodes(const xyl_foliage *f, cut_node *nodes, xyl_diag *di
 static xyl_result upload_records(xyl_foliage_gl *gl, const xyl_foliage_gpu_leaf *records,
                                  const cut_node *nodes, size_t count, xyl_diag *diag)
 {
-    drain_errors();
+    xyl__fgl_drain_errors();
     GLuint buf[3] = {0, 0, 0};
     glCreateBuffers(3, buf);
     glNamedBufferStorage(buf[0], (GLsizeiptr)(count * sizeof *records), records, 0);
     glNamedBufferData(buf[1], (GLsizeiptr)(count * sizeof *nodes), nodes, GL_STATIC_DRAW);
     glNamedBufferData(buf[2], (GLsizeiptr)(count * sizeof(uint32_t)), NULL, GL_DYNAMIC_DRAW);
-    xyl_result r = gl_check(diag, "uploading the leaves");
+    xyl_result r = xyl__fgl_check(diag, "uploading the leaves");
     if (r != XYL_OK) {
         glDeleteBuffers(3, buf);
         return r;
@@ -325,9 +281,9 @@ xyl_result xyl_foliage_gl_set_texture(xyl_foliage_gl *gl, const uint8_t *rgba, u
     if (width == 0 || height == 0 || width > cap || height > cap)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a leaf texture of %u x %u: each side from 1 to %u", width, height, cap);
-    drain_errors();
+    xyl__fgl_drain_errors();
     GLuint t = make_texture(rgba, width, height);
-    xyl_result r = gl_check(diag, "uploading the leaf texture");
+    xyl_result r = xyl__fgl_check(diag, "uploading the leaf texture");
     if (r != XYL_OK) {
         glDeleteTextures(1, &t);
         return r;
@@ -389,7 +345,7 @@ xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *f
     xyl__foliage_frame rf;
     xyl_result r = check_draw(gl, frame, lods, lod_count, &rf, diag);
     if (r != XYL_OK) return r;
-    drain_errors();
+    xyl__fgl_drain_errors();
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
     glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
@@ -398,7 +354,7 @@ xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *f
     bind_program(gl, &rf);
     draw_ranges(gl, lods);
     if (cull) glEnable(GL_CULL_FACE);
-    r = gl_check(diag, "drawing the leaves");
+    r = xyl__fgl_check(diag, "drawing the leaves");
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }
@@ -445,7 +401,7 @@ xyl_result xyl_foliage_gl_draw_adaptive(xyl_foliage_gl *gl, const xyl_foliage_gl
     double eye[3], per_distance = 0.0;
     if (r == XYL_OK) r = xyl__foliage_view_resolve(view, eye, &per_distance, diag);
     if (r != XYL_OK) return r;
-    drain_errors();
+    xyl__fgl_drain_errors();
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
     glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
@@ -453,7 +409,7 @@ xyl_result xyl_foliage_gl_draw_adaptive(xyl_foliage_gl *gl, const xyl_foliage_gl
     glDepthMask(GL_TRUE);
     draw_cut(gl, &rf, eye, per_distance);
     if (cull) glEnable(GL_CULL_FACE);
-    r = gl_check(diag, "drawing the leaves' cut");
+    r = xyl__fgl_check(diag, "drawing the leaves' cut");
     gl->has_cut = r == XYL_OK;
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
@@ -467,10 +423,10 @@ xyl_result xyl_foliage_gl_last_cut(xyl_foliage_gl *gl, uint32_t *out, size_t cap
     if (!gl->has_cut)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "no adaptive draw since the foliage was uploaded");
-    drain_errors();
+    xyl__fgl_drain_errors();
     uint32_t command[4] = {0, 0, 0, 0};
     glGetNamedBufferSubData(gl->command_buf, 0, sizeof command, command);
-    xyl_result r = gl_check(diag, "reading the cut's draw command back");
+    xyl_result r = xyl__fgl_check(diag, "reading the cut's draw command back");
     if (r != XYL_OK) return r;
     size_t n = command[1];
     if (n > gl->tables.leaf_count)
@@ -481,7 +437,7 @@ xyl_result xyl_foliage_gl_last_cut(xyl_foliage_gl *gl, uint32_t *out, size_t cap
             return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                              "the cut has %zu leaves, out holds %zu", n, capacity);
         if (n) glGetNamedBufferSubData(gl->list_buf, 0, (GLsizeiptr)(n * sizeof *out), out);
-        r = gl_check(diag, "reading the cut back");
+        r = xyl__fgl_check(diag, "reading the cut back");
         if (r != XYL_OK) return r;
     }
     *count = n;
@@ -495,9 +451,9 @@ static xyl_result run_feedback(xyl_foliage_gl *gl, const xyl__foliage_frame *rf,
                                size_t bytes, GLuint64 *written, GLuint64 *generated,
                                xyl_diag *diag)
 {
-    drain_errors();
+    xyl__fgl_drain_errors();
     glNamedBufferData(gl->xfb_buf, (GLsizeiptr)bytes, NULL, GL_STREAM_READ);
-    xyl_result r = gl_check(diag, "allocating the transform feedback buffer");
+    xyl_result r = xyl__fgl_check(diag, "allocating the transform feedback buffer");
     if (r != XYL_OK) return r;
     GLint draw_fbo = 0;
     glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &draw_fbo);
@@ -517,7 +473,7 @@ static xyl_result run_feedback(xyl_foliage_gl *gl, const xyl__foliage_frame *rf,
     glGetQueryObjectui64v(gl->generated_query, GL_QUERY_RESULT, generated);
     glBindBufferBase(GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0);
     glBindFramebuffer(GL_DRAW_FRAMEBUFFER, (GLuint)draw_fbo);
-    return gl_check(diag, "capturing the leaves with transform feedback");
+    return xyl__fgl_check(diag, "capturing the leaves with transform feedback");
 }
 
 xyl_result xyl__foliage_gl_capture(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
@@ -546,7 +502,7 @@ xyl_result xyl__foliage_gl_capture(xyl_foliage_gl *gl, const xyl_foliage_gl_fram
     size_t total = (size_t)written * 3;
     size_t n = capacity < total ? capacity : total;
     if (n) glGetNamedBufferSubData(gl->xfb_buf, 0, (GLsizeiptr)(n * XFB_VERTEX_BYTES), out);
-    r = gl_check(diag, "reading the transform feedback back");
+    r = xyl__fgl_check(diag, "reading the transform feedback back");
     if (r != XYL_OK) return r;
     *count = total;
     *generated = gen;
