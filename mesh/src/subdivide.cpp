@@ -1577,17 +1577,20 @@ xyl_result mean_limit_radius(uint32_t k, bool loop, double *mean)
 
 } /* namespace */
 
-extern "C" xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme,
-                                        bool limit, const xyl_mesh_limits *limits,
-                                        xyl__subdivide_path path, const xyl_allocator *alloc,
-                                        xyl__mesh_arrays *out, xyl_diag *diag)
+/* The scheme is passed by address: a C caller may hand over a value outside the enum, and
+ * loading that as an xyl_subdivision (passing it on by value) is undefined in C++;
+ * read_scheme reads its bytes. */
+static xyl_result subdivide_entry(const xyl__mesh_arrays *in, const xyl_subdivision *scheme,
+                                  bool limit, const xyl_mesh_limits *limits,
+                                  xyl__subdivide_path path, const xyl_allocator *alloc,
+                                  xyl__mesh_arrays *out, xyl_diag *diag)
 {
     if (!out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out must not be NULL");
     std::memset(out, 0, sizeof *out);
     if (!in) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "in must not be NULL");
     xyl_subdivision known;
-    if (!read_scheme(&scheme, &known)) return unknown_scheme(&scheme, diag);
+    if (!read_scheme(scheme, &known)) return unknown_scheme(scheme, diag);
     /* Every array is owned by a Buffer or by out until the end, so an exception frees them. */
     xyl_result r;
     try {
@@ -1614,7 +1617,15 @@ extern "C" xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision
                                      const xyl_allocator *alloc, xyl__mesh_arrays *out,
                                      xyl_diag *diag)
 {
-    return xyl__subdivide_by(in, scheme, limit, limits, XYL__SUBDIVIDE_ANY, alloc, out, diag);
+    return subdivide_entry(in, &scheme, limit, limits, XYL__SUBDIVIDE_ANY, alloc, out, diag);
+}
+
+extern "C" xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme,
+                                        bool limit, const xyl_mesh_limits *limits,
+                                        xyl__subdivide_path path, const xyl_allocator *alloc,
+                                        xyl__mesh_arrays *out, xyl_diag *diag)
+{
+    return subdivide_entry(in, &scheme, limit, limits, path, alloc, out, diag);
 }
 
 extern "C" xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor)
