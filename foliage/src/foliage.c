@@ -1,5 +1,6 @@
 /* The foliage object: options, the collapse chain of each sector laid out as one array, the
  * read-only view. */
+#include <math.h>
 #include <string.h>
 
 #include "foliage_internal.h"
@@ -406,4 +407,22 @@ xyl_result xyl_foliage_cut(const xyl_foliage *f, const xyl_foliage_view *view, u
     *count = n;
     xyl__diag_ok(diag);
     return XYL_OK;
+}
+
+void xyl_foliage_bounds(const xyl_foliage *f, float lo[3], float hi[3])
+{
+    for (uint32_t s = 0; f && s < f->sector_count; ++s) {
+        const xyl_foliage_sector *sec = &f->sectors[s];
+        for (uint32_t i = 0; i < sec->original_count; ++i) {
+            const xyl_leaf *l = &f->leaves[sec->base + i];
+            const float c[3] = {l->center.x, l->center.y, l->center.z};
+            const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x),
+                                fabsf(l->side.y) + fabsf(l->axis.y),
+                                fabsf(l->side.z) + fabsf(l->axis.z)};
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = fminf(lo[k], c[k] - e[k]);
+                hi[k] = fmaxf(hi[k], c[k] + e[k]);
+            }
+        }
+    }
 }

@@ -85,17 +85,7 @@ static xyl_foliage *default_foliage(uint32_t sectors, xyl_diag *d)
 static void view_camera(const xyl_foliage *f, float zoom, xyl_tess_camera *cam)
 {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t k = 0; k < f->leaf_count; ++k) {
-        const xyl_leaf *l = &f->leaves[k];
-        if (f->links[k].source == UINT32_MAX) continue; /* the originals only */
-        const float c[3] = {l->center.x, l->center.y, l->center.z};
-        const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x), fabsf(l->side.y) + fabsf(l->axis.y),
-                            fabsf(l->side.z) + fabsf(l->axis.z)};
-        for (int i = 0; i < 3; ++i) {
-            lo[i] = fminf(lo[i], c[i] - e[i]);
-            hi[i] = fmaxf(hi[i], c[i] + e[i]);
-        }
-    }
+    xyl_foliage_bounds(f, lo, hi); /* the originals' quads */
     const float deg = 3.14159265f / 180.0f;
     xyl_tess_camera_frame(lo, hi, 30.0f * deg, 20.0f * deg, 0.8f, 1.0f, cam);
     float d2 = 0.0f, r2 = 0.0f;

@@ -104,24 +104,6 @@ void leaf_draw_target_read(const leaf_draw_target *t, uint8_t *rgba)
 }
 #endif
 
-void leaf_draw_bounds(const xyl_foliage *f, float lo[3], float hi[3])
-{
-    for (uint32_t s = 0; f && s < f->sector_count; ++s) {
-        const xyl_foliage_sector *sec = &f->sectors[s];
-        for (uint32_t i = 0; i < sec->original_count; ++i) {
-            const xyl_leaf *l = &f->leaves[sec->base + i];
-            const float c[3] = {l->center.x, l->center.y, l->center.z};
-            const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x),
-                                fabsf(l->side.y) + fabsf(l->axis.y),
-                                fabsf(l->side.z) + fabsf(l->axis.z)};
-            for (int k = 0; k < 3; ++k) {
-                lo[k] = fminf(lo[k], c[k] - e[k]);
-                hi[k] = fmaxf(hi[k], c[k] + e[k]);
-            }
-        }
-    }
-}
-
 xyl_result leaf_draw_pick(const xyl_foliage *f, bool full, const xyl_tess_camera *cam,
                           uint32_t viewport_height, float error_px, uint32_t *lods,
                           size_t lod_cap, leaf_draw_pick_info *info, xyl_diag *d)

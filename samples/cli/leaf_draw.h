@@ -57,10 +57,6 @@ void leaf_draw_target_read(const leaf_draw_target *t, uint8_t *rgba);
 void leaf_draw_target_free(leaf_draw_target *t);
 #endif
 
-/* Grows [lo, hi] to hold every leaf quad of f (centre +- |side| + |axis| per axis): leaves reach
- * out past the twigs, and a camera framed on the stems alone would cut them off. */
-void leaf_draw_bounds(const xyl_foliage *f, float lo[3], float hi[3]);
-
 /* The LOD of each sector (lods: f->sector_count entries, at most LEAF_DRAW_MAX_SECTORS) for a
  * camera and a viewport height in pixels: full, LOD 0 everywhere; else the coarsest within
  * error_px pixels (xyl_foliage_pick), as `xylem render --foliage lod` picks. Fills *info.

@@ -178,7 +178,7 @@ static int adopt(tuner *t)
     xyl_mesh_bounds(t->tree->mesh, t->lo, t->hi);
     memcpy(t->leaf_lo, t->lo, sizeof t->lo);
     memcpy(t->leaf_hi, t->hi, sizeof t->hi);
-    leaf_draw_bounds(t->leaf_uploaded, t->leaf_lo, t->leaf_hi);
+    xyl_foliage_bounds(t->leaf_uploaded, t->leaf_lo, t->leaf_hi);
     float c = 0.0f;
     for (size_t i = 0; i < t->tree->patches->count; ++i)
         c = fmaxf(c, xyl_tess_patch_error_coefficient(t->tree->patches, i));

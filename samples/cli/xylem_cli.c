@@ -1009,21 +1009,7 @@ static void render_job_free(render_job *j)
 static void tree_bounds(const render_job *j, float lo[3], float hi[3])
 {
     xyl_mesh_bounds(j->mesh, lo, hi);
-    const xyl_foliage *f = j->draw_leaves ? j->leaves.foliage : NULL;
-    for (uint32_t s = 0; f && s < f->sector_count; ++s) { /* leaves reach out past the twigs */
-        const xyl_foliage_sector *sec = &f->sectors[s];
-        for (uint32_t i = 0; i < sec->original_count; ++i) {
-            const xyl_leaf *l = &f->leaves[sec->base + i];
-            const float c[3] = {l->center.x, l->center.y, l->center.z};
-            const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x),
-                                fabsf(l->side.y) + fabsf(l->axis.y),
-                                fabsf(l->side.z) + fabsf(l->axis.z)};
-            for (int k = 0; k < 3; ++k) {
-                lo[k] = fminf(lo[k], c[k] - e[k]);
-                hi[k] = fmaxf(hi[k], c[k] + e[k]);
-            }
-        }
-    }
+    if (j->draw_leaves) xyl_foliage_bounds(j->leaves.foliage, lo, hi); /* past the twigs */
 }
 
 static void frame_camera(const options *o, render_job *j)

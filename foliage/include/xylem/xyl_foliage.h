@@ -427,6 +427,11 @@ XYL_API xyl_result xyl_foliage_cut(const xyl_foliage *f, const xyl_foliage_view 
 XYL_API xyl_result xyl_foliage_gather(const xyl_foliage *f, const uint32_t *lods, size_t lod_count,
                                       xyl_leaf *out, size_t capacity, size_t *count, xyl_diag *diag);
 
+/* Grows the box lo..hi to hold every original leaf's quad (a box around its four corners);
+ * start from +INFINITY / -INFINITY for the leaves' own box, or from another box (the stems') to
+ * take the leaves in. A NULL foliage leaves the box as it is. */
+XYL_API void xyl_foliage_bounds(const xyl_foliage *f, float lo[3], float hi[3]);
+
 #define XYL_FOLIAGE_IMAGE_VIEWS 20              /* the vertices of a regular dodecahedron */
 #define XYL_FOLIAGE_IMAGE_MAX_RESOLUTION 4096
 
