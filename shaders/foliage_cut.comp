@@ -13,20 +13,37 @@ struct xyl_cut_node {
     uint pad0, pad1;
 };
 
-layout(std430, binding = XYL_FOLIAGE_GL_BINDING_NODES) readonly buffer xyl_node_buffer {
-    xyl_cut_node xyl_nodes[];
-};
-layout(std430, binding = XYL_FOLIAGE_GL_BINDING_LIST) writeonly buffer xyl_list_buffer {
-    uint xyl_list[];
-};
-// glDrawArraysIndirect's command: count (4), instance count, first, base instance
-layout(std430, binding = XYL_FOLIAGE_GL_BINDING_COMMAND) buffer xyl_command_buffer {
-    uint xyl_command[4];
-};
-
+#ifdef XYL_VULKAN // set 0 of the leaf renderer, the values in push constants
+#define XYL_CUT_BINDING(gl, vk) set = 0, binding = vk
+layout(push_constant) uniform xyl_foliage_vk_cut_push {
+    vec3 eye;
+    float per_distance;
+    uint count;
+} xyl_cut;
+#define u_eye xyl_cut.eye
+#define u_per_distance xyl_cut.per_distance
+#define u_count xyl_cut.count
+#else
+#define XYL_CUT_BINDING(gl, vk) binding = gl
 layout(location = XYL_FOLIAGE_GL_UNIFORM_CUT_EYE) uniform vec3 u_eye;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_CUT_PER_DISTANCE) uniform float u_per_distance;
 layout(location = XYL_FOLIAGE_GL_UNIFORM_CUT_COUNT) uniform uint u_count;
+#endif
+
+layout(std430, XYL_CUT_BINDING(XYL_FOLIAGE_GL_BINDING_NODES, XYL_FOLIAGE_VK_BINDING_NODES))
+    readonly buffer xyl_node_buffer {
+    xyl_cut_node xyl_nodes[];
+};
+layout(std430, XYL_CUT_BINDING(XYL_FOLIAGE_GL_BINDING_LIST, XYL_FOLIAGE_VK_BINDING_LIST))
+    writeonly buffer xyl_list_buffer {
+    uint xyl_list[];
+};
+// the indirect draw command (GL's glDrawArraysIndirect and Vulkan's VkDrawIndirectCommand
+// alike): vertex count (4), instance count, first vertex, first instance
+layout(std430, XYL_CUT_BINDING(XYL_FOLIAGE_GL_BINDING_COMMAND, XYL_FOLIAGE_VK_BINDING_COMMAND))
+    buffer xyl_command_buffer {
+    uint xyl_command[4];
+};
 
 bool within_budget(uint k)
 {

@@ -3,15 +3,24 @@
 // v & 2 ? 1 : -1), so the strip runs (-1,-1) (1,-1) (-1,1) (1,1), counter-clockwise seen from
 // the side the normal points to. No index buffer, no per-leaf CPU work. GL adds u_base to
 // gl_InstanceID, or with u_list = 1 (the per-leaf cut's indirect draw) reads the record's
-// index at gl_InstanceID of the list foliage_cut.comp wrote; Vulkan draws each range with firstInstance = its first record, which
-// gl_InstanceIndex includes. With XYL_CAPTURE (Vulkan, the tests' capture pipeline) each
-// vertex also stores what it computed at 4 * record + corner.
+// index at gl_InstanceID of the list foliage_cut.comp wrote; Vulkan draws each range with
+// firstInstance = its first record, which gl_InstanceIndex includes, or with XYL_LIST (the
+// cut's indirect draw) reads the record's index at gl_InstanceIndex of the list. With
+// XYL_CAPTURE (Vulkan, the tests' capture pipeline) each vertex also stores what it computed at
+// 4 * record + corner.
 
 #ifdef XYL_VULKAN
 layout(std430, set = 0, binding = XYL_FOLIAGE_VK_BINDING_LEAVES) readonly buffer xyl_leaf_buffer {
     xyl_foliage_gpu_leaf xyl_leaves[];
 };
+#ifdef XYL_LIST // the per-leaf cut's indirect draw: the record at gl_InstanceIndex of the list
+layout(std430, set = 0, binding = XYL_FOLIAGE_VK_BINDING_LIST) readonly buffer xyl_list_buffer {
+    uint xyl_list[];
+};
+#define XYL_LEAF_INDEX xyl_list[gl_InstanceIndex]
+#else
 #define XYL_LEAF_INDEX uint(gl_InstanceIndex)
+#endif
 #define XYL_CORNER gl_VertexIndex
 #define u_view_proj xyl_push.view_proj
 #ifdef XYL_CAPTURE

@@ -54,6 +54,14 @@
 #define XYL_FOLIAGE_VK_BINDING_TEXTURE 1
 #define XYL_FOLIAGE_VK_BINDING_CAPTURE 2
 #define XYL_FOLIAGE_VK_PUSH_SIZE 104
+/* The Vulkan per-leaf cut (foliage_cut.comp with XYL_CUT, xyl_foliage_vk_cmd_cut): the drawn
+ * records' indices (read by the list pipeline's vertex shader), the collapse forest's nodes and
+ * the indirect draw command, in the same set; the cut's values are push constants
+ * (xyl_foliage_vk_cut_push below). */
+#define XYL_FOLIAGE_VK_BINDING_LIST 3
+#define XYL_FOLIAGE_VK_BINDING_NODES 4
+#define XYL_FOLIAGE_VK_BINDING_COMMAND 5
+#define XYL_FOLIAGE_VK_CUT_PUSH_SIZE 20
 
 #ifdef XYL_GLSL
 
@@ -99,7 +107,7 @@ vec2 xyl_foliage_corner_uv(xyl_foliage_gpu_leaf l, vec2 st)
     return mix(r.xy, r.zw, 0.5 * st + 0.5);
 }
 
-#ifdef XYL_VULKAN
+#if defined(XYL_VULKAN) && !defined(XYL_CUT)
 /* A Vulkan draw's values, in push constants (std430 offsets: 0, 64, 80, 96, 100). */
 layout(push_constant) uniform xyl_foliage_vk_push {
     mat4 view_proj;     /* Vulkan clip convention (y down, depth 0..1) */
@@ -129,6 +137,13 @@ typedef struct xyl_foliage_vk_push {
     float cutoff;
     float translucency;
 } xyl_foliage_vk_push;
+
+/* The push constants of the Vulkan per-leaf cut (pinned in foliage/src/foliage_vk.c). */
+typedef struct xyl_foliage_vk_cut_push {
+    float eye[3];
+    float per_distance;
+    uint32_t count;
+} xyl_foliage_vk_cut_push;
 
 #endif
 

@@ -10,6 +10,7 @@
 #include "test_util.h"
 #include "foliage_gl_debug.h"
 #include "foliage_internal.h"
+#include "foliage_cut_check.h"
 #include "tess_util.h"
 #include <xylem/xyl_foliage_gl.h>
 #include <xylem/xyl_tess_gl.h>
@@ -421,74 +422,20 @@ static void expect_no_gl_call(xyl_result got, xyl_result want, const xyl_diag *d
 
 /* ---- 3. the per-leaf cut: GPU = CPU, and a valid cut ----------------------------------------- */
 
-/* Leaf k's test of the cut in double and how near it is to a tie: |error - allowed| against
- * the float roundings of the distance (|eye - c| + r) and of the error. */
-static bool near_tie(const xyl_foliage *f, uint32_t k, const double eye[3], double per_distance)
-{
-    const xyl_leaf *l = &f->leaves[k];
-    double dx = eye[0] - l->center.x, dy = eye[1] - l->center.y, dz = eye[2] - l->center.z;
-    double len = sqrt(dx * dx + dy * dy + dz * dz);
-    double r = xyl__foliage_node_radius(l, &f->links[k]);
-    double d = len - r, allowed = per_distance * (d > 0.0 ? d : 0.0);
-    double e = f->links[k].error;
-    return fabs(e - allowed) <= 1e-5 * (e + per_distance * (len + r));
-}
-
-/* Every original stood for by exactly one drawn leaf: itself or one ancestor. */
-static void expect_valid_cut(const xyl_foliage *f, const uint8_t *drawn)
-{
-    for (size_t k = 0; k < f->leaf_count; ++k) {
-        if (f->links[k].source == UINT32_MAX) continue;
-        int covered = 0;
-        for (int32_t p = (int32_t)k; p >= 0; p = f->links[p].parent) covered += drawn[p];
-        if (covered != 1) fail_msg("original %zu is drawn %d times in the cut", k, covered);
-    }
-}
-
-/* The GPU's cut for one eye against xyl_foliage_cut: equal, except below a node whose own test
- * is a tie within float rounding (near_tie: the CPU decides in double, the GPU in float). */
+/* The GPU's cut for one eye against xyl_foliage_cut (foliage_cut_check.h). */
 static size_t compare_cut(suite *s, const xyl_foliage *f, const xyl_foliage_view *v,
                           const xyl_foliage_gl_frame *fr, size_t *ties)
 {
     xyl_diag d = {0};
     expect(xyl_foliage_gl_draw_adaptive(s->gl, fr, v, &d), XYL_OK, &d);
-    size_t n_gpu = 0, n_cpu = 0;
+    size_t n_gpu = 0;
     expect(xyl_foliage_gl_last_cut(s->gl, NULL, 0, &n_gpu, &d), XYL_OK, &d);
-    expect(xyl_foliage_cut(f, v, NULL, 0, &n_cpu, &d), XYL_OK, &d);
-    uint32_t *gpu = malloc((n_gpu + 1) * sizeof *gpu), *cpu = malloc((n_cpu + 1) * sizeof *cpu);
-    uint8_t *dg = calloc(f->leaf_count, 1), *dc = calloc(f->leaf_count, 1);
-    assert_true(gpu && cpu && dg && dc);
+    uint32_t *gpu = malloc((n_gpu + 1) * sizeof *gpu);
+    assert_non_null(gpu);
     expect(xyl_foliage_gl_last_cut(s->gl, gpu, n_gpu, &n_gpu, &d), XYL_OK, &d);
-    expect(xyl_foliage_cut(f, v, cpu, n_cpu, &n_cpu, &d), XYL_OK, &d);
-    for (size_t i = 0; i < n_gpu; ++i) {
-        assert_true(gpu[i] < f->leaf_count);
-        assert_int_equal(dg[gpu[i]], 0); /* no record twice */
-        dg[gpu[i]] = 1;
-    }
-    for (size_t i = 0; i < n_cpu; ++i) {
-        if (i) assert_true(cpu[i] > cpu[i - 1]);
-        dc[cpu[i]] = 1;
-    }
-    expect_valid_cut(f, dg);
-    expect_valid_cut(f, dc);
-    double eye[3] = {v->eye[0], v->eye[1], v->eye[2]};
-    double per_distance = 0.0;
-    assert_int_equal(xyl__foliage_view_resolve(v, eye, &per_distance, NULL), XYL_OK);
-    for (size_t k = 0; k < f->leaf_count; ++k) {
-        if (dg[k] == dc[k]) continue;
-        bool tie = false;
-        for (int32_t p = (int32_t)k; p >= 0 && !tie; p = f->links[p].parent)
-            tie = near_tie(f, (uint32_t)p, eye, per_distance);
-        if (!tie)
-            fail_msg("leaf %zu: GPU %s, CPU %s, and no tie on its path", k,
-                     dg[k] ? "draws" : "skips", dc[k] ? "draws" : "skips");
-        ++*ties;
-    }
+    size_t n = cut_compare(f, v, gpu, n_gpu, ties);
     free(gpu);
-    free(cpu);
-    free(dg);
-    free(dc);
-    return n_cpu;
+    return n;
 }
 
 static void gpu_cut_equals_the_cpu_cut(void **state)
@@ -512,17 +459,10 @@ static void gpu_cut_equals_the_cpu_cut(void **state)
         }
         xyl_foliage_gl_frame fr;
         frame_of(f, 0.7f, 0.3f, &fr);
-        /* the eye at the crown's centre, at its rim, and 1.5, 4, 20 and 1000 radii away; budgets
-         * of 0.5, 1 and 4 pixels */
-        const float dist[6] = {0.0f, 1.0f, 1.5f, 4.0f, 20.0f, 1000.0f};
-        const float budget[3] = {0.5f, 1.0f, 4.0f};
         size_t ties = 0, first = 0, last = 0;
-        for (int i = 0; i < 6; ++i)
-            for (int b = 0; b < 3; ++b) {
-                xyl_foliage_view v = {{f->center.x + dist[i] * f->radius * 0.6f,
-                                       f->center.y + dist[i] * f->radius * 0.3f,
-                                       f->center.z + dist[i] * f->radius * 0.742f},
-                                      0.8f, 1080, budget[b]};
+        for (int i = 0; i < CUT_DISTANCES; ++i)
+            for (int b = 0; b < CUT_BUDGETS; ++b) {
+                xyl_foliage_view v = cut_view(f, i, b);
                 size_t n = compare_cut(s, f, &v, &fr, &ties);
                 if (i == 0 && b == 0) first = n;
                 last = n;

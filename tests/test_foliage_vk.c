@@ -9,6 +9,7 @@
 
 #include "test_util.h"
 #include "foliage_internal.h"
+#include "foliage_cut_check.h"
 #include "foliage_vk_debug.h"
 #include "tess_util.h"
 #include <xylem/xyl_foliage_vk.h>
@@ -585,9 +586,11 @@ static void end_dynamic(const app *a, VkCommandBuffer cb)
 }
 
 /* The application's frame: clear, vk's leaves at lods (in the render pass, or with dynamic
- * rendering), a copy of the colour image; rgba top row first. */
-static void draw_frame(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_foliage_vk_frame *fr,
-                       const uint32_t *lods, size_t lod_count, uint8_t *rgba)
+ * rendering), or with lods NULL the per-leaf cut for view `cut` (the compute pass before the
+ * render pass, its indirect draw inside), a copy of the colour image; rgba top row first. */
+static void draw_any(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_foliage_vk_frame *fr,
+                     const uint32_t *lods, size_t lod_count, const xyl_foliage_view *cut,
+                     uint8_t *rgba)
 {
     app *a = &s->a;
     VkCommandBuffer cb;
@@ -598,6 +601,8 @@ static void draw_frame(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_fol
     vk_ok(vkAllocateCommandBuffers(a->device, &ai, &cb), "vkAllocateCommandBuffers");
     VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     vk_ok(vkBeginCommandBuffer(cb, &bi), "vkBeginCommandBuffer");
+    xyl_diag d = {0};
+    if (!lods) expect(xyl_foliage_vk_cmd_cut(vk, cb, cut, &d), XYL_OK, &d);
     VkClearValue clear[2];
     memset(clear, 0, sizeof clear);
     for (int k = 0; k < 3; ++k) clear[0].color.float32[k] = background[k] / 255.0f;
@@ -618,8 +623,8 @@ static void draw_frame(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_fol
     VkRect2D sc = {{0, 0}, {SIDE, SIDE}};
     vkCmdSetViewport(cb, 0, 1, &vp);
     vkCmdSetScissor(cb, 0, 1, &sc);
-    xyl_diag d = {0};
-    expect(xyl_foliage_vk_cmd_draw(vk, cb, fr, lods, lod_count, &d), XYL_OK, &d);
+    if (lods) expect(xyl_foliage_vk_cmd_draw(vk, cb, fr, lods, lod_count, &d), XYL_OK, &d);
+    else expect(xyl_foliage_vk_cmd_draw_cut(vk, cb, fr, &d), XYL_OK, &d);
     if (dynamic) end_dynamic(a, cb);
     else vkCmdEndRenderPass(cb);
     VkBufferImageCopy copy = {0};
@@ -645,6 +650,12 @@ static void draw_frame(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_fol
     vkDestroyFence(a->device, fence, NULL);
     vkFreeCommandBuffers(a->device, a->pool, 1, &cb);
     memcpy(rgba, a->pixels, 4u * SIDE * SIDE);
+}
+
+static void draw_frame(suite *s, xyl_foliage_vk *vk, bool dynamic, const xyl_foliage_vk_frame *fr,
+                       const uint32_t *lods, size_t lod_count, uint8_t *rgba)
+{
+    draw_any(s, vk, dynamic, fr, lods, lod_count, NULL, rgba);
 }
 
 static void draw_square(suite *s, const xyl_foliage_vk_frame *fr, uint8_t *rgba)
@@ -798,7 +809,130 @@ static void dynamic_rendering_draws_what_the_render_pass_draws(void **state)
     no_messages(s);
 }
 
-/* ---- 3. bad input --------------------------------------------------------------------------- */
+/* ---- 3. the per-leaf cut: GPU = CPU, and what it draws --------------------------------------- */
+
+/* The cut for each view of foliage_cut_check.h against xyl_foliage_cut (equal but for float
+ * ties, a valid cut), drawn through the list: with the eye inside the crown it keeps every
+ * original and draws the image of LOD 0; far away it keeps the forest's roots. */
+static void gpu_cut_equals_the_cpu_cut(void **state)
+{
+    suite *s = need_vk(state);
+    uint8_t *cut_px = malloc(4 * SIDE * SIDE), *lod_px = malloc(4 * SIDE * SIDE);
+    assert_true(cut_px && lod_px);
+    for (uint32_t sectors = 1; sectors <= 4; sectors += 3) {
+        xyl_foliage *f = tree_foliage(xyl_lsystem_default_preset(), sectors);
+        xyl_diag d = {0};
+        expect(xyl_foliage_vk_set_foliage(s->vk, f, &d), XYL_OK, &d);
+        xyl_foliage_vk_frame fr;
+        frame_of(f, 0.7f, 0.3f, &fr);
+        size_t ties = 0, first = 0, last = 0, pixels = 0, full = 0;
+        uint32_t *gpu = malloc(f->leaf_count * sizeof *gpu), lods[4] = {0, 0, 0, 0};
+        assert_non_null(gpu);
+        draw_frame(s, s->vk, false, &fr, lods, f->sector_count, lod_px);
+        for (unsigned p = 0; p < SIDE * SIDE; ++p) full += !is_background(lod_px + 4 * p);
+        assert_true(full > 200);
+        for (int i = 0; i < CUT_DISTANCES; ++i)
+            for (int b = 0; b < CUT_BUDGETS; ++b) {
+                xyl_foliage_view v = cut_view(f, i, b);
+                draw_any(s, s->vk, false, &fr, NULL, 0, &v, cut_px);
+                size_t n_gpu = 0;
+                expect(xyl_foliage_vk_last_cut(s->vk, gpu, f->leaf_count, &n_gpu, &d), XYL_OK,
+                       &d);
+                size_t n = cut_compare(f, &v, gpu, n_gpu, &ties);
+                if (i == 0 && b == 0) first = n;
+                last = n;
+                /* a coarser cut keeps the crown's cover (merged leaves are larger); a draw that
+                 * took the first n_gpu records instead of the listed ones would not */
+                size_t leaf = 0;
+                for (unsigned p = 0; p < SIDE * SIDE; ++p) leaf += !is_background(cut_px + 4 * p);
+                assert_true(10 * leaf >= 9 * full);
+                if (i != 0) continue;
+                /* inside the crown: the records of LOD 0, so its pixels, but where two leaves
+                 * meet at one depth in another order */
+                size_t differ = 0;
+                for (unsigned p = 0; p < SIDE * SIDE; ++p)
+                    differ += memcmp(cut_px + 4 * p, lod_px + 4 * p, 4) != 0;
+                assert_true(differ <= SIDE * SIDE / 1000);
+                pixels += differ;
+            }
+        assert_int_equal(first, f->original_count);
+        assert_int_equal(last, f->coarsest_count);
+        print_message("%u sector(s): %zu leaves, %zu decided by a float tie, %zu pixels differ "
+                      "from the two-range draws\n",
+                      sectors, f->leaf_count, ties, pixels);
+        free(gpu);
+        xyl_foliage_destroy(f);
+    }
+    free(cut_px);
+    free(lod_px);
+    no_messages(s);
+}
+
+static void cut_bad_input_gets_result_codes(void **state)
+{
+    suite *s = need_vk(state);
+    xyl_diag d = {0};
+    xyl_foliage_vk *vk = NULL;
+    xyl_foliage_vk_desc good = app_desc(&s->a);
+    expect(xyl_foliage_vk_create(&good, &vk, &d), XYL_OK, &d);
+    VkCommandBuffer poison = (VkCommandBuffer)(uintptr_t)16; /* refused before any call */
+    xyl_foliage *f = tree_foliage("faycal-leaves", 3);
+    xyl_foliage_vk_frame fr;
+    frame_of(f, 0.3f, 0.2f, &fr);
+    xyl_foliage_view v = cut_view(f, 3, 1);
+    size_t n = 0;
+    /* nothing uploaded */
+    expect(xyl_foliage_vk_cmd_cut(vk, poison, &v, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, poison, &fr, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_last_cut(vk, NULL, 0, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_set_foliage(vk, f, &d), XYL_OK, &d);
+    /* NULLs */
+    expect(xyl_foliage_vk_cmd_cut(NULL, poison, &v, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_cmd_cut(vk, VK_NULL_HANDLE, &v, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_cmd_cut(vk, poison, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_cmd_draw_cut(NULL, poison, &fr, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, VK_NULL_HANDLE, &fr, &d), XYL_ERR_INVALID_ARGUMENT,
+           &d);
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, poison, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_last_cut(NULL, NULL, 0, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_last_cut(vk, NULL, 0, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    /* a draw or a read-back before any cut of this upload */
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, poison, &fr, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    expect(xyl_foliage_vk_last_cut(vk, NULL, 0, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    /* the view's bad values, as xyl_foliage_pick refuses them */
+    xyl_foliage_view bad = v;
+    bad.error_px = -1.0f;
+    expect(xyl_foliage_vk_cmd_cut(vk, poison, &bad, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    bad = v;
+    bad.fovy = 4.0f;
+    expect(xyl_foliage_vk_cmd_cut(vk, poison, &bad, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    bad = v;
+    bad.eye[1] = NAN;
+    expect(xyl_foliage_vk_cmd_cut(vk, poison, &bad, &d), XYL_ERR_NON_FINITE, &d);
+    /* a cut that ran; then the frame's bad values and too small an output */
+    uint8_t *px = malloc(4 * SIDE * SIDE);
+    assert_non_null(px);
+    draw_any(s, vk, false, &fr, NULL, 0, &v, px);
+    free(px);
+    expect(xyl_foliage_vk_last_cut(vk, NULL, 0, &n, &d), XYL_OK, &d);
+    assert_true(n > 1 && n < f->leaf_count);
+    uint32_t one = 0;
+    expect(xyl_foliage_vk_last_cut(vk, &one, 1, &n, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    xyl_foliage_vk_frame badf = fr;
+    badf.view_proj[3] = INFINITY;
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, poison, &badf, &d), XYL_ERR_NON_FINITE, &d);
+    badf = fr;
+    badf.alpha_cutoff = 3.0f;
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, poison, &badf, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    /* a new upload forgets the cut */
+    expect(xyl_foliage_vk_set_foliage(vk, f, &d), XYL_OK, &d);
+    expect(xyl_foliage_vk_cmd_draw_cut(vk, poison, &fr, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    xyl_foliage_vk_destroy(vk);
+    xyl_foliage_destroy(f);
+    no_messages(s);
+}
+
+/* ---- 4. bad input --------------------------------------------------------------------------- */
 
 static void bad_input_gets_result_codes(void **state)
 {
@@ -891,12 +1025,12 @@ static void bad_input_gets_result_codes(void **state)
     no_messages(s);
 }
 
-/* ---- 4. memory ------------------------------------------------------------------------------ */
+/* ---- 5. memory ------------------------------------------------------------------------------ */
 
 /* Every host allocation of the renderer goes through the desc's allocator: its own blocks and,
  * as VkAllocationCallbacks, the driver's (and the layer's) for its objects; all of them come
  * back. Refusing the first one fails create with nothing made; refusing each of set_foliage's
- * own (two tables and the packed records, made before any Vulkan call) is
+ * own (two tables, the packed records and the cut's nodes, made before any Vulkan call) is
  * XYL_ERR_OUT_OF_MEMORY with the previous upload still drawn. (Failures injected into the
  * driver's allocations would test lavapipe's out-of-memory paths, not xylem's; test_tess_vk
  * says why it stops there too.) */
@@ -920,7 +1054,7 @@ static void renderer_allocates_through_the_callers_allocator(void **state)
     frame_of(f, 0.3f, 0.2f, &fr);
     const uint32_t lod0 = 0;
     xyl__foliage_vk_captured got[4];
-    for (size_t k = 1; k <= 3; ++k) {
+    for (size_t k = 1; k <= 4; ++k) {
         c.fail_at = c.attempts + k;
         expect(xyl_foliage_vk_set_foliage(vk, f, &d), XYL_ERR_OUT_OF_MEMORY, &d);
         memset(got, 0, sizeof got);
@@ -946,6 +1080,8 @@ int main(void)
         cmocka_unit_test(alpha_test_discards_the_transparent_half),
         cmocka_unit_test(both_faces_are_lit_and_light_shines_through),
         cmocka_unit_test(dynamic_rendering_draws_what_the_render_pass_draws),
+        cmocka_unit_test(gpu_cut_equals_the_cpu_cut),
+        cmocka_unit_test(cut_bad_input_gets_result_codes),
         cmocka_unit_test(bad_input_gets_result_codes),
         cmocka_unit_test(renderer_allocates_through_the_callers_allocator),
     };

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "foliage_draw.h"
+#include "foliage_internal.h"
 
 /* A table from xyl_foliage_build is always well formed; one a program assembled by hand must
  * still keep every range inside the array. */
@@ -148,4 +149,25 @@ xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t 
                              "sector %u has LODs 0 to %u, not %u", s,
                              t->sectors[s].lod_count - 1, lods[s]);
     return resolve_frame(view_proj, light_dir, color, alpha_cutoff, translucency, out, diag);
+}
+
+_Static_assert(sizeof(xyl__foliage_cut_node) == 32, "std430 stride of xyl_cut_node");
+
+xyl_result xyl__foliage_cut_nodes(const xyl_foliage *f, xyl__foliage_cut_node *nodes,
+                                  xyl_diag *diag)
+{
+    if (!f->links)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "the foliage has no links");
+    for (size_t k = 0; k < f->leaf_count; ++k) {
+        const xyl_leaf *l = &f->leaves[k];
+        const xyl_leaf_link *ln = &f->links[k];
+        if (ln->parent < -1 || (int64_t)ln->parent >= (int64_t)f->leaf_count ||
+            !(ln->error >= 0.0f) || !isfinite(ln->error))
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)k,
+                             "leaf %zu's link has a parent outside the array or a bad error", k);
+        nodes[k] = (xyl__foliage_cut_node){{l->center.x, l->center.y, l->center.z,
+                                            (float)xyl__foliage_node_radius(l, ln)},
+                                           ln->error, ln->parent, {0, 0}};
+    }
+    return XYL_OK;
 }

@@ -53,4 +53,19 @@ xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t, const float vi
                                     float alpha_cutoff, float translucency,
                                     xyl__foliage_frame *out, xyl_diag *diag);
 
+/* A node of the collapse forest as foliage_cut.comp reads it (std430), for the per-leaf cut. */
+typedef struct xyl__foliage_cut_node {
+    float sphere[4]; /* centre, radius (xyl_foliage_cut's: the half diagonal grown by the error) */
+    float error;
+    int32_t parent;
+    uint32_t pad[2];
+} xyl__foliage_cut_node;
+
+/* The cut's nodes of every leaf of foliage into nodes (leaf_count of them). A parent outside
+ * the array or a negative or non-finite error (a foliage assembled by hand) is refused with
+ * XYL_ERR_INVALID_ARGUMENT: the shader follows the parents unchecked. So is a foliage without
+ * links. */
+xyl_result xyl__foliage_cut_nodes(const xyl_foliage *foliage, xyl__foliage_cut_node *nodes,
+                                  xyl_diag *diag);
+
 #endif /* XYL_FOLIAGE_DRAW_H */

@@ -15,14 +15,6 @@ extern const unsigned char xyl__shader_gl_foliage_leaf_vert[];
 extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
 extern const unsigned char xyl__shader_gl_foliage_cut_comp[];
 
-/* A node of the collapse forest as foliage_cut.comp reads it (std430). */
-typedef struct cut_node {
-    float sphere[4]; /* centre, radius */
-    float error;
-    int32_t parent;
-    uint32_t pad[2];
-} cut_node;
-_Static_assert(sizeof(cut_node) == 32, "std430 stride of xyl_cut_node");
 
 #define XFB_VERTEX_BYTES 28u /* gl_Position, v_st, v_leaf */
 #define VERTICES_PER_LEAF_CAPTURED 6u /* a strip of 4 is two triangles */
@@ -194,30 +186,9 @@ void xyl_foliage_gl_destroy(xyl_foliage_gl *gl)
 
 /* ---- the species' leaves ------------------------------------------------------------------ */
 
-/* The forest as the cut reads it: each leaf's sphere (xyl_foliage_cut's), error and parent.
- * A parent outside the array (a foliage assembled by hand) is refused: the shader follows the
- * parents unchecked. */
-static xyl_result make_nodes(const xyl_foliage *f, cut_node *nodes, xyl_diag *diag)
-{
-    if (!f->links)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "the foliage has no links");
-    for (size_t k = 0; k < f->leaf_count; ++k) {
-        const xyl_leaf *l = &f->leaves[k];
-        const xyl_leaf_link *ln = &f->links[k];
-        if (ln->parent < -1 || (int64_t)ln->parent >= (int64_t)f->leaf_count ||
-            !(ln->error >= 0.0f) || !isfinite(ln->error))
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)k,
-                             "leaf %zu's link has a parent outside the array or a bad error", k);
-        nodes[k] = (cut_node){{l->center.x, l->center.y, l->center.z,
-                               (float)xyl__foliage_node_radius(l, ln)},
-                              ln->error, ln->parent, {0, 0}};
-    }
-    return XYL_OK;
-}
-
 /* New buffers, swapped in only when the whole upload worked. */
 static xyl_result upload_records(xyl_foliage_gl *gl, const xyl_foliage_gpu_leaf *records,
-                                 const cut_node *nodes, size_t count, xyl_diag *diag)
+                                 const xyl__foliage_cut_node *nodes, size_t count, xyl_diag *diag)
 {
     xyl__fgl_drain_errors();
     GLuint buf[3] = {0, 0, 0};
@@ -253,10 +224,10 @@ xyl_result xyl_foliage_gl_set_foliage(xyl_foliage_gl *gl, const xyl_foliage *fol
     xyl_result r = xyl__foliage_tables_make(foliage, &gl->alloc, &tables, diag);
     if (r != XYL_OK) return r;
     xyl_foliage_gpu_leaf *records = xyl__alloc_array(&gl->alloc, n, sizeof *records);
-    cut_node *nodes = xyl__alloc_array(&gl->alloc, n, sizeof *nodes);
+    xyl__foliage_cut_node *nodes = xyl__alloc_array(&gl->alloc, n, sizeof *nodes);
     if (!records || !nodes) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
-    if (r == XYL_OK) r = make_nodes(foliage, nodes, diag);
+    if (r == XYL_OK) r = xyl__foliage_cut_nodes(foliage, nodes, diag);
     if (r == XYL_OK) r = upload_records(gl, records, nodes, n, diag);
     xyl__free(&gl->alloc, records);
     xyl__free(&gl->alloc, nodes);

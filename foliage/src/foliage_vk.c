@@ -1,11 +1,13 @@
 /* The Vulkan 1.2 leaf renderer on the caller's device: the species' packed leaves in one
  * storage buffer, each LOD recorded as its two ranges (per sector) of instanced 4-vertex strips
  * with firstInstance = the range's first record, the frame in push constants, and the tests'
- * capture (a vertex-stage store). Every entry point validates all of its input before its first
+ * capture (a vertex-stage store); the per-leaf cut as a compute pass into a list and an indirect
+ * command, drawn by a pipeline whose vertex shader reads the list. Every entry point validates all of its input before its first
  * Vulkan call (foliage_draw.c): the shaders read the leaf buffer unchecked. */
 #include <string.h>
 
 #include "foliage_draw.h"
+#include "foliage_internal.h"
 #include "foliage_vk_debug.h"
 
 extern const unsigned char xyl__shader_vk_foliage_leaf_vert[];
@@ -14,6 +16,10 @@ extern const unsigned char xyl__shader_vk_foliage_leaf_capture_vert[];
 extern const size_t xyl__shader_vk_foliage_leaf_capture_vert_size;
 extern const unsigned char xyl__shader_vk_foliage_leaf_frag[];
 extern const size_t xyl__shader_vk_foliage_leaf_frag_size;
+extern const unsigned char xyl__shader_vk_foliage_leaf_list_vert[];
+extern const size_t xyl__shader_vk_foliage_leaf_list_vert_size;
+extern const unsigned char xyl__shader_vk_foliage_cut_comp[];
+extern const size_t xyl__shader_vk_foliage_cut_comp_size;
 
 _Static_assert(sizeof(xyl_foliage_vk_push) == XYL_FOLIAGE_VK_PUSH_SIZE, "push block size");
 _Static_assert(offsetof(xyl_foliage_vk_push, light) == 64, "std430: light follows the mat4");
@@ -21,6 +27,9 @@ _Static_assert(offsetof(xyl_foliage_vk_push, color) == 80, "std430: color");
 _Static_assert(offsetof(xyl_foliage_vk_push, cutoff) == 96, "std430: cutoff");
 _Static_assert(offsetof(xyl_foliage_vk_push, translucency) == 100, "std430: translucency");
 _Static_assert(sizeof(xyl__foliage_vk_captured) == 32, "std430 stride of the captured struct");
+_Static_assert(sizeof(xyl_foliage_vk_cut_push) == XYL_FOLIAGE_VK_CUT_PUSH_SIZE, "cut push size");
+_Static_assert(offsetof(xyl_foliage_vk_cut_push, per_distance) == 12, "std430: vec3, float");
+_Static_assert(sizeof(VkDrawIndirectCommand) == 16, "the cut's command is four words");
 
 #define CAPTURE_BYTES_PER_LEAF (4u * sizeof(xyl__foliage_vk_captured))
 #define MAX_CAPTURE_BYTES ((uint64_t)1 << 31)
@@ -47,17 +56,19 @@ struct xyl_foliage_vk {
     VkPhysicalDeviceMemoryProperties memory;
     VkDeviceSize max_storage_range;
     uint32_t max_image_side;
-    VkShaderModule vert, vert_capture, frag;
+    VkShaderModule vert, vert_capture, vert_list, frag, cut;
     VkDescriptorSetLayout set_layout;
-    VkPipelineLayout layout;
+    VkPipelineLayout layout, cut_layout; /* the draws' push constants, the cut's */
     VkDescriptorPool pool;
     VkDescriptorSet set, capture_set; /* the capture's also has the capture buffer */
-    VkPipeline pipeline, capture_pipeline;
+    VkPipeline pipeline, capture_pipeline, list_pipeline, cut_pipeline;
     VkRenderPass capture_pass; /* no attachments: the capture rasterizes nothing */
     VkFramebuffer capture_framebuffer;
     VkSampler sampler;
     VkCommandPool commands;
     vk_buffer leaves;
+    vk_buffer nodes, list, command; /* the per-leaf cut's forest, chosen records, draw */
+    bool has_cut;                   /* a cut was recorded since the last upload */
     vk_image texture;
     xyl__foliage_tables tables; /* leaf_count 0: nothing uploaded */
 };
@@ -411,16 +422,22 @@ static xyl_result shader(const xyl_foliage_vk *vk, const unsigned char *code, si
 
 static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
 {
-    VkDescriptorSetLayoutBinding b[3] = {
+    VkDescriptorSetLayoutBinding b[6] = {
         {XYL_FOLIAGE_VK_BINDING_LEAVES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
          VK_SHADER_STAGE_VERTEX_BIT, NULL},
         {XYL_FOLIAGE_VK_BINDING_TEXTURE, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1,
          VK_SHADER_STAGE_FRAGMENT_BIT, NULL},
         {XYL_FOLIAGE_VK_BINDING_CAPTURE, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
-         VK_SHADER_STAGE_VERTEX_BIT, NULL}};
+         VK_SHADER_STAGE_VERTEX_BIT, NULL},
+        {XYL_FOLIAGE_VK_BINDING_LIST, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+         VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_COMPUTE_BIT, NULL},
+        {XYL_FOLIAGE_VK_BINDING_NODES, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+         VK_SHADER_STAGE_COMPUTE_BIT, NULL},
+        {XYL_FOLIAGE_VK_BINDING_COMMAND, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1,
+         VK_SHADER_STAGE_COMPUTE_BIT, NULL}};
     VkDescriptorSetLayoutCreateInfo li = {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    li.bindingCount = 3;
+    li.bindingCount = 6;
     li.pBindings = b;
     VK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &vk->set_layout),
            "vkCreateDescriptorSetLayout");
@@ -432,7 +449,11 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
     pi.pushConstantRangeCount = 1;
     pi.pPushConstantRanges = &pc;
     VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->layout), "vkCreatePipelineLayout");
-    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 4},
+    VkPushConstantRange cut_pc = {VK_SHADER_STAGE_COMPUTE_BIT, 0, XYL_FOLIAGE_VK_CUT_PUSH_SIZE};
+    pi.pPushConstantRanges = &cut_pc;
+    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->cut_layout),
+           "vkCreatePipelineLayout");
+    VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 10},
                                      {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2}};
     VkDescriptorPoolCreateInfo dp = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
     dp.maxSets = 2;
@@ -457,6 +478,7 @@ typedef struct pipe_target {
     VkFormat color, depth;
     VkSampleCountFlagBits samples;
     bool capture; /* vertex stage only, rasterizer off, no attachments */
+    bool list;    /* the cut's draw: the vertex shader reads the list */
 } pipe_target;
 
 static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPipeline *out,
@@ -464,7 +486,7 @@ static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPip
 {
     VkPipelineShaderStageCreateInfo st[2] = {
         {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0, VK_SHADER_STAGE_VERTEX_BIT,
-         t->capture ? vk->vert_capture : vk->vert, "main", NULL},
+         t->capture ? vk->vert_capture : t->list ? vk->vert_list : vk->vert, "main", NULL},
         {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
          VK_SHADER_STAGE_FRAGMENT_BIT, vk->frag, "main", NULL}};
     VkPipelineVertexInputStateCreateInfo vi = {
@@ -528,6 +550,19 @@ static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPip
     return XYL_OK;
 }
 
+static xyl_result cut_pipeline(xyl_foliage_vk *vk, xyl_diag *diag)
+{
+    VkComputePipelineCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    ci.stage = (VkPipelineShaderStageCreateInfo){
+        VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
+        VK_SHADER_STAGE_COMPUTE_BIT, vk->cut, "main", NULL};
+    ci.layout = vk->cut_layout;
+    VK_TRY(vkCreateComputePipelines(vk->device, VK_NULL_HANDLE, 1, &ci, vk->vkalloc,
+                                    &vk->cut_pipeline),
+           "vkCreateComputePipelines");
+    return XYL_OK;
+}
+
 static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
                           VkSampleCountFlagBits samples, xyl_diag *diag)
 {
@@ -539,10 +574,19 @@ static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
     if (r == XYL_OK)
         r = shader(vk, xyl__shader_vk_foliage_leaf_frag, xyl__shader_vk_foliage_leaf_frag_size,
                    &vk->frag, diag);
+    if (r == XYL_OK)
+        r = shader(vk, xyl__shader_vk_foliage_leaf_list_vert,
+                   xyl__shader_vk_foliage_leaf_list_vert_size, &vk->vert_list, diag);
+    if (r == XYL_OK)
+        r = shader(vk, xyl__shader_vk_foliage_cut_comp, xyl__shader_vk_foliage_cut_comp_size,
+                   &vk->cut, diag);
     if (r == XYL_OK) r = layouts(vk, diag);
     pipe_target t = {d->render_pass, d->subpass, d->color_format, d->depth_format, samples,
-                     false};
+                     false, false};
     if (r == XYL_OK) r = pipeline(vk, &t, &vk->pipeline, diag);
+    t.list = true;
+    if (r == XYL_OK) r = pipeline(vk, &t, &vk->list_pipeline, diag);
+    if (r == XYL_OK) r = cut_pipeline(vk, diag);
     if (r != XYL_OK) return r;
     VkSamplerCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
     si.magFilter = si.minFilter = VK_FILTER_LINEAR;
@@ -596,18 +640,24 @@ void xyl_foliage_vk_destroy(xyl_foliage_vk *vk)
     if (!vk) return;
     VkDevice dev = vk->device;
     buffer_destroy(vk, &vk->leaves);
+    buffer_destroy(vk, &vk->nodes);
+    buffer_destroy(vk, &vk->list);
+    buffer_destroy(vk, &vk->command);
     image_destroy(vk, &vk->texture);
     if (vk->commands) vkDestroyCommandPool(dev, vk->commands, vk->vkalloc);
     if (vk->sampler) vkDestroySampler(dev, vk->sampler, vk->vkalloc);
     if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, vk->vkalloc);
     if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, vk->vkalloc);
     if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, vk->vkalloc);
-    if (vk->pipeline) vkDestroyPipeline(dev, vk->pipeline, vk->vkalloc);
+    VkPipeline pipes[3] = {vk->pipeline, vk->list_pipeline, vk->cut_pipeline};
+    for (int k = 0; k < 3; ++k)
+        if (pipes[k]) vkDestroyPipeline(dev, pipes[k], vk->vkalloc);
     if (vk->pool) vkDestroyDescriptorPool(dev, vk->pool, vk->vkalloc);
     if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, vk->vkalloc);
+    if (vk->cut_layout) vkDestroyPipelineLayout(dev, vk->cut_layout, vk->vkalloc);
     if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, vk->vkalloc);
-    VkShaderModule mods[3] = {vk->vert, vk->vert_capture, vk->frag};
-    for (int k = 0; k < 3; ++k)
+    VkShaderModule mods[5] = {vk->vert, vk->vert_capture, vk->vert_list, vk->frag, vk->cut};
+    for (int k = 0; k < 5; ++k)
         if (mods[k]) vkDestroyShaderModule(dev, mods[k], vk->vkalloc);
     xyl_allocator a = vk->alloc;
     xyl__foliage_tables_free(&vk->tables, &a);
@@ -630,20 +680,41 @@ xyl_result xyl_foliage_vk_set_foliage(xyl_foliage_vk *vk, const xyl_foliage *fol
     xyl_result r = xyl__foliage_tables_make(foliage, &vk->alloc, &tables, diag);
     if (r != XYL_OK) return r;
     xyl_foliage_gpu_leaf *records = xyl__alloc_array(&vk->alloc, n, sizeof *records);
-    if (!records) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    xyl__foliage_cut_node *nodes = xyl__alloc_array(&vk->alloc, n, sizeof *nodes);
+    if (!records || !nodes) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
-    vk_buffer b = {0};
+    if (r == XYL_OK) r = xyl__foliage_cut_nodes(foliage, nodes, diag);
+    /* the records, the cut's nodes, its list and its command, swapped in together */
+    vk_buffer b[4] = {{0}};
+    const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
     if (r == XYL_OK)
-        r = buffer_create(vk, (VkDeviceSize)n * sizeof *records,
-                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, records, &b, diag);
+        r = buffer_create(vk, (VkDeviceSize)n * sizeof *records, storage, records, &b[0], diag);
+    if (r == XYL_OK)
+        r = buffer_create(vk, (VkDeviceSize)n * sizeof *nodes, storage, nodes, &b[1], diag);
+    if (r == XYL_OK)
+        r = buffer_create(vk, (VkDeviceSize)n * sizeof(uint32_t), storage, NULL, &b[2], diag);
+    if (r == XYL_OK)
+        r = buffer_create(vk, sizeof(VkDrawIndirectCommand),
+                          storage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                              VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                          NULL, &b[3], diag);
     xyl__free(&vk->alloc, records);
+    xyl__free(&vk->alloc, nodes);
     if (r != XYL_OK) {
+        for (int k = 0; k < 4; ++k) buffer_destroy(vk, &b[k]);
         xyl__foliage_tables_free(&tables, &vk->alloc);
         return r;
     }
-    write_sets(vk, XYL_FOLIAGE_VK_BINDING_LEAVES, b.buffer, VK_NULL_HANDLE);
-    buffer_destroy(vk, &vk->leaves);
-    vk->leaves = b;
+    write_sets(vk, XYL_FOLIAGE_VK_BINDING_LEAVES, b[0].buffer, VK_NULL_HANDLE);
+    write_sets(vk, XYL_FOLIAGE_VK_BINDING_NODES, b[1].buffer, VK_NULL_HANDLE);
+    write_sets(vk, XYL_FOLIAGE_VK_BINDING_LIST, b[2].buffer, VK_NULL_HANDLE);
+    write_sets(vk, XYL_FOLIAGE_VK_BINDING_COMMAND, b[3].buffer, VK_NULL_HANDLE);
+    vk_buffer *mine[4] = {&vk->leaves, &vk->nodes, &vk->list, &vk->command};
+    for (int k = 0; k < 4; ++k) {
+        buffer_destroy(vk, mine[k]);
+        *mine[k] = b[k];
+    }
+    vk->has_cut = false;
     xyl__foliage_tables_free(&vk->tables, &vk->alloc);
     vk->tables = tables;
     xyl__diag_ok(diag);
@@ -667,6 +738,16 @@ xyl_result xyl_foliage_vk_set_texture(xyl_foliage_vk *vk, const uint8_t *rgba, u
 
 /* ---- draws -------------------------------------------------------------------------------- */
 
+static void fill_push(const xyl__foliage_frame *f, xyl_foliage_vk_push *push)
+{
+    memset(push, 0, sizeof *push);
+    memcpy(push->view_proj, f->view_proj, sizeof push->view_proj);
+    memcpy(push->light, f->light, sizeof f->light);
+    memcpy(push->color, f->color, sizeof push->color);
+    push->cutoff = f->cutoff;
+    push->translucency = f->translucency;
+}
+
 static xyl_result check_draw(const xyl_foliage_vk *vk, const xyl_foliage_vk_frame *frame,
                              const uint32_t *lods, size_t lod_count, xyl_foliage_vk_push *push,
                              xyl_diag *diag)
@@ -678,14 +759,8 @@ static xyl_result check_draw(const xyl_foliage_vk *vk, const xyl_foliage_vk_fram
     xyl_result r = xyl__foliage_draw_check(&vk->tables, lods, lod_count, frame->view_proj,
                                            frame->light_dir, frame->color, frame->alpha_cutoff,
                                            frame->translucency, &f, diag);
-    if (r != XYL_OK) return r;
-    memset(push, 0, sizeof *push);
-    memcpy(push->view_proj, f.view_proj, sizeof push->view_proj);
-    memcpy(push->light, f.light, sizeof f.light);
-    memcpy(push->color, f.color, sizeof push->color);
-    push->cutoff = f.cutoff;
-    push->translucency = f.translucency;
-    return XYL_OK;
+    if (r == XYL_OK) fill_push(&f, push);
+    return r;
 }
 
 /* Per sector the LOD's two ranges, [base, base + a) and [base + b, base + b + c), each one
@@ -722,6 +797,119 @@ xyl_result xyl_foliage_vk_cmd_draw(xyl_foliage_vk *vk, VkCommandBuffer cmd,
     return XYL_OK;
 }
 
+/* ---- the per-leaf cut --------------------------------------------------------------------- */
+
+static void barrier(VkCommandBuffer cmd, VkPipelineStageFlags src, VkAccessFlags src_access,
+                    VkPipelineStageFlags dst, VkAccessFlags dst_access)
+{
+    VkMemoryBarrier mb = {.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = src_access;
+    mb.dstAccessMask = dst_access;
+    vkCmdPipelineBarrier(cmd, src, dst, 0, 1, &mb, 0, NULL, 0, NULL);
+}
+
+xyl_result xyl_foliage_vk_cmd_cut(xyl_foliage_vk *vk, VkCommandBuffer cmd,
+                                  const xyl_foliage_view *view, xyl_diag *diag)
+{
+    if (!vk || !cmd || !view)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "vk, cmd and view are required");
+    if (!vk->tables.leaf_count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no foliage uploaded: call xyl_foliage_vk_set_foliage first");
+    double eye[3], per_distance = 0.0;
+    xyl_result r = xyl__foliage_view_resolve(view, eye, &per_distance, diag);
+    if (r != XYL_OK) return r;
+    xyl_foliage_vk_cut_push push = {{(float)eye[0], (float)eye[1], (float)eye[2]},
+                                    (float)per_distance, (uint32_t)vk->tables.leaf_count};
+    const VkPipelineStageFlags readers = VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT |
+                                         VK_PIPELINE_STAGE_VERTEX_SHADER_BIT;
+    const VkPipelineStageFlags writers = VK_PIPELINE_STAGE_TRANSFER_BIT |
+                                         VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+    /* earlier draws of the list have read it before it is written again */
+    barrier(cmd, readers, 0, writers, 0);
+    const VkDrawIndirectCommand zero = {4, 0, 0, 0};
+    vkCmdUpdateBuffer(cmd, vk->command.buffer, 0, sizeof zero, &zero);
+    barrier(cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+            VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+            VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, vk->cut_pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, vk->cut_layout, 0, 1, &vk->set,
+                            0, NULL);
+    vkCmdPushConstants(cmd, vk->cut_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof push, &push);
+    vkCmdDispatch(cmd, (push.count + XYL_FOLIAGE_GL_CUT_GROUP - 1) / XYL_FOLIAGE_GL_CUT_GROUP, 1,
+                  1);
+    barrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+            readers | VK_PIPELINE_STAGE_HOST_BIT,
+            VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_SHADER_READ_BIT |
+                VK_ACCESS_HOST_READ_BIT);
+    vk->has_cut = true;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_foliage_vk_cmd_draw_cut(xyl_foliage_vk *vk, VkCommandBuffer cmd,
+                                       const xyl_foliage_vk_frame *frame, xyl_diag *diag)
+{
+    if (!vk || !cmd || !frame)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "vk, cmd and frame are required");
+    xyl__foliage_frame f;
+    xyl_result r = xyl__foliage_frame_check(&vk->tables, frame->view_proj, frame->light_dir,
+                                            frame->color, frame->alpha_cutoff,
+                                            frame->translucency, &f, diag);
+    if (r != XYL_OK) return r;
+    if (!vk->has_cut)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no cut recorded since the foliage was uploaded: call "
+                         "xyl_foliage_vk_cmd_cut first");
+    xyl_foliage_vk_push push;
+    fill_push(&f, &push);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, vk->list_pipeline);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, vk->layout, 0, 1, &vk->set, 0,
+                            NULL);
+    vkCmdPushConstants(cmd, vk->layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT,
+                       0, sizeof push, &push);
+    vkCmdDrawIndirect(cmd, vk->command.buffer, 0, 1, sizeof(VkDrawIndirectCommand));
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_foliage_vk_last_cut(xyl_foliage_vk *vk, uint32_t *out, size_t capacity,
+                                   size_t *count, xyl_diag *diag)
+{
+    if (!vk || !count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "vk and count are required");
+    if (!vk->has_cut)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no cut recorded since the foliage was uploaded");
+    VkDrawIndirectCommand command;
+    void *map = NULL;
+    VkResult vr = vkMapMemory(vk->device, vk->command.memory, 0, sizeof command, 0, &map);
+    if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkMapMemory");
+    memcpy(&command, map, sizeof command);
+    vkUnmapMemory(vk->device, vk->command.memory);
+    size_t n = command.instanceCount;
+    if (n > vk->tables.leaf_count || command.vertexCount != 4)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "the cut's command counts %zu of %zu leaves: has it run?", n,
+                         vk->tables.leaf_count);
+    if (out) {
+        if (capacity < n)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                             "the cut has %zu leaves, out holds %zu", n, capacity);
+        if (n) {
+            vr = vkMapMemory(vk->device, vk->list.memory, 0, n * sizeof *out, 0, &map);
+            if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkMapMemory");
+            memcpy(out, map, n * sizeof *out);
+            vkUnmapMemory(vk->device, vk->list.memory);
+        }
+    }
+    *count = n;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
 /* ---- capture ------------------------------------------------------------------------------ */
 
 static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
@@ -748,7 +936,7 @@ static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
                "vkCreateFramebuffer");
     }
     pipe_target t = {vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,
-                     VK_SAMPLE_COUNT_1_BIT, true};
+                     VK_SAMPLE_COUNT_1_BIT, true, false};
     return pipeline(vk, &t, &vk->capture_pipeline, diag);
 }
 

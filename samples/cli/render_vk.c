@@ -260,6 +260,8 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
         vkCmdResetQueryPool(cb, a->timer, 0, 2);
         vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, a->timer, 0);
     }
+    xyl_result r = XYL_OK;
+    if (!t->lods) r = xyl_foliage_vk_cmd_cut(leaves, cb, t->cut_view, d); /* outside the pass */
     VkClearValue clear[3];
     memset(clear, 0, sizeof clear);
     memcpy(clear[0].color.float32, t->image->background, sizeof clear[0].color.float32);
@@ -277,13 +279,15 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
     vkCmdSetScissor(cb, 0, 1, &sc);
     xyl_tess_frame sf = t->frame;
     if (t->image->wireframe) sf.flags |= XYL_TESS_FLAG_WIREFRAME;
-    xyl_result r = xyl_tess_vk_cmd_draw(stems, cb, 0, t->batches, &sf, d);
+    if (r == XYL_OK) r = xyl_tess_vk_cmd_draw(stems, cb, 0, t->batches, &sf, d);
     xyl_foliage_vk_frame lf = {0};
     memcpy(lf.view_proj, t->frame.view_proj, sizeof lf.view_proj);
     memcpy(lf.light_dir, t->frame.light_dir, sizeof lf.light_dir);
     lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
-    if (r == XYL_OK)
+    if (r == XYL_OK && t->lods)
         r = xyl_foliage_vk_cmd_draw(leaves, cb, &lf, t->lods, t->foliage->sector_count, d);
+    else if (r == XYL_OK)
+        r = xyl_foliage_vk_cmd_draw_cut(leaves, cb, &lf, d);
     vkCmdEndRenderPass(cb);
     if (a->timer) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, a->timer, 1);
     VkBufferImageCopy copy = {0};
@@ -365,6 +369,7 @@ static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, double *
     }
     if (r == XYL_OK) r = record(a, cb, stems, leaves, t, d);
     if (r == XYL_OK) r = submit_and_read(a, cb, rgba, gpu_ms, d);
+    if (r == XYL_OK && !t->lods) r = xyl_foliage_vk_last_cut(leaves, NULL, 0, t->cut_leaves, d);
     vkDeviceWaitIdle(a->device);
     if (cb) vkFreeCommandBuffers(a->device, a->pool, 1, &cb);
     xyl_foliage_vk_destroy(leaves);

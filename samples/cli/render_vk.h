@@ -14,12 +14,15 @@ typedef struct xyl_cli_vk_tree {
     xyl_tess_frame frame;        /* view_proj: Vulkan's clip convention */
     const xyl_tess_image_desc *image;
     const xyl_foliage *foliage;
-    const uint32_t *lods;        /* one per sector */
+    const uint32_t *lods;        /* one per sector, or NULL: the per-leaf cut for cut_view */
+    const xyl_foliage_view *cut_view;
+    size_t *cut_leaves;          /* with the cut: the leaves the GPU's cut drew */
     const uint8_t *leaf_texture; /* RGBA8, top row first */
     uint32_t texture_width, texture_height;
 } xyl_cli_vk_tree;
 
-/* Draws the stems, then the leaves, into a colour (R8G8B8A8, image->samples) and depth target
+/* Draws the stems, then the leaves (the two-range LODs, or the per-leaf cut recorded before
+ * the render pass and drawn inside it), into a colour (R8G8B8A8, image->samples) and depth target
  * cleared to image->background, resolves it, and writes width * height RGBA8 pixels, top row
  * first. device_name (at least 256 bytes) gets the device's name, *gpu_ms the render pass's GPU
  * time from timestamp queries (negative where the queue has none). Errors: the libraries' codes;

@@ -1428,7 +1428,9 @@ static xyl_result render_vk_tree(render_job *j, xyl_diag *d)
     t.frame = j->frame;
     t.image = &j->image;
     t.foliage = j->leaves.foliage;
-    t.lods = j->lods;
+    t.lods = j->adaptive ? NULL : j->lods;
+    t.cut_view = &j->leaf_view;
+    t.cut_leaves = &j->leaves_drawn;
     t.leaf_texture = tex;
     t.texture_width = w;
     t.texture_height = h;
@@ -1557,9 +1559,6 @@ static int cmd_render(const options *o)
         return usage_error("%s", "--tess hardware is the GL backend's; use --backend gl");
     if (ro->frames || ro->screenshot)
         return usage_error("%s", "--frames and --screenshot are options of 'view'");
-    if (ro->vulkan && ro->leaves == LEAVES_ADAPTIVE)
-        return usage_error("%s", "--foliage adaptive chooses the leaves with a GL compute pass; "
-                                 "use --backend gl");
     bool billboard = ro->leaves == LEAVES_BILLBOARD;
     if (billboard && ro->vulkan)
         return usage_error("%s", "--foliage billboard is drawn with the GL backend only");

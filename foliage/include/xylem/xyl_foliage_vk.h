@@ -18,6 +18,10 @@
  *     xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_VULKAN, fr.view_proj, &diag);
  *     xyl_foliage_pick(foliage, &view, lod, sector_count, &diag);
  *     xyl_foliage_vk_cmd_draw(leaves, cmd, &fr, lod, sector_count, &diag);
+ *     // or per leaf, chosen on the GPU: the cut before the render pass, its draw inside
+ *     xyl_foliage_vk_cmd_cut(leaves, cmd, &view, &diag);       // outside a render pass
+ *     ...vkCmdBeginRenderPass...
+ *     xyl_foliage_vk_cmd_draw_cut(leaves, cmd, &fr, &diag);    // one indirect draw
  *     ...
  *     xyl_foliage_vk_destroy(leaves);  // once nothing recorded with it is pending
  *
@@ -25,7 +29,9 @@
  * two ranges of the one storage buffer of 32-byte records (firstInstance = the range's first
  * record); the vertex shader expands each record to its quad. The frame's values travel as
  * push constants, so a recorded draw owns everything it reads but the leaf buffer and the
- * texture: no per-frame buffers, no frame slots.
+ * texture: no per-frame buffers, no frame slots. The per-leaf cut is the exception: its list
+ * of records and its indirect command live in one buffer pair per renderer, so one cut is in
+ * flight at a time (record the next cut once the previous frame's draw has run).
  *
  * Clip space and winding: frame.view_proj is in Vulkan's convention (xyl_tess_camera_matrix
  * with XYL_TESS_CLIP_VULKAN: y flipped for the y-down framebuffer, depth 0 near, 1 far), as for
@@ -132,6 +138,39 @@ XYL_API xyl_result xyl_foliage_vk_cmd_draw(xyl_foliage_vk *vk, VkCommandBuffer c
                                            const xyl_foliage_vk_frame *frame,
                                            const uint32_t *lods, size_t lod_count,
                                            xyl_diag *diag);
+
+/* Per-leaf LOD (docs/foliage.md, "Per-leaf LOD"), the GL renderer's
+ * xyl_foliage_gl_draw_adaptive in two steps, since a compute dispatch cannot be recorded
+ * inside a render pass. cmd_cut records, outside any render pass, the compute pass over the
+ * uploaded collapse forest that keeps per cluster the coarsest leaf within the view's budget
+ * (xyl_foliage_cut's test, in float), writes the chosen records' indices to the renderer's list
+ * and their count into its indirect command, with the barriers that make both visible to
+ * indirect draws, vertex shaders and host reads. view gives the eye in the foliage's
+ * coordinates, fovy, viewport height and pixel budget as xyl_foliage_pick takes them (zero
+ * fields: its defaults). It binds its compute pipeline, descriptor set 0 and push constants.
+ * Errors: XYL_ERR_INVALID_ARGUMENT (NULL vk, cmd or view, no foliage uploaded, the view's bad
+ * values as xyl_foliage_pick refuses them), XYL_ERR_NON_FINITE; on error nothing is recorded.
+ * The list and command are the renderer's own: a cut overwrites the previous one, so record it
+ * only when no submitted work still reads that one. */
+XYL_API xyl_result xyl_foliage_vk_cmd_cut(xyl_foliage_vk *vk, VkCommandBuffer cmd,
+                                          const xyl_foliage_view *view, xyl_diag *diag);
+
+/* Records one vkCmdDrawIndirect of the last recorded cut's leaves, inside the render pass, with
+ * the state and frame rules of xyl_foliage_vk_cmd_draw. Errors: XYL_ERR_INVALID_ARGUMENT (NULL
+ * vk, cmd or frame, no cut recorded since the foliage was uploaded, the frame's bad values),
+ * XYL_ERR_NON_FINITE; on error nothing is recorded. */
+XYL_API xyl_result xyl_foliage_vk_cmd_draw_cut(xyl_foliage_vk *vk, VkCommandBuffer cmd,
+                                               const xyl_foliage_vk_frame *frame,
+                                               xyl_diag *diag);
+
+/* The record indices of the last cut, in the GPU's order (invocations append as they finish),
+ * read from the renderer's host-visible list: call it after the command buffer that ran the cut
+ * has completed. For statistics and tests. Count-then-fill: out NULL sets *count only; with
+ * capacity < *count, XYL_ERR_INVALID_ARGUMENT. Errors: XYL_ERR_INVALID_ARGUMENT (NULL vk or
+ * count, no cut recorded since the last upload), XYL_ERR_UNSUPPORTED (a count above the leaf
+ * count: the cut has not run), those of vkMapMemory. */
+XYL_API xyl_result xyl_foliage_vk_last_cut(xyl_foliage_vk *vk, uint32_t *out, size_t capacity,
+                                           size_t *count, xyl_diag *diag);
 
 #ifdef __cplusplus
 }
