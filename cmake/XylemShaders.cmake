@@ -6,11 +6,11 @@ find_program(XYL_GLSLANG glslangValidator REQUIRED)
 set(XYL_SHADER_DIR ${PROJECT_SOURCE_DIR}/shaders)
 set(XYL_SHADER_OUT ${PROJECT_BINARY_DIR}/shaders)
 file(MAKE_DIRECTORY ${XYL_SHADER_OUT})
-set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_tess_debug.h
+set(XYL_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_dither.h ${XYL_SHADER_DIR}/xyl_tess_shared.h ${XYL_SHADER_DIR}/xyl_tess_debug.h
     ${XYL_SHADER_DIR}/xyl_tess_eval.glsl ${XYL_SHADER_DIR}/xyl_tess_io.glsl)
 
 # The foliage module's GL shaders read the leaf record only (foliage/ does not see tessellate/).
-set(XYL_FOLIAGE_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_foliage_shared.h)
+set(XYL_FOLIAGE_SHADER_COMMON ${XYL_SHADER_DIR}/xyl_dither.h ${XYL_SHADER_DIR}/xyl_foliage_shared.h)
 
 # xyl_shader(<name> <stage file> <gl|vulkan|gl_foliage|vk_foliage> [DEFINE...]): appends the
 # generated C file to XYL_GL_SHADER_SOURCES, XYL_VK_SHADER_SOURCES, or (the *_foliage kinds:

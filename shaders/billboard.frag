@@ -7,6 +7,7 @@ layout(binding = 0) uniform sampler2DArray u_color_map;
 layout(binding = 1) uniform sampler2DArray u_normal_map;
 layout(location = 6) uniform vec3 u_light;
 layout(location = 7) uniform float u_cutoff;
+layout(location = 8) uniform vec2 u_dither; // a cross-fade's keep range (xyl_dither.h)
 
 layout(location = 0) in vec2 v_uv;
 layout(location = 1) flat in vec3 v_right;
@@ -25,6 +26,7 @@ void main()
 {
     // seen from behind, a cross plane shows its view mirrored: u runs the other way in the
     // quad's frame, and the normals' z points away from this side
+    if (!xyl_dither_keeps(gl_FragCoord.xy, u_dither)) discard;
     vec4 texel = texture(u_color_map, vec3(v_uv, float(v_layer)));
     if (texel.a < u_cutoff) discard;
     vec3 q = texture(u_normal_map, vec3(v_uv, float(v_layer))).xyz * 2.0 - 1.0;

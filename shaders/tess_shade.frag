@@ -7,6 +7,7 @@ layout(location = 0) out vec4 out_color;
 
 void main()
 {
+    if (!xyl_dither_keeps(gl_FragCoord.xy, xyl_tess_keep(xyl_frame.dither))) discard;
     if ((xyl_frame.flags & XYL_TESS_FLAG_WIREFRAME) != 0u) {
         out_color = xyl_frame.line_color;
         return;

@@ -35,6 +35,7 @@
 #define XYL_FOLIAGE_GL_UNIFORM_COLOR 3
 #define XYL_FOLIAGE_GL_UNIFORM_CUTOFF 4
 #define XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY 5
+#define XYL_FOLIAGE_GL_UNIFORM_DITHER 7 /* vec2: the keep range of xyl_dither.h */
 /* The per-leaf cut (foliage_cut.comp, xyl_foliage_gl_draw_adaptive): the drawn records'
  * indices (the vertex shader reads them when u_list is 1), the collapse forest's nodes, and the
  * indirect draw command whose instance count the cut counts up. */
@@ -53,7 +54,7 @@
 #define XYL_FOLIAGE_VK_BINDING_LEAVES 0
 #define XYL_FOLIAGE_VK_BINDING_TEXTURE 1
 #define XYL_FOLIAGE_VK_BINDING_CAPTURE 2
-#define XYL_FOLIAGE_VK_PUSH_SIZE 104
+#define XYL_FOLIAGE_VK_PUSH_SIZE 112
 /* The Vulkan per-leaf cut (foliage_cut.comp with XYL_CUT, xyl_foliage_vk_cmd_cut): the drawn
  * records' indices (read by the list pipeline's vertex shader), the collapse forest's nodes and
  * the indirect draw command, in the same set; the cut's values are push constants
@@ -108,13 +109,14 @@ vec2 xyl_foliage_corner_uv(xyl_foliage_gpu_leaf l, vec2 st)
 }
 
 #if defined(XYL_VULKAN) && !defined(XYL_CUT)
-/* A Vulkan draw's values, in push constants (std430 offsets: 0, 64, 80, 96, 100). */
+/* A Vulkan draw's values, in push constants (std430 offsets: 0, 64, 80, 96, 100, 104). */
 layout(push_constant) uniform xyl_foliage_vk_push {
     mat4 view_proj;     /* Vulkan clip convention (y down, depth 0..1) */
     vec4 light;         /* xyz: towards the light, normalised */
     vec4 color;
     float cutoff;
     float translucency;
+    vec2 dither;        /* the keep range of xyl_dither.h; (0, 0): every fragment */
 } xyl_push;
 #endif
 
@@ -136,6 +138,7 @@ typedef struct xyl_foliage_vk_push {
     float color[4];
     float cutoff;
     float translucency;
+    float dither[2];
 } xyl_foliage_vk_push;
 
 /* The push constants of the Vulkan per-leaf cut (pinned in foliage/src/foliage_vk.c). */

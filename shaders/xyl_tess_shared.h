@@ -65,8 +65,14 @@ struct xyl_tess_frame {
     uint variant;    /* XYL_TESS_VARIANT_* */
     uint flags;      /* XYL_TESS_FLAG_*; other bits reserved (0) */
     uint base_instance; /* hardware path: first instance record of the draw */
-    uint pad;
+    uint dither;     /* keep range of the screen-door dither (xyl_tess_dither); 0: all */
 };
+
+/* The keep range [lo, hi) packed in xyl_tess_frame.dither: lo in bits 0..15, hi in 16..31. */
+vec2 xyl_tess_keep(uint dither)
+{
+    return vec2(float(dither & 0xffffu), float(dither >> 16u)) / 65535.0;
+}
 
 #else /* C */
 
@@ -92,7 +98,9 @@ typedef struct xyl_tess_frame {
     uint32_t variant;
     uint32_t flags; /* XYL_TESS_FLAG_*; other bits reserved (0) */
     uint32_t base_instance;
-    uint32_t pad;
+    uint32_t dither; /* the screen-door dither's keep range, from xyl_tess_dither (cross-fades
+                        between levels of detail, docs/foliage.md "Transitions"); 0: every
+                        fragment */
 } xyl_tess_frame;
 
 /* The layout of both glDrawElementsIndirect's and vkCmdDrawIndexedIndirect's command. */

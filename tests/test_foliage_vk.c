@@ -11,6 +11,7 @@
 #include "foliage_internal.h"
 #include "foliage_cut_check.h"
 #include "foliage_vk_debug.h"
+#include "../shaders/xyl_dither.h"
 #include "tess_util.h"
 #include <xylem/xyl_foliage_vk.h>
 
@@ -724,6 +725,45 @@ static void alpha_test_discards_the_transparent_half(void **state)
     no_messages(s);
 }
 
+/* The dither's keep ranges [0, t) and [t, 1) split the full-screen leaf between two draws:
+ * each pixel in one, as the threshold of xyl_dither.h says (y counted from the top in Vulkan's
+ * framebuffer, as gl_FragCoord counts it there). */
+static void the_dither_splits_the_leaf_between_two_ranges(void **state)
+{
+    suite *s = need_vk(state);
+    xyl_foliage *f = square_leaf();
+    xyl_diag d = {0};
+    expect(xyl_foliage_vk_set_foliage(s->vk, f, &d), XYL_OK, &d);
+    uint8_t tex[16 * 16 * 4], *a = malloc(4 * SIDE * SIDE), *b = malloc(4 * SIDE * SIDE);
+    assert_true(a && b);
+    half_clear(tex, NULL);
+    expect(xyl_foliage_vk_set_texture(s->vk, tex, 16, 16, &d), XYL_OK, &d);
+    const float t = 37.0f / 64.0f;
+    xyl_foliage_vk_frame fr = square_frame();
+    fr.dither[0] = 0.0f, fr.dither[1] = t;
+    draw_square(s, &fr, a);
+    fr.dither[0] = t, fr.dither[1] = 1.0f;
+    draw_square(s, &fr, b);
+    size_t in_a = 0;
+    for (uint32_t y = 0; y < SIDE; ++y)
+        for (uint32_t x = 0; x < SIDE; ++x) {
+            bool ca = !is_background(a + 4 * (SIDE * y + x)), cb = !is_background(b + 4 * (SIDE * y + x));
+            assert_true(ca != cb);
+            assert_int_equal(ca, xyl_dither_threshold(x, y) < t);
+            in_a += ca;
+        }
+    assert_int_equal(in_a, SIDE * SIDE * 37 / 64);
+    fr.dither[0] = 0.5f; /* an empty range is refused */
+    fr.dither[1] = 0.5f;
+    uint32_t lod = 0;
+    expect(xyl_foliage_vk_cmd_draw(s->vk, (VkCommandBuffer)(uintptr_t)16, &fr, &lod, 1, &d),
+           XYL_ERR_INVALID_ARGUMENT, &d);
+    free(a);
+    free(b);
+    xyl_foliage_destroy(f);
+    no_messages(s);
+}
+
 static int middle(const uint8_t *rgba)
 {
     const uint8_t *p = rgba + 4 * (SIDE * (SIDE / 2) + SIDE / 2);
@@ -1078,6 +1118,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(gpu_corners_match_the_cpu_reference_per_lod),
         cmocka_unit_test(alpha_test_discards_the_transparent_half),
+        cmocka_unit_test(the_dither_splits_the_leaf_between_two_ranges),
         cmocka_unit_test(both_faces_are_lit_and_light_shines_through),
         cmocka_unit_test(dynamic_rendering_draws_what_the_render_pass_draws),
         cmocka_unit_test(gpu_cut_equals_the_cpu_cut),

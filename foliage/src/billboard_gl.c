@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "foliage_draw.h"
 #include "foliage_gl_util.h"
 #include "foliage_internal.h"
 #include "xylem/xyl_billboard_gl.h"
@@ -13,7 +14,7 @@
 extern const unsigned char xyl__shader_gl_billboard_vert[];
 extern const unsigned char xyl__shader_gl_billboard_frag[];
 
-enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF };
+enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF, U_DITHER };
 
 struct xyl_billboard_gl {
     GLuint program, vao, color_tex, normal_tex;
@@ -427,6 +428,8 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     if (!(frame->alpha_cutoff >= 0.0f && frame->alpha_cutoff <= 1.0f))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "alpha_cutoff %g is outside [0, 1]", (double)frame->alpha_cutoff);
+    xyl_result checked = xyl__foliage_dither_check(frame->dither, diag);
+    if (checked != XYL_OK) return checked;
     float l[3] = {frame->light_dir[0], frame->light_dir[1], frame->light_dir[2]};
     float len = sqrtf(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
     if (!(len > 0.0f) || !isfinite(len)) l[0] = 0.0f, l[1] = 1.0f, l[2] = 0.0f, len = 1.0f;
@@ -448,6 +451,7 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     glProgramUniform1i(p, U_PLANES, (GLint)bb->views);
     glProgramUniform3fv(p, U_LIGHT, 1, l);
     glProgramUniform1f(p, U_CUTOFF, cutoff);
+    glProgramUniform2fv(p, U_DITHER, 1, frame->dither);
     glBindVertexArray(bb->vao);
     glBindTextureUnit(0, bb->color_tex);
     glBindTextureUnit(1, bb->normal_tex);

@@ -81,10 +81,24 @@ uint64_t xyl__foliage_tables_leaves(const xyl__foliage_tables *t, const uint32_t
     return n;
 }
 
-static xyl_result resolve_frame(const float view_proj[16], const float light_dir[3],
-                                const float color[4], float alpha_cutoff, float translucency,
-                                xyl__foliage_frame *out, xyl_diag *diag)
+xyl_result xyl__foliage_dither_check(const float dither[2], xyl_diag *diag)
 {
+    if (!isfinite(dither[0]) || !isfinite(dither[1]))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "a dither bound is not finite");
+    if ((dither[0] != 0.0f || dither[1] != 0.0f) &&
+        !(dither[0] >= 0.0f && dither[0] < dither[1] && dither[1] <= 1.0f))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the dither keeps [%g, %g): give (0, 0) for every fragment, or "
+                         "0 <= lo < hi <= 1 (skip a draw whose share is empty)",
+                         (double)dither[0], (double)dither[1]);
+    return XYL_OK;
+}
+
+static xyl_result resolve_frame(const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
+                                xyl_diag *diag)
+{
+    const float *view_proj = in->view_proj, *light_dir = in->light_dir, *color = in->color;
+    float alpha_cutoff = in->alpha_cutoff, translucency = in->translucency;
     bool any = false;
     for (int k = 0; k < 16; ++k) {
         if (!isfinite(view_proj[k]))
@@ -105,6 +119,8 @@ static xyl_result resolve_frame(const float view_proj[16], const float light_dir
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "alpha_cutoff %g must lie in [0, 1] and translucency %g be at most 1",
                          (double)alpha_cutoff, (double)translucency);
+    xyl_result r = xyl__foliage_dither_check(in->dither, diag);
+    if (r != XYL_OK) return r;
     memcpy(out->view_proj, view_proj, sizeof out->view_proj);
     double l2 = (double)light_dir[0] * light_dir[0] + (double)light_dir[1] * light_dir[1] +
                 (double)light_dir[2] * light_dir[2];
@@ -116,24 +132,22 @@ static xyl_result resolve_frame(const float view_proj[16], const float light_dir
     memcpy(out->color, no_color ? green : color, sizeof out->color);
     out->cutoff = alpha_cutoff > 0.0f ? alpha_cutoff : 0.5f;
     out->translucency = translucency > 0.0f ? translucency : translucency < 0.0f ? 0.0f : 0.5f;
+    memcpy(out->dither, in->dither, sizeof out->dither);
     return XYL_OK;
 }
 
-xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t, const float view_proj[16],
-                                    const float light_dir[3], const float color[4],
-                                    float alpha_cutoff, float translucency,
-                                    xyl__foliage_frame *out, xyl_diag *diag)
+xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t,
+                                    const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
+                                    xyl_diag *diag)
 {
     if (t->leaf_count == 0)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "no foliage uploaded (set_foliage first)");
-    return resolve_frame(view_proj, light_dir, color, alpha_cutoff, translucency, out, diag);
+    return resolve_frame(in, out, diag);
 }
 
 xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t *lods,
-                                   size_t lod_count, const float view_proj[16],
-                                   const float light_dir[3], const float color[4],
-                                   float alpha_cutoff, float translucency,
+                                   size_t lod_count, const xyl__foliage_frame_in *in,
                                    xyl__foliage_frame *out, xyl_diag *diag)
 {
     if (t->leaf_count == 0)
@@ -148,7 +162,7 @@ xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t 
             return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)s,
                              "sector %u has LODs 0 to %u, not %u", s,
                              t->sectors[s].lod_count - 1, lods[s]);
-    return resolve_frame(view_proj, light_dir, color, alpha_cutoff, translucency, out, diag);
+    return resolve_frame(in, out, diag);
 }
 
 _Static_assert(sizeof(xyl__foliage_cut_node) == 32, "std430 stride of xyl_cut_node");

@@ -25,8 +25,19 @@ typedef struct xyl__foliage_tables {
 
 /* A draw's values with their defaults filled in (light normalised). */
 typedef struct xyl__foliage_frame {
-    float view_proj[16], light[3], color[4], cutoff, translucency;
+    float view_proj[16], light[3], color[4], cutoff, translucency, dither[2];
 } xyl__foliage_frame;
+
+/* The fields both renderers' public frames have, as the checks take them. */
+typedef struct xyl__foliage_frame_in {
+    const float *view_proj, *light_dir, *color, *dither;
+    float alpha_cutoff, translucency;
+} xyl__foliage_frame_in;
+
+/* A public frame's fields (xyl_foliage_gl_frame, xyl_foliage_vk_frame: the same names). */
+#define XYL__FOLIAGE_FRAME_IN(f)                                                               \
+    ((xyl__foliage_frame_in){(f)->view_proj, (f)->light_dir, (f)->color, (f)->dither,         \
+                             (f)->alpha_cutoff, (f)->translucency})
 
 /* The tables of a non-NULL foliage, checked (a foliage without leaves, missing arrays, a range
  * outside the leaf array: XYL_ERR_INVALID_ARGUMENT) and copied from alloc
@@ -41,17 +52,17 @@ uint64_t xyl__foliage_tables_leaves(const xyl__foliage_tables *t, const uint32_t
 /* The checks of a draw after its NULL arguments: an upload, one LOD per sector within its
  * table, then the frame's values (the fields both renderers' public frames have). */
 xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t *lods,
-                                   size_t lod_count, const float view_proj[16],
-                                   const float light_dir[3], const float color[4],
-                                   float alpha_cutoff, float translucency,
+                                   size_t lod_count, const xyl__foliage_frame_in *in,
                                    xyl__foliage_frame *out, xyl_diag *diag);
 
 /* The same without LODs, for a draw that chooses its leaves itself (the per-leaf cut): an
  * upload, then the frame's values. */
-xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t, const float view_proj[16],
-                                    const float light_dir[3], const float color[4],
-                                    float alpha_cutoff, float translucency,
-                                    xyl__foliage_frame *out, xyl_diag *diag);
+xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t,
+                                    const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
+                                    xyl_diag *diag);
+
+/* The checks of a dither keep range: (0, 0), or finite with 0 <= lo < hi <= 1. */
+xyl_result xyl__foliage_dither_check(const float dither[2], xyl_diag *diag);
 
 /* A node of the collapse forest as foliage_cut.comp reads it (std430), for the per-leaf cut. */
 typedef struct xyl__foliage_cut_node {

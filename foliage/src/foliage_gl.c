@@ -274,9 +274,8 @@ static xyl_result check_draw(const xyl_foliage_gl *gl, const xyl_foliage_gl_fram
     if (!gl || !frame || !lods)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "gl, frame and lods are required");
-    return xyl__foliage_draw_check(&gl->tables, lods, lod_count, frame->view_proj,
-                                   frame->light_dir, frame->color, frame->alpha_cutoff,
-                                   frame->translucency, rf, diag);
+    const xyl__foliage_frame_in in = XYL__FOLIAGE_FRAME_IN(frame);
+    return xyl__foliage_draw_check(&gl->tables, lods, lod_count, &in, rf, diag);
 }
 
 static void bind_program(const xyl_foliage_gl *gl, const xyl__foliage_frame *rf)
@@ -288,6 +287,7 @@ static void bind_program(const xyl_foliage_gl *gl, const xyl__foliage_frame *rf)
     glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rf->color);
     glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rf->cutoff);
     glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rf->translucency);
+    glProgramUniform2fv(p, XYL_FOLIAGE_GL_UNIFORM_DITHER, 1, rf->dither);
     glProgramUniform1ui(p, XYL_FOLIAGE_GL_UNIFORM_LIST, 0);
     glBindVertexArray(gl->vao);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LEAVES, gl->leaf_buf);
@@ -366,9 +366,8 @@ xyl_result xyl_foliage_gl_draw_adaptive(xyl_foliage_gl *gl, const xyl_foliage_gl
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "gl, frame and view are required");
     xyl__foliage_frame rf;
-    xyl_result r = xyl__foliage_frame_check(&gl->tables, frame->view_proj, frame->light_dir,
-                                            frame->color, frame->alpha_cutoff,
-                                            frame->translucency, &rf, diag);
+    const xyl__foliage_frame_in in = XYL__FOLIAGE_FRAME_IN(frame);
+    xyl_result r = xyl__foliage_frame_check(&gl->tables, &in, &rf, diag);
     double eye[3], per_distance = 0.0;
     if (r == XYL_OK) r = xyl__foliage_view_resolve(view, eye, &per_distance, diag);
     if (r != XYL_OK) return r;

@@ -26,6 +26,7 @@ _Static_assert(offsetof(xyl_foliage_vk_push, light) == 64, "std430: light follow
 _Static_assert(offsetof(xyl_foliage_vk_push, color) == 80, "std430: color");
 _Static_assert(offsetof(xyl_foliage_vk_push, cutoff) == 96, "std430: cutoff");
 _Static_assert(offsetof(xyl_foliage_vk_push, translucency) == 100, "std430: translucency");
+_Static_assert(offsetof(xyl_foliage_vk_push, dither) == 104, "std430: the vec2 dither");
 _Static_assert(sizeof(xyl__foliage_vk_captured) == 32, "std430 stride of the captured struct");
 _Static_assert(sizeof(xyl_foliage_vk_cut_push) == XYL_FOLIAGE_VK_CUT_PUSH_SIZE, "cut push size");
 _Static_assert(offsetof(xyl_foliage_vk_cut_push, per_distance) == 12, "std430: vec3, float");
@@ -746,6 +747,7 @@ static void fill_push(const xyl__foliage_frame *f, xyl_foliage_vk_push *push)
     memcpy(push->color, f->color, sizeof push->color);
     push->cutoff = f->cutoff;
     push->translucency = f->translucency;
+    memcpy(push->dither, f->dither, sizeof push->dither);
 }
 
 static xyl_result check_draw(const xyl_foliage_vk *vk, const xyl_foliage_vk_frame *frame,
@@ -756,9 +758,8 @@ static xyl_result check_draw(const xyl_foliage_vk *vk, const xyl_foliage_vk_fram
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "vk, frame and lods are required");
     xyl__foliage_frame f;
-    xyl_result r = xyl__foliage_draw_check(&vk->tables, lods, lod_count, frame->view_proj,
-                                           frame->light_dir, frame->color, frame->alpha_cutoff,
-                                           frame->translucency, &f, diag);
+    const xyl__foliage_frame_in in = XYL__FOLIAGE_FRAME_IN(frame);
+    xyl_result r = xyl__foliage_draw_check(&vk->tables, lods, lod_count, &in, &f, diag);
     if (r == XYL_OK) fill_push(&f, push);
     return r;
 }
@@ -855,9 +856,8 @@ xyl_result xyl_foliage_vk_cmd_draw_cut(xyl_foliage_vk *vk, VkCommandBuffer cmd,
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "vk, cmd and frame are required");
     xyl__foliage_frame f;
-    xyl_result r = xyl__foliage_frame_check(&vk->tables, frame->view_proj, frame->light_dir,
-                                            frame->color, frame->alpha_cutoff,
-                                            frame->translucency, &f, diag);
+    const xyl__foliage_frame_in in = XYL__FOLIAGE_FRAME_IN(frame);
+    xyl_result r = xyl__foliage_frame_check(&vk->tables, &in, &f, diag);
     if (r != XYL_OK) return r;
     if (!vk->has_cut)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,

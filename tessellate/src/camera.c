@@ -105,3 +105,15 @@ void xyl_tess_camera_zoom(xyl_tess_camera *camera, float factor)
     camera->near_plane *= factor;
     camera->far_plane = (float)((double)camera->far_plane + ((double)factor - 1.0) * sqrt(d2));
 }
+
+static uint32_t unorm16(float x)
+{
+    if (!(x > 0.0f)) return 0; /* NaN too */
+    if (x >= 1.0f) return 65535u;
+    return (uint32_t)lrintf(x * 65535.0f);
+}
+
+uint32_t xyl_tess_dither(float lo, float hi)
+{
+    return unorm16(lo) | unorm16(hi) << 16;
+}

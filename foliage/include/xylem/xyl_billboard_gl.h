@@ -84,6 +84,10 @@ typedef struct xyl_billboard_gl_frame {
     float eye[3];        /* the camera's position: spherical and cylindrical quads face it */
     float light_dir[3];  /* towards the light, normalised by the call; default (all 0): +Y */
     float alpha_cutoff;  /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5 */
+    float dither[2];     /* keep range [lo, hi) of the screen-door dither that cross-fades the
+                            billboard with the tree (docs/foliage.md, "Transitions";
+                            xyl_fade_update gives it); default (0, 0): every fragment; otherwise
+                            0 <= lo < hi <= 1 */
 } xyl_billboard_gl_frame;
 
 /* Bakes the billboard: one view (spherical, cylindrical) or desc->planes views (cross), each a
@@ -111,7 +115,8 @@ XYL_API xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32
 /* Draws the billboard into the bound framebuffer with the current viewport: depth test
  * (GL_LESS) and writes on, no face culling (restored), no blending, alpha test at the frame's
  * cutoff. Errors: XYL_ERR_INVALID_ARGUMENT (NULL bb or frame, an all-zero matrix, a cutoff
- * outside [0, 1]), XYL_ERR_NON_FINITE (a matrix, eye or light entry), XYL_ERR_OUT_OF_MEMORY
+ * outside [0, 1], a dither range other than (0, 0) outside 0 <= lo < hi <= 1),
+ * XYL_ERR_NON_FINITE (a matrix, eye, light or dither entry), XYL_ERR_OUT_OF_MEMORY
  * (GL_OUT_OF_MEMORY). */
 XYL_API xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb,
                                          const xyl_billboard_gl_frame *frame, xyl_diag *diag);

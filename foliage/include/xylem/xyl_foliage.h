@@ -564,6 +564,44 @@ XYL_API xyl_result xyl_foliage_write_glb_file(const xyl_foliage *foliage,
                                               const xyl_foliage_glb_desc *desc, const char *path,
                                               xyl_diag *diag);
 
+/* ---- transitions between levels of detail (docs/foliage.md, "Transitions") ---------------- */
+
+/* Where a cross-fade between a near and a far level of detail happens (the whole tree and its
+ * billboard, or any two): over a band of camera distances, with hysteresis. */
+typedef struct xyl_fade_desc {
+    double start, end; /* distances: up to start the near level alone, from end the far one;
+                          0 <= start < end, finite */
+    double hysteresis; /* how far the camera must move back before the fade follows it, in
+                          distance units, >= 0; default (0): none */
+} xyl_fade_desc;
+
+/* What one camera keeps between frames (zeroed before the first). */
+typedef struct xyl_fade_state {
+    float t;     /* the far level's share of the last frame, a multiple of 1/64 */
+    bool primed; /* false before the first update */
+} xyl_fade_state;
+
+/* One frame's draws: the near level with near_keep, the far one with far_keep (the frames'
+ * dither fields of xylem/xyl_foliage_gl.h, _vk.h, xyl_billboard_gl.h; stems: xyl_tess_dither),
+ * each only where its flag is set. The two keep ranges split every pixel between the levels:
+ * none shows both or neither. */
+typedef struct xyl_fade_draws {
+    bool near, far;
+    float near_keep[2], far_keep[2]; /* (0, 0) for the level drawn alone */
+    float t;                         /* the far level's share, a multiple of 1/64 */
+} xyl_fade_draws;
+
+/* The draws for a camera at distance from the object: t = (distance - start) / (end - start)
+ * clamped to [0, 1], then held while the camera moves less than the hysteresis back (t may
+ * lie anywhere between its values at distance - hysteresis and distance + hysteresis, and
+ * keeps the last frame's when it can), rounded to the dither's 64 levels (the last frame's
+ * level kept until the share is 3/4 of a level from it). A still camera gets the same draws
+ * every frame. Errors: XYL_ERR_INVALID_ARGUMENT (NULL desc, state or out, a band
+ * out of order, a negative hysteresis or distance), XYL_ERR_NON_FINITE; state and out are then
+ * untouched. */
+XYL_API xyl_result xyl_fade_update(const xyl_fade_desc *desc, double distance,
+                                   xyl_fade_state *state, xyl_fade_draws *out, xyl_diag *diag);
+
 #ifdef __cplusplus
 }
 #endif

@@ -57,6 +57,10 @@ typedef struct xyl_foliage_gl_frame {
     float alpha_cutoff;   /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5 */
     float translucency;   /* how much light from behind a blade shines through it, [0, 1];
                              default (0): 0.5; negative: none */
+    float dither[2];      /* keep range [lo, hi) of the screen-door dither that cross-fades two
+                             levels of detail (docs/foliage.md, "Transitions"; xyl_fade_update
+                             gives it); default (0, 0): every fragment. Otherwise
+                             0 <= lo < hi <= 1 */
 } xyl_foliage_gl_frame;
 
 /* Compiles the leaf program and makes the buffers, with a 1 x 1 opaque white texture until
@@ -90,8 +94,9 @@ XYL_API xyl_result xyl_foliage_gl_set_texture(xyl_foliage_gl *gl, const uint8_t 
  * (GL_LESS) and depth writes on, no face culling (the leaves are double-sided; the cull-face
  * state is restored), no blending. Errors: XYL_ERR_INVALID_ARGUMENT (NULL gl, frame or lods, no
  * foliage uploaded, lod_count != sector count, a LOD beyond its sector's merged_count:
- * diag.index = the sector, an all-zero matrix, an alpha_cutoff outside [0, 1] or a
- * translucency over 1), XYL_ERR_NON_FINITE (a matrix, light or colour entry),
+ * diag.index = the sector, an all-zero matrix, an alpha_cutoff outside [0, 1], a
+ * translucency over 1, a dither range other than (0, 0) outside 0 <= lo < hi <= 1),
+ * XYL_ERR_NON_FINITE (a matrix, light, colour or dither entry),
  * XYL_ERR_OUT_OF_MEMORY (GL_OUT_OF_MEMORY). */
 XYL_API xyl_result xyl_foliage_gl_draw(xyl_foliage_gl *gl, const xyl_foliage_gl_frame *frame,
                                        const uint32_t *lods, size_t lod_count, xyl_diag *diag);

@@ -97,6 +97,10 @@ typedef struct xyl_foliage_vk_frame {
     float alpha_cutoff;   /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5 */
     float translucency;   /* light from behind shining through a blade, [0, 1]; default (0):
                              0.5; negative: none */
+    float dither[2];      /* keep range [lo, hi) of the screen-door dither that cross-fades two
+                             levels of detail (docs/foliage.md, "Transitions"; xyl_fade_update
+                             gives it); default (0, 0): every fragment. Otherwise
+                             0 <= lo < hi <= 1 */
 } xyl_foliage_vk_frame;
 
 /* Shader modules, descriptor set, pipeline, sampler and a 1 x 1 opaque white texture. desc is
@@ -132,7 +136,8 @@ XYL_API xyl_result xyl_foliage_vk_set_texture(xyl_foliage_vk *vk, const uint8_t 
  * culled (the leaves are double-sided), no blending. Errors: XYL_ERR_INVALID_ARGUMENT (NULL vk,
  * cmd, frame or lods, no foliage uploaded, lod_count != sector count, a LOD beyond its sector's
  * merged_count: diag.index = the sector, an all-zero matrix, an alpha_cutoff outside [0, 1] or a
- * translucency over 1), XYL_ERR_NON_FINITE (a matrix, light or colour entry); on error nothing
+ * translucency over 1, a dither range other than (0, 0) outside 0 <= lo < hi <= 1),
+ * XYL_ERR_NON_FINITE (a matrix, light, colour or dither entry); on error nothing
  * is recorded. */
 XYL_API xyl_result xyl_foliage_vk_cmd_draw(xyl_foliage_vk *vk, VkCommandBuffer cmd,
                                            const xyl_foliage_vk_frame *frame,

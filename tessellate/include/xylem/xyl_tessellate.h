@@ -224,6 +224,13 @@ XYL_API void xyl_tess_camera_frame(const float lo[3], const float hi[3], float a
  * not > 0 leaves the camera as it is. */
 XYL_API void xyl_tess_camera_zoom(xyl_tess_camera *camera, float factor);
 
+/* xyl_tess_frame.dither for the keep range [lo, hi) of the screen-door dither (a cross-fade
+ * between levels of detail: xyl_fade_update in xylem/xyl_foliage.h gives the ranges, and
+ * shaders/xyl_dither.h says which pixels each keeps): both clamped to [0, 1] and rounded to
+ * 16 bits, NaN taken as 0. (0, 0), the default, keeps every fragment; so does any range that
+ * rounds to it, so skip a draw whose range is empty rather than packing it. */
+XYL_API uint32_t xyl_tess_dither(float lo, float hi);
+
 typedef enum xyl_tess_path {
     XYL_TESS_PATH_INSTANCED = 0, /* one pattern per level, drawn once per patch */
     XYL_TESS_PATH_HARDWARE = 1   /* TCS/TES: GL only */
