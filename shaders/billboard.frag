@@ -1,7 +1,8 @@
 // A tree's billboard, alpha-tested and relit: the bake lit the tree from its camera, so a
 // texel's colour is albedo * shade(n, towards the bake camera); it is drawn as
 // colour * shade(n, u_light) / shade(n, towards the bake camera), shade being the stems'
-// Lambert-plus-sky term (tess_shade.frag), n the baked normal turned into world space.
+// Lambert-plus-sky term (tess_shade.frag), n the baked normal turned into world space. The
+// colour is stored premultiplied by coverage, so a filtered texel's colour is texel.rgb / texel.a.
 
 layout(binding = 0) uniform sampler2DArray u_color_map;
 layout(binding = 1) uniform sampler2DArray u_normal_map;
@@ -32,5 +33,6 @@ void main()
     vec3 n = normalize(q.x * v_right + q.y * v_up + side * q.z * v_facing);
     vec3 bake_dir = side * v_facing;
     float ratio = shade(n, u_light) / max(shade(n, bake_dir), 0.05);
-    out_color = vec4(min(texel.rgb * clamp(ratio, 0.0, 4.0), vec3(1.0)), 1.0);
+    vec3 albedo_lit = texel.rgb / texel.a; // stored premultiplied by coverage
+    out_color = vec4(min(albedo_lit * clamp(ratio, 0.0, 4.0), vec3(1.0)), 1.0);
 }

@@ -274,8 +274,8 @@ expect 64 "per-leaf LOD is GL's" -- "$XYLEM" render --backend vulkan --foliage a
 contains "use --backend gl" "Vulkan --foliage adaptive says which backend"
 expect 0 "render a leafless preset" -- "$XYLEM" render --preset abop-1.24a --size 32x32 --out "$tmp/nl.png"
 grep -q "^leaves:" "$tmp/out" && bad "a leafless tree reported leaves" || ok
-expect 64 "render bad --foliage" -- "$XYLEM" render --foliage impostor --out "$tmp/x.png"
-contains "takes full, lod, adaptive, none or billboard" "bad --foliage names the values"
+expect 64 "render bad --foliage" -- "$XYLEM" render --foliage sprites --out "$tmp/x.png"
+contains "takes full, lod, adaptive, none, billboard or impostor" "bad --foliage names the values"
 # the tree as its billboard: baked from the tree, drawn in its place (GL only)
 for kind in spherical cylindrical cross; do
   expect 0 "render --foliage billboard --billboard $kind" -- "$XYLEM" render --foliage billboard --billboard $kind --billboard-size 64 --size 64x64 --out "$tmp/bb_$kind.png"
@@ -287,6 +287,20 @@ expect 0 "render a 3-plane cross with its image error" -- "$XYLEM" render --foli
 contains "3 views of 32 x 32 texels" "--planes 3 bakes three views"
 contains "20 dodecahedron views" "--billboard-error prints the table"
 contains "mean " "--billboard-error prints the mean"
+# the octahedral impostor: grid^2 views in one atlas
+expect 0 "render --foliage impostor" -- "$XYLEM" render --foliage impostor --grid 3 --billboard-size 32 --size 32x32 --out "$tmp/imp.png"
+contains "billboard: octahedral" "the impostor is the octahedral billboard"
+contains "9 views of 32 x 32 texels" "--grid 3 bakes 3 x 3 views"
+expect 0 "render --billboard octahedral" -- "$XYLEM" render --foliage billboard --billboard octahedral --billboard-size 16 --size 32x32 --out "$tmp/oct.png"
+contains "64 views of 16 x 16 texels" "the grid is 8 x 8 by default"
+expect 64 "--grid 1" -- "$XYLEM" render --foliage impostor --grid 1 --out "$tmp/x.png"
+contains "--grid takes a whole number from 2 to 32" "a bad grid is named"
+expect 64 "--grid 33" -- "$XYLEM" render --foliage impostor --grid 33 --out "$tmp/x.png"
+expect 64 "--grid on a cross" -- "$XYLEM" render --foliage billboard --grid 4 --out "$tmp/x.png"
+contains "--grid is the octahedral billboard's" "--grid on another kind is refused"
+expect 64 "--foliage impostor with another kind" -- "$XYLEM" render --foliage impostor --billboard cross --out "$tmp/x.png"
+expect 64 "an atlas over the limit" -- "$XYLEM" render --foliage impostor --grid 32 --billboard-size 1024 --out "$tmp/x.png"
+contains "atlas" "an atlas over the limit is named"
 expect 64 "billboard with 1 plane" -- "$XYLEM" render --foliage billboard --planes 1 --out "$tmp/x.png"
 expect 64 "billboard with 9 planes" -- "$XYLEM" render --foliage billboard --planes 9 --out "$tmp/x.png"
 expect 64 "billboard of absurd resolution" -- "$XYLEM" render --foliage billboard --billboard-size 100000 --out "$tmp/x.png"
