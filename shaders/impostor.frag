@@ -1,7 +1,8 @@
 // A tree's octahedral impostor: for each of the three grid views the eye ray through this
-// fragment meets the view's plane (through the centre, facing the view's direction), and that
-// point's place in the view's orthographic frame is where the view is sampled in its atlas cell.
-// Each view is relit as the billboards are (colour * shade(n, u_light) / shade(n, its bake
+// fragment is marched through the view's height field (the height over the view's plane,
+// baked in the normal map's alpha) to the surface the view saw, and that point's place in the
+// view's orthographic frame is where the view is sampled in its atlas cell (parallax
+// correction: the three views then agree on where a branch is). Each view is relit as the billboards are (colour * shade(n, u_light) / shade(n, its bake
 // direction)), and the views are blended by weight times coverage; colours are stored
 // premultiplied by coverage.
 
@@ -13,6 +14,9 @@ layout(location = 3) uniform float u_radius;
 layout(location = 4) uniform int u_grid;
 layout(location = 6) uniform vec3 u_light;
 layout(location = 7) uniform float u_cutoff;
+layout(location = 8) uniform vec3 u_bake_light; // all 0: each view lit from its own camera
+// 1 in a multisampled target: alpha (the filtered coverage) goes to alpha-to-coverage
+layout(location = 9) uniform int u_to_coverage;
 
 layout(location = 0) in vec3 v_world;
 layout(location = 1) flat in ivec3 v_views;
@@ -39,6 +43,14 @@ vec3 grid_dir(ivec2 cell)
     return normalize(vec3(o.x, y, o.y));
 }
 
+// where a point (relative to the centre) projects in a view's picture, [0, 1]^2 over the square
+vec2 view_uv(vec3 p, vec3 right, vec3 up)
+{
+    return vec2(dot(p, right), dot(p, up)) / (2.0 * u_radius) + 0.5;
+}
+
+const int STEPS = 32;
+
 void main()
 {
     vec3 ray = v_world - u_eye;
@@ -51,19 +63,35 @@ void main()
         vec3 right = dot(r, r) > 1e-8 ? normalize(r) : vec3(1.0, 0.0, 0.0);
         vec3 up = cross(d, right);
         float den = dot(ray, d);
-        float t = abs(den) > 1e-8 ? dot(u_center - u_eye, d) / den : 0.0;
-        vec3 hit = u_eye + t * ray - u_center;
-        vec2 uv = vec2(dot(hit, right), dot(hit, up)) / (2.0 * u_radius) + 0.5;
-        bool inside = den < 0.0 && all(greaterThanEqual(uv, vec2(0.0))) &&
-                      all(lessThanEqual(uv, vec2(1.0)));
+        float t0 = abs(den) > 1e-8 ? dot(u_center - u_eye, d) / den : 0.0;
+        vec2 uv0 = view_uv(u_eye + t0 * ray - u_center, right, up);
+        vec2 gx = dFdx(uv0) / float(u_grid), gy = dFdy(uv0) / float(u_grid);
+        // parallax: march the eye's ray down through the view's slab of heights [R, -R] and
+        // stop at the first point under the height baked where it projects, on a covered
+        // texel; a ray that meets nothing in this view takes no coverage from it
+        vec2 uv = uv0;
+        bool found = false;
+        for (int i = 0; i <= STEPS && den < -1e-8; ++i) {
+            float s = u_radius * (1.0 - 2.0 * float(i) / float(STEPS));
+            vec2 ui = view_uv(u_eye + (t0 + s / den) * ray - u_center, right, up);
+            if (any(lessThan(ui, vec2(0.0))) || any(greaterThan(ui, vec2(1.0)))) continue;
+            vec2 ai = (vec2(cell) + ui) / float(u_grid);
+            float h = (textureLod(u_normal_map, ai, 0.0).a * 2.0 - 1.0) * u_radius;
+            if (textureLod(u_color_map, ai, 0.0).a > 0.5 && h >= s - u_radius / float(STEPS)) {
+                uv = view_uv(u_eye + (t0 + h / den) * ray - u_center, right, up);
+                found = true;
+                break;
+            }
+        }
         vec2 at = (vec2(cell) + clamp(uv, 0.0, 1.0)) / float(u_grid);
-        vec4 texel = texture(u_color_map, at);
-        vec3 q = texture(u_normal_map, at).xyz * 2.0 - 1.0;
+        vec4 texel = textureGrad(u_color_map, at, gx, gy);
+        vec3 q = textureGrad(u_normal_map, at, gx, gy).xyz * 2.0 - 1.0;
         vec3 n = normalize(q.x * right + q.y * up + q.z * d);
-        float ratio = clamp(shade(n, u_light) / max(shade(n, d), 0.05), 0.0, 4.0);
-        float w = inside ? v_weights[k] : 0.0;
+        vec3 bake = dot(u_bake_light, u_bake_light) > 0.0 ? u_bake_light : d;
+        float ratio = clamp(shade(n, u_light) / max(shade(n, bake), 0.05), 0.0, 4.0);
+        float w = found ? v_weights[k] : 0.0;
         sum += w * vec4(texel.rgb * ratio, texel.a);
     }
-    if (sum.a < u_cutoff) discard;
-    out_color = vec4(min(sum.rgb / sum.a, vec3(1.0)), 1.0);
+    if (sum.a < (u_to_coverage != 0 ? 1.0 / 255.0 : u_cutoff)) discard;
+    out_color = vec4(min(sum.rgb / sum.a, vec3(1.0)), u_to_coverage != 0 ? sum.a : 1.0);
 }

@@ -15,7 +15,8 @@ extern const unsigned char xyl__shader_gl_billboard_frag[];
 extern const unsigned char xyl__shader_gl_impostor_vert[];
 extern const unsigned char xyl__shader_gl_impostor_frag[];
 
-enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF };
+enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF,
+       U_BAKE_LIGHT, U_TO_COVERAGE };
 /* impostor.vert/.frag: U_VIEW_PROJ, U_EYE, U_CENTER, U_LIGHT and U_CUTOFF as above, and these */
 enum { U_RADIUS = 3, U_GRID = 4 };
 
@@ -24,6 +25,7 @@ struct xyl_billboard_gl {
     xyl_billboard_kind kind;
     uint32_t views, resolution, grid; /* grid: the octahedral kind's, else 0 */
     float center[3], half[2]; /* the quads' centre, half width and half height */
+    float bake_light[3];      /* the bake's light; all 0: each view's own direction */
     xyl_allocator alloc;
 };
 
@@ -61,6 +63,9 @@ static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
                              "wide, over %d", g, g, d->resolution,
                              (unsigned long long)g * d->resolution, XYL_BILLBOARD_MAX_ATLAS);
     }
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(d->light_dir[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the bake's light is not finite");
     for (int k = 0; k < 3; ++k) {
         if (!isfinite(d->lo[k]) || !isfinite(d->hi[k]))
             return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the tree's box is not finite");
@@ -186,7 +191,8 @@ static xyl_result target_make(bake_target *t, uint32_t side, xyl_diag *diag)
 
 /* Normals from the depth buffer (rows bottom to top, depth in [0, 1], 1 = nothing): the height
  * towards the camera h = (1 - 2 depth) * radius, n ~ (-dh/dx, -dh/dy, 1), texels step[0] wide
- * and step[1] high in world units. A neighbour that is empty or lies across a jump of more
+ * and step[1] high in world units; h / radius * 0.5 + 0.5 goes to alpha (0.5 where empty), for
+ * the impostor's parallax correction. A neighbour that is empty or lies across a jump of more
  * than four texels' size is not used. */
 static void depth_to_normals(const float *depth, uint32_t n, float radius, const float step[2],
                              uint8_t *out)
@@ -197,7 +203,7 @@ static void depth_to_normals(const float *depth, uint32_t n, float radius, const
             size_t i = (size_t)y * n + x;
             uint8_t *o = out + 4 * i;
             if (depth[i] >= 1.0f) {
-                o[0] = 128, o[1] = 128, o[2] = 255, o[3] = 0;
+                o[0] = 128, o[1] = 128, o[2] = 255, o[3] = 128;
                 continue;
             }
             float h = (1.0f - 2.0f * depth[i]) * radius, g[2] = {0.0f, 0.0f};
@@ -221,7 +227,7 @@ static void depth_to_normals(const float *depth, uint32_t n, float radius, const
             float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
             for (int k = 0; k < 3; ++k)
                 o[k] = (uint8_t)lrintf((v[k] / len * 0.5f + 0.5f) * 255.0f);
-            o[3] = 255;
+            o[3] = (uint8_t)lrintf(fminf(fmaxf(h / radius * 0.5f + 0.5f, 0.0f), 1.0f) * 255.0f);
         }
 }
 
@@ -332,7 +338,9 @@ static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_d
         glClearDepth(1.0);
         glDepthMask(GL_TRUE);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        r = draw(user, m, d, diag);
+        bool fixed = bb->bake_light[0] != 0.0f || bb->bake_light[1] != 0.0f ||
+                     bb->bake_light[2] != 0.0f;
+        r = draw(user, m, fixed ? bb->bake_light : d, diag);
         if (r != XYL_OK) break;
         xyl__fgl_drain_errors(); /* the caller's draw reports its own */
         glBindFramebuffer(GL_READ_FRAMEBUFFER, t.fbo);
@@ -396,6 +404,11 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
     bb->views = desc->kind == XYL_BILLBOARD_CROSS ? desc->planes : grid ? grid * grid : 1;
     bb->resolution = desc->resolution;
     bb->grid = grid;
+    float ll = sqrtf(desc->light_dir[0] * desc->light_dir[0] +
+                     desc->light_dir[1] * desc->light_dir[1] +
+                     desc->light_dir[2] * desc->light_dir[2]);
+    if (ll > 0.0f && isfinite(ll))
+        for (int k = 0; k < 3; ++k) bb->bake_light[k] = desc->light_dir[k] / ll;
     float ext[3];
     for (int k = 0; k < 3; ++k) {
         bb->center[k] = 0.5f * (desc->lo[k] + desc->hi[k]);
@@ -518,6 +531,13 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     float cutoff = frame->alpha_cutoff > 0.0f ? frame->alpha_cutoff : 0.5f;
     xyl__fgl_drain_errors();
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
+    GLboolean a2c = glIsEnabled(GL_SAMPLE_ALPHA_TO_COVERAGE), a21 = glIsEnabled(GL_SAMPLE_ALPHA_TO_ONE);
+    GLint sample_buffers = 0;
+    glGetIntegerv(GL_SAMPLE_BUFFERS, &sample_buffers);
+    /* multisampled: a texel's filtered coverage becomes the share of samples covered, as the
+     * tree's own sub-pixel leaves do, instead of all or nothing at the cutoff */
+    bool to_coverage = sample_buffers > 0;
+    if (to_coverage) glEnable(GL_SAMPLE_ALPHA_TO_COVERAGE), glEnable(GL_SAMPLE_ALPHA_TO_ONE);
     glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
@@ -537,12 +557,16 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     }
     glProgramUniform3fv(p, U_LIGHT, 1, l);
     glProgramUniform1f(p, U_CUTOFF, cutoff);
+    glProgramUniform3fv(p, U_BAKE_LIGHT, 1, bb->bake_light);
+    glProgramUniform1i(p, U_TO_COVERAGE, to_coverage ? 1 : 0);
     glBindVertexArray(bb->vao);
     glBindTextureUnit(0, bb->color_tex);
     glBindTextureUnit(1, bb->normal_tex);
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4,
                           bb->kind == XYL_BILLBOARD_OCTAHEDRAL ? 1 : (GLsizei)bb->views);
     if (cull) glEnable(GL_CULL_FACE);
+    if (to_coverage && !a2c) glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+    if (to_coverage && !a21) glDisable(GL_SAMPLE_ALPHA_TO_ONE);
     xyl_result r = xyl__fgl_check(diag, "drawing the billboard");
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;

@@ -1293,6 +1293,7 @@ static xyl_result bake_billboard(const options *o, tree_gl *t, xyl_billboard_gl 
     bd.grid = bd.kind == XYL_BILLBOARD_OCTAHEDRAL ? ro->grid : 0;
     bd.resolution = ro->billboard_size ? ro->billboard_size : 512;
     tree_bounds(t->j, bd.lo, bd.hi);
+    memcpy(bd.light_dir, t->j->frame.light_dir, sizeof bd.light_dir); /* the scene's light */
     double t0 = now_seconds();
     xyl_result r = xyl_billboard_gl_bake(&bd, bake_tree, t, bb, d);
     if (r == XYL_OK)

@@ -37,7 +37,7 @@
  * corners) o is first replaced by ((1 - |o.y|) sign o.x, (1 - |o.x|) sign o.y). Its view is
  * an orthographic render looking at the centre of the box along minus that direction d, with
  * right = normalize(Y x d) (+X where d is vertical) and up = d x right, of the square of side
- * 2 R (R the box's half diagonal) around the centre; it sits in the atlas's cell (column, row),
+ * 2 R (R: 1.01 times the box's half diagonal) around the centre, depth over [-R, R]; it sits in the atlas's cell (column, row),
  * the atlas being grid * resolution texels wide, row 0 at the bottom. Drawing, the eye's
  * direction from the centre is encoded the same way; the grid triangle around it gives three
  * views and barycentric weights, each view is sampled where the eye's ray meets its plane
@@ -49,10 +49,13 @@
  * (alpha: covered or not; RGB premultiplied by it, so mipmaps and filtering do not mix in
  * the colour of empty texels) and an RGBA8 normal map: the quad-space normal (x along the quad's
  * right, y up, z towards the bake camera) in RGB as n * 0.5 + 0.5, reconstructed from the
- * bake's depth buffer by central differences. The bake lights the tree from the bake camera
- * (light_dir = the view direction), and the draw relights each texel with the frame's light
- * and the reconstructed normal by the ratio of the stems' shading (Lambert plus a sky term)
- * under the two lights.
+ * bake's depth buffer by central differences. The bake lights the tree with desc->light_dir
+ * (by default each view from its own camera), and the draw relights each texel with the
+ * frame's light and the reconstructed normal by the ratio of the stems' shading (Lambert plus
+ * a sky term) under the two lights: exactly 1 when the frame's light is the bake's. Leaves
+ * (double-sided, translucent) do not shade like that, and the normals of a leaf cloud
+ * reconstructed from depth are rough, so the ratio is only an approximation: baking under
+ * the scene's own light is what makes a billboard as bright as its tree.
  *
  * The bake binds and clears its own framebuffer and restores the caller's framebuffer and
  * viewport; every call checks its input before its first GL call, and must come from the
@@ -100,6 +103,10 @@ typedef struct xyl_billboard_gl_desc {
                             XYL_BILLBOARD_MAX_ATLAS (and the driver's limit); 0:
                             XYL_BILLBOARD_DEFAULT_GRID. Other kinds: 0 */
     float lo[3], hi[3];  /* the tree's box, lo < hi on every axis, finite */
+    float light_dir[3];  /* towards the light the views are baked under, normalised by the
+                            call; default (all 0): each view's own camera direction. Give the
+                            scene's light: a draw under the same light then shows the tree's
+                            own shading (leaves' translucency included) unchanged */
     xyl_allocator alloc; /* every host allocation, as long as the billboard lives */
 } xyl_billboard_gl_desc;
 
