@@ -37,19 +37,20 @@
  * corners) o is first replaced by ((1 - |o.y|) sign o.x, (1 - |o.x|) sign o.y). Its view is
  * an orthographic render looking at the centre of the box along minus that direction d, with
  * right = normalize(Y x d) (+X where d is vertical) and up = d x right, of the square of side
- * 2 R (R: 1.01 times the box's half diagonal) around the centre, depth over [-R, R]; it sits in the atlas's cell (column, row),
- * the atlas being grid * resolution texels wide, row 0 at the bottom. Drawing, the eye's
- * direction from the centre is encoded the same way; the grid triangle around it gives three
- * views and barycentric weights, each view is sampled where the eye's ray meets its plane
- * (through the centre, perpendicular to its direction), relit, and the three are mixed by
- * weight times coverage. The quad is as large as the perspective outline of the sphere of
- * radius R around the centre.
- * Each baked view is an orthographic render of the tree into a resolution x resolution RGBA8 colour texture
- * stretched over the rectangle
- * (alpha: covered or not; RGB premultiplied by it, so mipmaps and filtering do not mix in
- * the colour of empty texels) and an RGBA8 normal map: the quad-space normal (x along the quad's
- * right, y up, z towards the bake camera) in RGB as n * 0.5 + 0.5, reconstructed from the
- * bake's depth buffer by central differences. The bake lights the tree with desc->light_dir
+ * 2 R (R: 1.01 times the box's half diagonal) around the centre, depth over [-R, R]; it sits
+ * in the atlas's cell (column, row), the atlas being grid * resolution texels wide, row 0 at
+ * the bottom. Drawing, the eye's direction from the centre is encoded the same way; the grid
+ * triangle around it gives three views and barycentric weights; each view is sampled where
+ * the eye's ray, marched through the view's baked heights, first meets what the view saw
+ * (parallax correction), relit, and the three are mixed by weight times coverage. The quad
+ * is as large as the perspective outline of the sphere of radius R around the centre.
+ * Each baked view is an orthographic render of the tree into a resolution x resolution RGBA8
+ * colour texture stretched over the rectangle (alpha: covered or not; RGB premultiplied by
+ * it, so mipmaps and filtering do not mix in the colour of empty texels) and an RGBA8 normal
+ * map: the quad-space normal (x along the quad's right, y up, z towards the bake camera) in
+ * RGB as n * 0.5 + 0.5, reconstructed from the bake's depth buffer by central differences,
+ * and in alpha the height h towards the bake camera over the plane through the centre as
+ * h / R * 0.5 + 0.5 (R: 1.01 times the box's half diagonal, every kind; 0.5 where empty). The bake lights the tree with desc->light_dir
  * (by default each view from its own camera), and the draw relights each texel with the
  * frame's light and the reconstructed normal by the ratio of the stems' shading (Lambert plus
  * a sky term) under the two lights: exactly 1 when the frame's light is the bake's. Leaves
@@ -117,7 +118,9 @@ typedef struct xyl_billboard_gl_frame {
     float view_proj[16]; /* column-major world-to-clip matrix (GL clip convention); all 0 refused */
     float eye[3];        /* the camera's position: spherical and cylindrical quads face it */
     float light_dir[3];  /* towards the light, normalised by the call; default (all 0): +Y */
-    float alpha_cutoff;  /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5 */
+    float alpha_cutoff;  /* texels with alpha below it are discarded, (0, 1]; default (0): 0.5.
+                            Into a multisampled framebuffer the filtered alpha goes to
+                            alpha-to-coverage instead (the share of samples covered) */
 } xyl_billboard_gl_frame;
 
 /* Bakes the billboard: one view (spherical, cylindrical), desc->planes views (cross) or grid^2
@@ -138,14 +141,16 @@ XYL_API void xyl_billboard_gl_destroy(xyl_billboard_gl *bb);
 XYL_API uint32_t xyl_billboard_gl_view_count(const xyl_billboard_gl *bb);
 
 /* A baked view read back: colour (normal false; premultiplied by alpha) or normal map (normal
- * true), resolution * resolution RGBA8 texels, top row first, into rgba (4 * resolution^2 bytes). Errors:
+ * true; height in alpha), resolution * resolution RGBA8 texels, top row first, into rgba
+ * (4 * resolution^2 bytes). Errors:
  * XYL_ERR_INVALID_ARGUMENT (NULL bb or rgba, view >= xyl_billboard_gl_view_count). */
 XYL_API xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32_t view,
                                               bool normal, uint8_t *rgba, xyl_diag *diag);
 
 /* Draws the billboard into the bound framebuffer with the current viewport: depth test
  * (GL_LESS) and writes on, no face culling (restored), no blending, alpha test at the frame's
- * cutoff. Errors: XYL_ERR_INVALID_ARGUMENT (NULL bb or frame, an all-zero matrix, a cutoff
+ * cutoff, or in a multisampled framebuffer (GL_SAMPLE_BUFFERS) alpha-to-coverage and
+ * alpha-to-one (restored). Errors: XYL_ERR_INVALID_ARGUMENT (NULL bb or frame, an all-zero matrix, a cutoff
  * outside [0, 1]), XYL_ERR_NON_FINITE (a matrix, eye or light entry), XYL_ERR_OUT_OF_MEMORY
  * (GL_OUT_OF_MEMORY). */
 XYL_API xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb,
