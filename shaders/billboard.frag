@@ -1,13 +1,17 @@
-// A tree's billboard, alpha-tested and relit: the bake lit the tree from its camera, so a
-// texel's colour is albedo * shade(n, towards the bake camera); it is drawn as
-// colour * shade(n, u_light) / shade(n, towards the bake camera), shade being the stems'
-// Lambert-plus-sky term (tess_shade.frag), n the baked normal turned into world space.
+// A tree's billboard, alpha-tested and relit: the bake lit the tree from u_bake_light (all 0:
+// from its camera), so a texel's colour is albedo * shade(n, bake light); it is drawn as
+// colour * shade(n, u_light) / shade(n, bake light), shade being the stems'
+// Lambert-plus-sky term (tess_shade.frag), n the baked normal turned into world space. The
+// colour is stored premultiplied by coverage, so a filtered texel's colour is texel.rgb / texel.a.
 
 layout(binding = 0) uniform sampler2DArray u_color_map;
 layout(binding = 1) uniform sampler2DArray u_normal_map;
 layout(location = 6) uniform vec3 u_light;
 layout(location = 7) uniform float u_cutoff;
-layout(location = 8) uniform vec2 u_dither; // a cross-fade's keep range (xyl_dither.h)
+layout(location = 8) uniform vec3 u_bake_light; // all 0: each view lit from its own camera
+// 1 in a multisampled target: alpha (the filtered coverage) goes to alpha-to-coverage
+layout(location = 9) uniform int u_to_coverage;
+layout(location = 10) uniform vec2 u_dither; // a cross-fade's keep range (xyl_dither.h)
 
 layout(location = 0) in vec2 v_uv;
 layout(location = 1) flat in vec3 v_right;
@@ -28,11 +32,13 @@ void main()
     // quad's frame, and the normals' z points away from this side
     if (!xyl_dither_keeps(gl_FragCoord.xy, u_dither)) discard;
     vec4 texel = texture(u_color_map, vec3(v_uv, float(v_layer)));
-    if (texel.a < u_cutoff) discard;
+    if (texel.a < (u_to_coverage != 0 ? 1.0 / 255.0 : u_cutoff)) discard;
     vec3 q = texture(u_normal_map, vec3(v_uv, float(v_layer))).xyz * 2.0 - 1.0;
     float side = gl_FrontFacing ? 1.0 : -1.0;
     vec3 n = normalize(q.x * v_right + q.y * v_up + side * q.z * v_facing);
-    vec3 bake_dir = side * v_facing;
+    vec3 bake_dir = dot(u_bake_light, u_bake_light) > 0.0 ? u_bake_light : side * v_facing;
     float ratio = shade(n, u_light) / max(shade(n, bake_dir), 0.05);
-    out_color = vec4(min(texel.rgb * clamp(ratio, 0.0, 4.0), vec3(1.0)), 1.0);
+    vec3 albedo_lit = texel.rgb / texel.a; // stored premultiplied by coverage
+    out_color = vec4(min(albedo_lit * clamp(ratio, 0.0, 4.0), vec3(1.0)),
+                     u_to_coverage != 0 ? texel.a : 1.0);
 }

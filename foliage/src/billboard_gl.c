@@ -13,24 +13,31 @@
 
 extern const unsigned char xyl__shader_gl_billboard_vert[];
 extern const unsigned char xyl__shader_gl_billboard_frag[];
+extern const unsigned char xyl__shader_gl_impostor_vert[];
+extern const unsigned char xyl__shader_gl_impostor_frag[];
 
-enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF, U_DITHER };
+enum { U_VIEW_PROJ = 0, U_EYE, U_CENTER, U_HALF, U_KIND, U_PLANES, U_LIGHT, U_CUTOFF,
+       U_BAKE_LIGHT, U_TO_COVERAGE, U_DITHER };
+/* impostor.vert/.frag: U_VIEW_PROJ, U_EYE, U_CENTER, U_LIGHT, U_CUTOFF, U_BAKE_LIGHT,
+ * U_TO_COVERAGE and U_DITHER as above, and these */
+enum { U_RADIUS = 3, U_GRID = 4 };
 
 struct xyl_billboard_gl {
     GLuint program, vao, color_tex, normal_tex;
     xyl_billboard_kind kind;
-    uint32_t views, resolution;
+    uint32_t views, resolution, grid; /* grid: the octahedral kind's, else 0 */
     float center[3], half[2]; /* the quads' centre, half width and half height */
+    float bake_light[3];      /* the bake's light; all 0: each view's own direction */
     xyl_allocator alloc;
 };
 
 static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
 {
     if (d->kind != XYL_BILLBOARD_SPHERICAL && d->kind != XYL_BILLBOARD_CYLINDRICAL &&
-        d->kind != XYL_BILLBOARD_CROSS)
+        d->kind != XYL_BILLBOARD_CROSS && d->kind != XYL_BILLBOARD_OCTAHEDRAL)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "unknown billboard kind %d (spherical 0, cylindrical 1, cross 2)",
-                         (int)d->kind);
+                         "unknown billboard kind %d (spherical 0, cylindrical 1, cross 2, "
+                         "octahedral 3)", (int)d->kind);
     if (d->kind == XYL_BILLBOARD_CROSS &&
         (d->planes < 2 || d->planes > XYL_BILLBOARD_MAX_PLANES))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -43,6 +50,24 @@ static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a billboard resolution of %u: from %d to %d texels", d->resolution,
                          XYL_BILLBOARD_MIN_RESOLUTION, XYL_BILLBOARD_MAX_RESOLUTION);
+    if (d->kind != XYL_BILLBOARD_OCTAHEDRAL && d->grid != 0)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a grid of %u: only an octahedral billboard has a grid", d->grid);
+    if (d->kind == XYL_BILLBOARD_OCTAHEDRAL) {
+        uint32_t g = d->grid ? d->grid : XYL_BILLBOARD_DEFAULT_GRID;
+        if (g < XYL_BILLBOARD_MIN_GRID || g > XYL_BILLBOARD_MAX_GRID)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                             "an octahedral grid of %u views per side: from %d to %d", g,
+                             XYL_BILLBOARD_MIN_GRID, XYL_BILLBOARD_MAX_GRID);
+        if ((uint64_t)g * d->resolution > XYL_BILLBOARD_MAX_ATLAS)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                             "an octahedral atlas of %u x %u views of %u texels is %llu texels "
+                             "wide, over %d", g, g, d->resolution,
+                             (unsigned long long)g * d->resolution, XYL_BILLBOARD_MAX_ATLAS);
+    }
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(d->light_dir[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the bake's light is not finite");
     for (int k = 0; k < 3; ++k) {
         if (!isfinite(d->lo[k]) || !isfinite(d->hi[k]))
             return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the tree's box is not finite");
@@ -60,8 +85,12 @@ static xyl_result build_program(xyl_billboard_gl *bb, xyl_diag *diag)
 {
     char log[192] = "";
     const GLenum stages[2] = {GL_VERTEX_SHADER, GL_FRAGMENT_SHADER};
-    const unsigned char *texts[2] = {xyl__shader_gl_billboard_vert, xyl__shader_gl_billboard_frag};
-    const char *names[2] = {"billboard.vert", "billboard.frag"};
+    bool octa = bb->kind == XYL_BILLBOARD_OCTAHEDRAL;
+    const unsigned char *texts[2] = {
+        octa ? xyl__shader_gl_impostor_vert : xyl__shader_gl_billboard_vert,
+        octa ? xyl__shader_gl_impostor_frag : xyl__shader_gl_billboard_frag};
+    const char *names[2] = {octa ? "impostor.vert" : "billboard.vert",
+                            octa ? "impostor.frag" : "billboard.frag"};
     GLuint p = glCreateProgram();
     for (int i = 0; i < 2; ++i) {
         GLuint sh = xyl__fgl_compile(stages[i], texts[i], log, (GLsizei)sizeof log);
@@ -86,18 +115,42 @@ static xyl_result build_program(xyl_billboard_gl *bb, xyl_diag *diag)
 
 /* ---- bake --------------------------------------------------------------------------------- */
 
-/* The direction from the axis towards the camera of view v, horizontal. */
-static void view_dir(const xyl_billboard_gl *bb, uint32_t v, float d[3])
+/* Grid view v's direction on the octahedron (the header's formula). */
+static void octahedral_dir(uint32_t grid, uint32_t v, double d[3])
 {
-    double a = bb->kind == XYL_BILLBOARD_CROSS ? 3.14159265358979323846 * v / bb->views : 0.0;
-    d[0] = (float)sin(a), d[1] = 0.0f, d[2] = (float)cos(a);
+    double ox = 2.0 * (v % grid) / (grid - 1) - 1.0, oz = 2.0 * (v / grid) / (grid - 1) - 1.0;
+    double y = 1.0 - fabs(ox) - fabs(oz);
+    if (y < 0.0) {
+        double fx = (1.0 - fabs(oz)) * (ox >= 0.0 ? 1.0 : -1.0);
+        double fz = (1.0 - fabs(ox)) * (oz >= 0.0 ? 1.0 : -1.0);
+        ox = fx, oz = fz;
+    }
+    double len = sqrt(ox * ox + y * y + oz * oz);
+    d[0] = ox / len, d[1] = y / len, d[2] = oz / len;
+}
+
+/* View v's frame: d from the centre towards its camera, right and up across its picture. */
+static void view_frame(const xyl_billboard_gl *bb, uint32_t v, float right[3], float up[3],
+                       float d[3])
+{
+    double w[3] = {0.0, 0.0, 1.0};
+    if (bb->kind == XYL_BILLBOARD_OCTAHEDRAL) {
+        octahedral_dir(bb->grid, v, w);
+    } else if (bb->kind == XYL_BILLBOARD_CROSS) {
+        double a = 3.14159265358979323846 * v / bb->views;
+        w[0] = sin(a), w[2] = cos(a);
+    }
+    double h = sqrt(w[0] * w[0] + w[2] * w[2]); /* right = normalize(Y x d) */
+    double r[3] = {h > 1e-4 ? w[2] / h : 1.0, 0.0, h > 1e-4 ? -w[0] / h : 0.0};
+    double u[3] = {w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2], w[0] * r[1] - w[1] * r[0]};
+    for (int k = 0; k < 3; ++k) right[k] = (float)r[k], up[k] = (float)u[k], d[k] = (float)w[k];
 }
 
 /* Orthographic world-to-clip matrix (column-major, GL clip) looking along -d at the centre,
  * the quad's rectangle (2 * half[0] by 2 * half[1]) filling the view and depth [-radius, radius] around the centre. */
-static void bake_matrix(const xyl_billboard_gl *bb, const float d[3], float radius, float m[16])
+static void bake_matrix(const xyl_billboard_gl *bb, const float right[3], const float up[3],
+                        const float d[3], float radius, float m[16])
 {
-    const float right[3] = {d[2], 0.0f, -d[0]}, up[3] = {0.0f, 1.0f, 0.0f};
     const float *rows[3] = {right, up, d};
     const float scale[3] = {1.0f / bb->half[0], 1.0f / bb->half[1], -1.0f / radius};
     memset(m, 0, 16 * sizeof *m);
@@ -140,7 +193,8 @@ static xyl_result target_make(bake_target *t, uint32_t side, xyl_diag *diag)
 
 /* Normals from the depth buffer (rows bottom to top, depth in [0, 1], 1 = nothing): the height
  * towards the camera h = (1 - 2 depth) * radius, n ~ (-dh/dx, -dh/dy, 1), texels step[0] wide
- * and step[1] high in world units. A neighbour that is empty or lies across a jump of more
+ * and step[1] high in world units; h / radius * 0.5 + 0.5 goes to alpha (0.5 where empty), for
+ * the impostor's parallax correction. A neighbour that is empty or lies across a jump of more
  * than four texels' size is not used. */
 static void depth_to_normals(const float *depth, uint32_t n, float radius, const float step[2],
                              uint8_t *out)
@@ -151,7 +205,7 @@ static void depth_to_normals(const float *depth, uint32_t n, float radius, const
             size_t i = (size_t)y * n + x;
             uint8_t *o = out + 4 * i;
             if (depth[i] >= 1.0f) {
-                o[0] = 128, o[1] = 128, o[2] = 255, o[3] = 0;
+                o[0] = 128, o[1] = 128, o[2] = 255, o[3] = 128;
                 continue;
             }
             float h = (1.0f - 2.0f * depth[i]) * radius, g[2] = {0.0f, 0.0f};
@@ -175,31 +229,20 @@ static void depth_to_normals(const float *depth, uint32_t n, float radius, const
             float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
             for (int k = 0; k < 3; ++k)
                 o[k] = (uint8_t)lrintf((v[k] / len * 0.5f + 0.5f) * 255.0f);
-            o[3] = 255;
+            o[3] = (uint8_t)lrintf(fminf(fmaxf(h / radius * 0.5f + 0.5f, 0.0f), 1.0f) * 255.0f);
         }
 }
 
-/* Coverage from depth into the colour's alpha; empty texels take the mean colour of their
- * covered neighbours, so linear filtering and mipmaps do not pull in the clear colour. */
+/* Coverage from depth into the colour's alpha, the colour premultiplied by it (empty texels
+ * 0): filtering and mipmaps then average colour over covered texels only, once the draw
+ * divides by alpha, and an edge texel is not darkened by the empty ones around it. */
 static void colour_coverage(const float *depth, uint32_t n, uint8_t *rgba)
 {
-    for (size_t i = 0; i < (size_t)n * n; ++i) rgba[4 * i + 3] = depth[i] < 1.0f ? 255 : 0;
-    for (uint32_t y = 0; y < n; ++y)
-        for (uint32_t x = 0; x < n; ++x) {
-            uint8_t *o = rgba + 4 * ((size_t)y * n + x);
-            if (o[3]) continue;
-            unsigned sum[3] = {0, 0, 0}, used = 0;
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    int64_t xx = (int64_t)x + dx, yy = (int64_t)y + dy;
-                    if (xx < 0 || yy < 0 || xx >= (int64_t)n || yy >= (int64_t)n) continue;
-                    size_t j = (size_t)yy * n + (size_t)xx;
-                    if (depth[j] >= 1.0f) continue;
-                    for (int k = 0; k < 3; ++k) sum[k] += rgba[4 * j + k];
-                    ++used;
-                }
-            for (int k = 0; k < 3; ++k) o[k] = used ? (uint8_t)(sum[k] / used) : 0;
-        }
+    for (size_t i = 0; i < (size_t)n * n; ++i)
+        if (depth[i] < 1.0f)
+            rgba[4 * i + 3] = 255;
+        else
+            memset(rgba + 4 * i, 0, 4);
 }
 
 static GLuint make_array(uint32_t side, uint32_t layers)
@@ -214,6 +257,31 @@ static GLuint make_array(uint32_t side, uint32_t layers)
     glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     return t;
+}
+
+/* The octahedral kind's atlas: one 2D texture of side cells x cell, mipmapped down to cells
+ * of 4 texels while the cell halves exactly, so that no level mixes two cells' texels. */
+static GLuint make_atlas(uint32_t cell, uint32_t cells)
+{
+    GLsizei levels = 1;
+    for (uint32_t s = cell; s % 2 == 0 && s > 4; s /= 2) ++levels;
+    GLuint t = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &t);
+    glTextureStorage2D(t, levels, GL_RGBA8, (GLsizei)(cell * cells), (GLsizei)(cell * cells));
+    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, levels > 1 ? GL_LINEAR_MIPMAP_LINEAR : GL_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return t;
+}
+
+/* Where view v lies in the textures: layer v of the arrays, or the atlas's cell. */
+static void view_place(const xyl_billboard_gl *bb, uint32_t v, GLint xyz[3])
+{
+    bool octa = bb->kind == XYL_BILLBOARD_OCTAHEDRAL;
+    xyz[0] = octa ? (GLint)(v % bb->grid * bb->resolution) : 0;
+    xyz[1] = octa ? (GLint)(v / bb->grid * bb->resolution) : 0;
+    xyz[2] = octa ? 0 : (GLint)v;
 }
 
 typedef struct saved_state {
@@ -263,16 +331,18 @@ static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_d
     xyl_result r = target_make(&t, n, diag);
     const float step[2] = {2.0f * bb->half[0] / (float)n, 2.0f * bb->half[1] / (float)n};
     for (uint32_t v = 0; r == XYL_OK && v < bb->views; ++v) {
-        float d[3], m[16];
-        view_dir(bb, v, d);
-        bake_matrix(bb, d, radius, m);
+        float right[3], up[3], d[3], m[16];
+        view_frame(bb, v, right, up, d);
+        bake_matrix(bb, right, up, d, radius, m);
         glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
         glViewport(0, 0, (GLsizei)n, (GLsizei)n);
         glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
         glClearDepth(1.0);
         glDepthMask(GL_TRUE);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        r = draw(user, m, d, diag);
+        bool fixed = bb->bake_light[0] != 0.0f || bb->bake_light[1] != 0.0f ||
+                     bb->bake_light[2] != 0.0f;
+        r = draw(user, m, fixed ? bb->bake_light : d, diag);
         if (r != XYL_OK) break;
         xyl__fgl_drain_errors(); /* the caller's draw reports its own */
         glBindFramebuffer(GL_READ_FRAMEBUFFER, t.fbo);
@@ -280,10 +350,19 @@ static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_d
         glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
         colour_coverage(depth, n, rgba);
         depth_to_normals(depth, n, radius, step, nrm);
-        glTextureSubImage3D(bb->color_tex, 0, 0, 0, (GLint)v, (GLsizei)n, (GLsizei)n, 1, GL_RGBA,
-                            GL_UNSIGNED_BYTE, rgba);
-        glTextureSubImage3D(bb->normal_tex, 0, 0, 0, (GLint)v, (GLsizei)n, (GLsizei)n, 1,
-                            GL_RGBA, GL_UNSIGNED_BYTE, nrm);
+        GLint at[3];
+        view_place(bb, v, at);
+        if (bb->kind == XYL_BILLBOARD_OCTAHEDRAL) {
+            glTextureSubImage2D(bb->color_tex, 0, at[0], at[1], (GLsizei)n, (GLsizei)n, GL_RGBA,
+                                GL_UNSIGNED_BYTE, rgba);
+            glTextureSubImage2D(bb->normal_tex, 0, at[0], at[1], (GLsizei)n, (GLsizei)n, GL_RGBA,
+                                GL_UNSIGNED_BYTE, nrm);
+        } else {
+            glTextureSubImage3D(bb->color_tex, 0, 0, 0, at[2], (GLsizei)n, (GLsizei)n, 1,
+                                GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+            glTextureSubImage3D(bb->normal_tex, 0, 0, 0, at[2], (GLsizei)n, (GLsizei)n, 1,
+                                GL_RGBA, GL_UNSIGNED_BYTE, nrm);
+        }
         r = xyl__fgl_check(diag, "baking a billboard view");
     }
     if (r == XYL_OK) {
@@ -311,13 +390,27 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a billboard resolution of %u exceeds the driver's %d",
                          desc->resolution, max_side);
+    uint32_t grid = desc->kind != XYL_BILLBOARD_OCTAHEDRAL ? 0
+                    : desc->grid                           ? desc->grid
+                                                           : XYL_BILLBOARD_DEFAULT_GRID;
+    if (max_side > 0 && grid * desc->resolution > (uint32_t)max_side)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "an octahedral atlas of %u x %u views of %u texels is %u texels wide, "
+                         "over the driver's %d", grid, grid, desc->resolution,
+                         grid * desc->resolution, max_side);
     xyl_allocator a = desc->alloc;
     xyl_billboard_gl *bb = xyl__calloc(&a, 1, sizeof *bb);
     if (!bb) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     bb->alloc = a;
     bb->kind = desc->kind;
-    bb->views = desc->kind == XYL_BILLBOARD_CROSS ? desc->planes : 1;
+    bb->views = desc->kind == XYL_BILLBOARD_CROSS ? desc->planes : grid ? grid * grid : 1;
     bb->resolution = desc->resolution;
+    bb->grid = grid;
+    float ll = sqrtf(desc->light_dir[0] * desc->light_dir[0] +
+                     desc->light_dir[1] * desc->light_dir[1] +
+                     desc->light_dir[2] * desc->light_dir[2]);
+    if (ll > 0.0f && isfinite(ll))
+        for (int k = 0; k < 3; ++k) bb->bake_light[k] = desc->light_dir[k] / ll;
     float ext[3];
     for (int k = 0; k < 3; ++k) {
         bb->center[k] = 0.5f * (desc->lo[k] + desc->hi[k]);
@@ -326,6 +419,7 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
     bb->half[0] = sqrtf(ext[0] * ext[0] + ext[2] * ext[2]); /* any turn about the axis fits */
     bb->half[1] = ext[1];
     float radius = sqrtf(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]) * 1.01f;
+    if (grid) bb->half[0] = bb->half[1] = radius; /* the sphere fits from every direction */
     size_t texels = (size_t)bb->resolution * bb->resolution;
     uint8_t *rgba = xyl__alloc_array(&a, texels, 8);
     float *depth = xyl__alloc_array(&a, texels, sizeof *depth);
@@ -337,8 +431,10 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
         r = build_program(bb, diag);
         if (r == XYL_OK) {
             glCreateVertexArrays(1, &bb->vao);
-            bb->color_tex = make_array(bb->resolution, bb->views);
-            bb->normal_tex = make_array(bb->resolution, bb->views);
+            bb->color_tex = grid ? make_atlas(bb->resolution, grid)
+                                 : make_array(bb->resolution, bb->views);
+            bb->normal_tex = grid ? make_atlas(bb->resolution, grid)
+                                  : make_array(bb->resolution, bb->views);
             r = xyl__fgl_check(diag, "making the billboard's textures");
         }
         if (r == XYL_OK)
@@ -390,7 +486,9 @@ xyl_result xyl_billboard_gl_read_view(const xyl_billboard_gl *bb, uint32_t view,
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     GLsizei n = (GLsizei)bb->resolution;
     size_t bytes = 4u * (size_t)n * (size_t)n;
-    glGetTextureSubImage(normal ? bb->normal_tex : bb->color_tex, 0, 0, 0, (GLint)view, n, n, 1,
+    GLint at[3];
+    view_place(bb, view, at);
+    glGetTextureSubImage(normal ? bb->normal_tex : bb->color_tex, 0, at[0], at[1], at[2], n, n, 1,
                          GL_RGBA, GL_UNSIGNED_BYTE, (GLsizei)bytes, rgba);
     glPixelStorei(GL_PACK_ALIGNMENT, align);
     glBindBuffer(GL_PIXEL_PACK_BUFFER, (GLuint)pack_buf);
@@ -437,6 +535,13 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     float cutoff = frame->alpha_cutoff > 0.0f ? frame->alpha_cutoff : 0.5f;
     xyl__fgl_drain_errors();
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
+    GLboolean a2c = glIsEnabled(GL_SAMPLE_ALPHA_TO_COVERAGE), a21 = glIsEnabled(GL_SAMPLE_ALPHA_TO_ONE);
+    GLint sample_buffers = 0;
+    glGetIntegerv(GL_SAMPLE_BUFFERS, &sample_buffers);
+    /* multisampled: a texel's filtered coverage becomes the share of samples covered, as the
+     * tree's own sub-pixel leaves do, instead of all or nothing at the cutoff */
+    bool to_coverage = sample_buffers > 0;
+    if (to_coverage) glEnable(GL_SAMPLE_ALPHA_TO_COVERAGE), glEnable(GL_SAMPLE_ALPHA_TO_ONE);
     glDisable(GL_CULL_FACE);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
@@ -446,17 +551,27 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     glProgramUniformMatrix4fv(p, U_VIEW_PROJ, 1, GL_FALSE, frame->view_proj);
     glProgramUniform3fv(p, U_EYE, 1, frame->eye);
     glProgramUniform3fv(p, U_CENTER, 1, bb->center);
-    glProgramUniform2fv(p, U_HALF, 1, bb->half);
-    glProgramUniform1i(p, U_KIND, (GLint)bb->kind);
-    glProgramUniform1i(p, U_PLANES, (GLint)bb->views);
+    if (bb->kind == XYL_BILLBOARD_OCTAHEDRAL) {
+        glProgramUniform1f(p, U_RADIUS, bb->half[0]);
+        glProgramUniform1i(p, U_GRID, (GLint)bb->grid);
+    } else {
+        glProgramUniform2fv(p, U_HALF, 1, bb->half);
+        glProgramUniform1i(p, U_KIND, (GLint)bb->kind);
+        glProgramUniform1i(p, U_PLANES, (GLint)bb->views);
+    }
     glProgramUniform3fv(p, U_LIGHT, 1, l);
     glProgramUniform1f(p, U_CUTOFF, cutoff);
+    glProgramUniform3fv(p, U_BAKE_LIGHT, 1, bb->bake_light);
+    glProgramUniform1i(p, U_TO_COVERAGE, to_coverage ? 1 : 0);
     glProgramUniform2fv(p, U_DITHER, 1, frame->dither);
     glBindVertexArray(bb->vao);
     glBindTextureUnit(0, bb->color_tex);
     glBindTextureUnit(1, bb->normal_tex);
-    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)bb->views);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4,
+                          bb->kind == XYL_BILLBOARD_OCTAHEDRAL ? 1 : (GLsizei)bb->views);
     if (cull) glEnable(GL_CULL_FACE);
+    if (to_coverage && !a2c) glDisable(GL_SAMPLE_ALPHA_TO_COVERAGE);
+    if (to_coverage && !a21) glDisable(GL_SAMPLE_ALPHA_TO_ONE);
     xyl_result r = xyl__fgl_check(diag, "drawing the billboard");
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;

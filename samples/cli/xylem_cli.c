@@ -66,9 +66,11 @@ typedef struct render_options {
     uint32_t samples;        /* MSAA samples; 0: 4 */
     uint32_t frames;         /* view: close after N frames (0: when the window closes) */
     const char *screenshot;  /* view: PNG of the last frame */
-    leaf_mode leaves;        /* render --foliage full|lod|adaptive|none|billboard */
+    leaf_mode leaves;        /* render --foliage full|lod|adaptive|none|billboard|impostor */
+    bool impostor;           /* --foliage impostor: billboard, octahedral */
     int billboard_kind;      /* --billboard: 1 + an xyl_billboard_kind; 0: cross */
     uint32_t planes;         /* --planes: the cross's, 0: 4 */
+    uint32_t grid;           /* --grid: the octahedral's views per side, 0: 8 */
     uint32_t billboard_size; /* --billboard-size: texels per baked view, 0: 512 */
     bool billboard_error;    /* --billboard-error: the 20-view image error table */
 } render_options;
@@ -136,9 +138,9 @@ static const char usage_text[] =
     "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION[,DISTANCE]]\n"
     "           [--size WxH] [--wireframe] [--samples N]\n"
-    "           [--foliage full|lod|adaptive|none|billboard]\n"
-    "           [--billboard spherical|cylindrical|cross] [--planes N] [--billboard-size N]\n"
-    "           [--billboard-error] --out FILE.png\n"
+    "           [--foliage full|lod|adaptive|none|billboard|impostor]\n"
+    "           [--billboard spherical|cylindrical|cross|octahedral] [--planes N] [--grid N]\n"
+    "           [--billboard-size N] [--billboard-error] --out FILE.png\n"
     "                               refine the stem mesh (PN patches) and render it headless,\n"
     "                               with the source's leaves (GL): lod (default) the leaf LOD\n"
     "                               within the pixel budget, adaptive the coarsest leaf within\n"
@@ -147,7 +149,8 @@ static const char usage_text[] =
     "                               baked from it (GL only; --billboard kind, default cross;\n"
     "                               --planes of a cross, 2..8, default 4; --billboard-size\n"
     "                               texels per baked view, default 512; --billboard-error: its\n"
-    "                               image error over 20 views)\n"
+    "                               image error over 20 views); impostor the octahedral\n"
+    "                               billboard (--grid views per side, 2..32, default 8)\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -289,7 +292,13 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
         if (strcmp(val, "spherical") == 0) r->billboard_kind = 1;
         else if (strcmp(val, "cylindrical") == 0) r->billboard_kind = 2;
         else if (strcmp(val, "cross") == 0) r->billboard_kind = 3;
-        else return usage_error("--billboard takes spherical, cylindrical or cross, not '%s'", val);
+        else if (strcmp(val, "octahedral") == 0) r->billboard_kind = 4;
+        else return usage_error("--billboard takes spherical, cylindrical, cross or octahedral, "
+                                "not '%s'", val);
+    } else if (strcmp(opt, "--grid") == 0) {
+        if (!parse_u64(val, XYL_BILLBOARD_MAX_GRID, &u) || u < XYL_BILLBOARD_MIN_GRID)
+            return usage_error("--grid takes a whole number from 2 to 32, not '%s'", val);
+        r->grid = (uint32_t)u;
     } else if (strcmp(opt, "--planes") == 0) {
         if (!parse_u64(val, 8, &u) || u < 2)
             return usage_error("--planes takes a whole number from 2 to 8, not '%s'", val);
@@ -429,8 +438,10 @@ static int parse_options(int argc, char **argv, options *o)
             else if (strcmp(val, "none") == 0) o->render.leaves = LEAVES_NONE;
             else if (strcmp(val, "adaptive") == 0) o->render.leaves = LEAVES_ADAPTIVE;
             else if (strcmp(val, "billboard") == 0) o->render.leaves = LEAVES_BILLBOARD;
-            else return usage_error("render --foliage takes full, lod, adaptive, none or "
-                                    "billboard, not '%s'", val);
+            else if (strcmp(val, "impostor") == 0)
+                o->render.leaves = LEAVES_BILLBOARD, o->render.impostor = true;
+            else return usage_error("render --foliage takes full, lod, adaptive, none, "
+                                    "billboard or impostor, not '%s'", val);
             continue;
         }
         if (strcmp(opt, "--billboard-error") == 0) {
@@ -1275,18 +1286,24 @@ static xyl_result bake_billboard(const options *o, tree_gl *t, xyl_billboard_gl 
 {
     const render_options *ro = &o->render;
     xyl_billboard_gl_desc bd = {0};
-    bd.kind = ro->billboard_kind ? (xyl_billboard_kind)(ro->billboard_kind - 1)
-                                 : XYL_BILLBOARD_CROSS;
+    bd.kind = ro->impostor         ? XYL_BILLBOARD_OCTAHEDRAL
+              : ro->billboard_kind ? (xyl_billboard_kind)(ro->billboard_kind - 1)
+                                   : XYL_BILLBOARD_CROSS;
     bd.planes = bd.kind == XYL_BILLBOARD_CROSS ? (ro->planes ? ro->planes : 4) : 0;
+    bd.grid = bd.kind == XYL_BILLBOARD_OCTAHEDRAL ? ro->grid : 0;
     bd.resolution = ro->billboard_size ? ro->billboard_size : 512;
     tree_bounds(t->j, bd.lo, bd.hi);
+    memcpy(bd.light_dir, t->j->frame.light_dir, sizeof bd.light_dir); /* the scene's light */
     double t0 = now_seconds();
     xyl_result r = xyl_billboard_gl_bake(&bd, bake_tree, t, bb, d);
     if (r == XYL_OK)
         printf("billboard: %s%s, %u views of %u x %u texels, baked in %.1f ms\n",
                bd.kind == XYL_BILLBOARD_SPHERICAL ? "spherical" :
-               bd.kind == XYL_BILLBOARD_CYLINDRICAL ? "cylindrical" : "cross",
-               bd.kind == XYL_BILLBOARD_CROSS ? " planes" : " (one side view, +Z)",
+               bd.kind == XYL_BILLBOARD_CYLINDRICAL ? "cylindrical" :
+               bd.kind == XYL_BILLBOARD_CROSS ? "cross" : "octahedral",
+               bd.kind == XYL_BILLBOARD_CROSS ? " planes" :
+               bd.kind == XYL_BILLBOARD_OCTAHEDRAL ? " (one atlas, octahedral grid)" :
+                                                     " (one side view, +Z)",
                xyl_billboard_gl_view_count(*bb), bd.resolution, bd.resolution,
                (now_seconds() - t0) * 1e3);
     return r;
@@ -1561,12 +1578,19 @@ static int cmd_render(const options *o)
         return usage_error("%s", "--frames and --screenshot are options of 'view'");
     bool billboard = ro->leaves == LEAVES_BILLBOARD;
     if (billboard && ro->vulkan)
-        return usage_error("%s", "--foliage billboard is drawn with the GL backend only");
-    if (!billboard && (ro->billboard_kind || ro->planes || ro->billboard_size || ro->billboard_error))
-        return usage_error("%s", "--billboard, --planes, --billboard-size and --billboard-error "
-                                 "go with --foliage billboard");
+        return usage_error("%s", "--foliage billboard and impostor are drawn with the GL backend "
+                                 "only");
+    if (!billboard && (ro->billboard_kind || ro->planes || ro->grid || ro->billboard_size ||
+                       ro->billboard_error))
+        return usage_error("%s", "--billboard, --planes, --grid, --billboard-size and "
+                                 "--billboard-error go with --foliage billboard or impostor");
+    if (ro->impostor && ro->billboard_kind && ro->billboard_kind != 4)
+        return usage_error("%s", "--foliage impostor is the octahedral billboard; give "
+                                 "--foliage billboard for another kind");
     if (ro->planes && ro->billboard_kind && ro->billboard_kind != 3)
         return usage_error("%s", "--planes is the cross billboard's");
+    if (ro->grid && ro->billboard_kind != 4 && !ro->impostor)
+        return usage_error("%s", "--grid is the octahedral billboard's (--foliage impostor)");
     render_job j;
     memset(&j, 0, sizeof j);
     j.image.width = ro->width ? ro->width : 1024;
