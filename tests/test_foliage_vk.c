@@ -747,7 +747,8 @@ static void the_dither_splits_the_leaf_between_two_ranges(void **state)
     size_t in_a = 0;
     for (uint32_t y = 0; y < SIDE; ++y)
         for (uint32_t x = 0; x < SIDE; ++x) {
-            bool ca = !is_background(a + 4 * (SIDE * y + x)), cb = !is_background(b + 4 * (SIDE * y + x));
+            size_t at = 4 * (SIDE * y + x);
+            bool ca = !is_background(a + at), cb = !is_background(b + at);
             assert_true(ca != cb);
             assert_int_equal(ca, xyl_dither_threshold(x, y) < t);
             in_a += ca;

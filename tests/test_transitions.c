@@ -81,13 +81,13 @@ static void the_dither_splits_every_pixel_once(void **state)
             assert_int_equal(seen[k]++, 0);
             assert_float_equal(b, xyl_dither_threshold(x + 8, y + 16), 0.0);
         }
-    /* any 16 consecutive levels hit every 4 x 4 quarter of the block once... spread evenly:
-     * the first 4 levels fall one per 4 x 4 quadrant */
+    /* spread evenly: the first 4 levels fall one in each 4 x 4 quadrant of the block */
     for (int q = 0; q < 4; ++q) {
         int hits = 0;
         for (uint32_t y = 0; y < 8; ++y)
             for (uint32_t x = 0; x < 8; ++x)
-                hits += xyl_dither_threshold(x, y) < 4.0f / 64.0f && (x / 4) + 2 * (y / 4) == (uint32_t)q;
+                hits += xyl_dither_threshold(x, y) < 4.0f / 64.0f &&
+                        (x / 4) + 2 * (y / 4) == (uint32_t)q;
         assert_int_equal(hits, 1);
     }
 }

@@ -2,8 +2,9 @@
  * storage buffer, each LOD recorded as its two ranges (per sector) of instanced 4-vertex strips
  * with firstInstance = the range's first record, the frame in push constants, and the tests'
  * capture (a vertex-stage store); the per-leaf cut as a compute pass into a list and an indirect
- * command, drawn by a pipeline whose vertex shader reads the list. Every entry point validates all of its input before its first
- * Vulkan call (foliage_draw.c): the shaders read the leaf buffer unchecked. */
+ * command, drawn by a pipeline whose vertex shader reads the list. Every entry point validates
+ * all of its input before its first Vulkan call (foliage_draw.c): the shaders read the leaf
+ * buffer unchecked. */
 #include <string.h>
 
 #include "foliage_draw.h"
