@@ -867,11 +867,14 @@ static void print_foliage(const xyl_foliage *f, const char *source)
            (double)coarse);
 }
 
-/* The .glb of the leaves (and the stems, when given), then the table. */
-static int write_foliage(const options *o, const leaf_job *j, const xyl_mesh *stems)
+/* The .glb of the leaves (and the stems, when given), then the table. Leaves from a skeleton
+ * stand at its origin. */
+static int write_foliage(const options *o, const leaf_job *j, const xyl_skeleton *sk,
+                         const xyl_mesh *stems)
 {
     xyl_foliage_glb_desc gd = {0};
     gd.stems = stems;
+    if (sk) memcpy(gd.origin, sk->origin, sizeof gd.origin);
     gd.texture_png = j->png;
     gd.texture_png_size = j->png_size;
     xyl_diag d = {0};
@@ -898,7 +901,7 @@ static int cmd_foliage(const options *o)
     if (!rc) rc = build_foliage(o, sk, source, &j);
     double t2 = now_seconds();
     if (!rc) rc = leaf_texture_png(o, &j);
-    if (!rc) rc = write_foliage(o, &j, NULL);
+    if (!rc) rc = write_foliage(o, &j, sk, NULL);
     if (!rc) {
         print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, leaves and LODs %.3f ms, write %.3f ms (leaf texture "
@@ -939,7 +942,7 @@ static int cmd_mesh(const options *o)
     if (!rc && o->foliage.enabled) rc = build_foliage(o, sk, source, &j);
     double t2 = now_seconds();
     if (!rc && o->foliage.enabled) rc = leaf_texture_png(o, &j);
-    if (!rc) rc = o->foliage.enabled ? write_foliage(o, &j, m) : write_mesh(m, o->out);
+    if (!rc) rc = o->foliage.enabled ? write_foliage(o, &j, sk, m) : write_mesh(m, o->out);
     if (!rc) {
         printf("%s: %zu nodes -> %zu vertices, %zu quads, %zu triangles (%zu in the triangulated "
                "view)\n",
