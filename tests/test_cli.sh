@@ -67,6 +67,14 @@ contains "limit" "limit message"
 printf 'axiom: A(1)\nA(x) -> A(x-1)B(1/(x-1))\n' >"$tmp/nan.lsys"
 expect 65 "division by zero" -- "$XYLEM" derive --grammar "$tmp/nan.lsys" --depth 3
 contains "non-finite" "non-finite message"
+# 71: the allocator runs dry. Depth 11 of abop-1.24a needs about 280 MB; the address space is
+# capped below that. Not under AddressSanitizer, which reserves terabytes of address space.
+if ldd "$XYLEM" 2>/dev/null | grep -q libasan || nm "$XYLEM" 2>/dev/null | grep -q __asan_init; then
+  echo "test_cli: out of memory (71) not checked under AddressSanitizer"
+else
+  expect 71 "out of memory" -- bash -c 'ulimit -v 120000 && exec "$0" derive --preset abop-1.24a --depth 11' "$XYLEM"
+  contains "abop-1.24a: out of memory" "out of memory names the source"
+fi
 
 expect 0 "skeleton .skel" -- "$XYLEM" skeleton --out "$tmp/tree.skel"
 contains "nodes" "summary counts nodes"
@@ -123,6 +131,33 @@ contains "version" "unknown .skel version names the version"
 [ ! -e "$tmp/x.glb" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: unknown .skel version wrote output"; }
 expect 65 "unknown .skel version (foliage)" -- "$XYLEM" foliage --skeleton "$data/skel/bad_version.skel" --out "$tmp/x.glb"
 expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
+# Exit codes per error kind of a skeleton file: 66 unreadable (a directory), 65 a number no float
+# holds, and a mesh that leaves the float range fails in the stage that makes it, naming the
+# input, not the output.
+expect 66 "skeleton that is a directory" -- "$XYLEM" mesh --skeleton "$tmp" --out "$tmp/x.glb"
+printf 'xylem-skeleton 1\nnodes 1\nleaves 0\nn 0 -1 0 1e39 0 1\nend\n' >"$tmp/huge_number.skel"
+expect 65 "skeleton with a number too large for a float" -- "$XYLEM" mesh --skeleton "$tmp/huge_number.skel" --out "$tmp/x.glb"
+contains "huge_number.skel:4:" "a non-finite number names the line"
+printf 'xylem-skeleton 1\nnodes 2\nleaves 0\nn 0 -1 0 0 0 3e38\nn 1 0 0 3e38 0 3e38\nend\n' >"$tmp/overflow.skel"
+rm -f "$tmp/x.obj"
+expect 65 "rings beyond the float range" -- "$XYLEM" mesh --skeleton "$tmp/overflow.skel" --subdivide catmark --out "$tmp/x.obj"
+contains "overflow.skel: non-finite number: the stem mesher: vertex" "the failing stage and the input are named"
+grep -q "x.obj" "$tmp/out" && bad "the error names the output" || ok
+[ ! -e "$tmp/x.obj" ] && ok || bad "a failed mesh wrote x.obj"
+# Length / radius of 1e40: texture coordinates stay finite and the OBJ is written.
+printf 'xylem-skeleton 1\nnodes 2\nleaves 0\nn 0 -1 0 0 0 1e-40\nn 1 0 0 1 0 1e-40\nend\n' >"$tmp/needle.skel"
+expect 0 "a needle of radius 1e-40" -- "$XYLEM" mesh --skeleton "$tmp/needle.skel" --out "$tmp/needle.obj"
+grep -Eiq '^vt .*(inf|nan)' "$tmp/needle.obj" && bad "needle UVs not finite" || ok
+# World coordinates: a tree 1e5 units away keeps its 1e-3 twig; OBJ and .skel print world
+# positions, the GLB node carries the origin.
+printf 'xylem-skeleton 1\nnodes 3\nleaves 0\nn 0 -1 100000.0123 5 -7 0.01\nn 1 0 100000.0123 6 -7 0.002\nn 2 1 100000.0133 6.001 -7 0.001\nend\n' >"$tmp/far.skel"
+expect 0 "a far skeleton meshes" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --out "$tmp/far.obj"
+grep -q "warning" "$tmp/out" && bad "a far skeleton with an origin warns" || ok
+grep -Eq '^v 100000\.0[0-9]* ' "$tmp/far.obj" && ok || bad "far OBJ has world positions"
+expect 0 "a far skeleton as .glb" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --out "$tmp/far.glb"
+grep -aq '"translation":\[100000.0123,5,-7\]' "$tmp/far.glb" && ok || bad "far GLB node translation"
+expect 0 "a far skeleton written back" -- "$XYLEM" skeleton --skeleton "$tmp/far.skel" --out "$tmp/far2.skel"
+grep -q '^n 2 1 100000.0133 6.001 -7 0.001$' "$tmp/far2.skel" && ok || bad "far .skel keeps world digits"
 
 # foliage: leaves, their LODs, a .glb and the LOD table
 ok() { passed=$((passed + 1)); }
