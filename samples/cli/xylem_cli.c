@@ -650,6 +650,7 @@ static int load_skeleton(const options *o, xyl_skeleton **sk, const char **sourc
         *source = o->skeleton_path;
         xyl_diag d = {0};
         xyl_result r = xyl_skeleton_read_file(o->skeleton_path, NULL, sk, &d);
+        if (!r && d.warning_count) printf("warning: %s: %s\n", o->skeleton_path, d.warning);
         return r ? report(o->skeleton_path, r, &d) : 0;
     }
     xyl_grammar *g = NULL;
