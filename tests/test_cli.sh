@@ -159,6 +159,16 @@ grep -q "warning" "$tmp/out" && bad "a far skeleton with an origin warns" || ok
 grep -Eq '^v 100000\.0[0-9]* ' "$tmp/far.obj" && ok || bad "far OBJ has world positions"
 expect 0 "a far skeleton as .glb" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --out "$tmp/far.glb"
 grep -aq '"translation":\[100000.0123,5,-7\]' "$tmp/far.glb" && ok || bad "far GLB node translation"
+# --origin plants a grown tree: world positions in .skel, the origin in the GLB, the same mesh.
+expect 0 "a tree planted far away" -- "$XYLEM" skeleton --preset abop-1.24a --origin 100000.0123,0,-2e7 --out "$tmp/planted.skel"
+grep -q '^n 0 -1 100000.0123 0 -20000000 ' "$tmp/planted.skel" && ok || bad "planted .skel starts at the origin"
+expect 0 "the planted tree meshes" -- "$XYLEM" mesh --skeleton "$tmp/planted.skel" --out "$tmp/planted.glb"
+"$XYLEM" mesh --preset abop-1.24a --out "$tmp/at0.glb" >/dev/null 2>&1
+grep -aq '"translation":\[100000.0123,0,-20000000\]' "$tmp/planted.glb" && ok || bad "planted GLB translation"
+# the binary chunks match: the files differ only by the translation in the JSON
+cmp -s <(tail -c 65536 "$tmp/planted.glb") <(tail -c 65536 "$tmp/at0.glb") && ok || bad "planted mesh differs from the mesh at the origin"
+expect 64 "bad --origin" -- "$XYLEM" skeleton --origin 1,2 --out "$tmp/x.skel"
+expect 64 "--origin with --skeleton" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --origin 1,2,3 --out "$tmp/x.glb"
 # A forest around the world's origin keeps origin 0; its far twig is reported with the figures.
 printf 'xylem-skeleton 1\nnodes 4\nleaves 0\nn 0 -1 0 0 0 0.5\nn 1 0 0 1 0 0.4\nn 2 -1 100000 0 0 0.01\nn 3 2 100000 1 0 0.01\nend\n' >"$tmp/forest.skel"
 expect 0 "a forest with a far twig" -- "$XYLEM" mesh --skeleton "$tmp/forest.skel" --out "$tmp/forest.obj"

@@ -113,7 +113,7 @@ static const char usage_text[] =
     "                               print the derived module string\n"
     "  skeleton [source] [--seed N] [--depth N] [--radius pipe|grammar]\n"
     "           [--radius-exponent X] [--tip-radius R] [--angles grammar|murray]\n"
-    "           [--merge-collinear] --out FILE.skel|FILE.obj\n"
+    "           [--merge-collinear] [--origin X,Y,Z] --out FILE.skel|FILE.obj\n"
     "                               grow the branch skeleton and write it\n"
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
@@ -240,6 +240,21 @@ static bool parse_double(const char *s, double *out)
     double v = strtod(s, &end);
     if (errno || *end || v != v) return false;
     *out = v;
+    return true;
+}
+
+/* "X,Y,Z": three finite numbers, where a grown tree is planted (the skeleton's origin). */
+static bool parse_origin(const char *s, double out[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        char *end = NULL;
+        errno = 0;
+        double v = s && *s ? strtod(s, &end) : NAN;
+        if (errno || !end || end == s || !isfinite(v) || *end != (k < 2 ? ',' : '\0'))
+            return false;
+        out[k] = v;
+        s = end + 1;
+    }
     return true;
 }
 
@@ -404,6 +419,9 @@ static int parse_turtle_option(options *o, const char *opt, const char *val)
     } else if (strcmp(opt, "--tip-radius") == 0) {
         if (!parse_double(val, &t->tip_radius) || !(t->tip_radius > 0.0) || t->tip_radius > 1e30)
             return usage_error("--tip-radius takes a positive number, not '%s'", val);
+    } else if (strcmp(opt, "--origin") == 0) {
+        if (!parse_origin(val, t->origin))
+            return usage_error("--origin takes three finite numbers X,Y,Z, not '%s'", val);
     } else {
         return parse_mesh_option(o, opt, val);
     }
@@ -468,6 +486,10 @@ static int parse_options(int argc, char **argv, options *o)
         }
     }
     if (o->preset && o->grammar_path) return usage_error("%s", "give --preset or --grammar, not both");
+    const double *at = o->turtle.origin;
+    if ((o->skeleton_path || o->mesh_path) && (at[0] != 0.0 || at[1] != 0.0 || at[2] != 0.0))
+        return usage_error("%s", "--origin plants a grown tree; a .skel or .glb file holds its own "
+                                 "place");
     return 0;
 }
 
