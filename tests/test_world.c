@@ -152,6 +152,33 @@ static void turtle_origin_moves_the_tree_not_its_nodes(void **state)
     xyl_grammar_destroy(g);
 }
 
+/* A grammar that walks 1e5 units before it grows a twig warns; planting it there does not. */
+static void turtle_warns_when_a_grammar_walks_far(void **state)
+{
+    (void)state;
+    xyl_grammar *g = tu_parse("#width 0.02\naxiom: f(100000) F(1) F(1)\n");
+    xyl_lstring *s = NULL;
+    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
+    xyl_skeleton *sk = NULL;
+    xyl_diag d = {0};
+    assert_int_equal(xyl_lsystem_interpret(g, s, NULL, &sk, &d), XYL_OK);
+    assert_int_equal(d.warning_count, 1);
+    assert_non_null(strstr(d.warning, "float precision"));
+    xyl_skeleton_destroy(sk);
+    xyl_grammar_destroy(g);
+    xyl_lstring_destroy(s);
+    g = tu_parse("#width 0.02\naxiom: F(1) F(1)\n");
+    assert_int_equal(xyl_lsystem_derive(g, NULL, &s, NULL), XYL_OK);
+    xyl_turtle_desc td = {0};
+    td.origin[1] = 100000.0;
+    memset(&d, 0, sizeof d);
+    assert_int_equal(xyl_lsystem_interpret(g, s, &td, &sk, &d), XYL_OK);
+    assert_int_equal(d.warning_count, 0);
+    xyl_skeleton_destroy(sk);
+    xyl_grammar_destroy(g);
+    xyl_lstring_destroy(s);
+}
+
 /* A .skel written at 1e5 or 1e7 holds world positions; read back, the first root is the origin
  * again, every node has the bits of the tree at the origin, and writing it again gives the same
  * text. The tree at the origin writes and reads as it always did. */
@@ -552,6 +579,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(double_text_reads_back_as_the_same_double),
         cmocka_unit_test(turtle_origin_moves_the_tree_not_its_nodes),
+        cmocka_unit_test(turtle_warns_when_a_grammar_walks_far),
         cmocka_unit_test(far_skel_files_read_like_the_tree_at_the_origin),
         cmocka_unit_test(skel_reader_takes_a_far_first_root_as_origin),
         cmocka_unit_test(skel_reader_keeps_origin_zero_and_warns_where_floats_lose_detail),

@@ -536,6 +536,8 @@ static xyl_result finish(turtle *t, xyl_skeleton **out)
     if (clamped)
         xyl__warn(t->diag, "Murray angles clamped at %u of %u forks (min %.3g deg, max %.3g deg)",
                   clamped, forks, t->o->min_angle / DEG_TO_RAD, t->o->max_angle / DEG_TO_RAD);
+    /* a grammar that walks far from where it started (f(1e6)) still holds floats */
+    xyl__skeleton_warn_precision(sk->nodes, sk->node_count, "the skeleton", t->diag);
     *out = sk;
     return XYL_OK;
 }

@@ -138,7 +138,9 @@ typedef struct xyl_turtle_desc {
                                  tree planted far from (0, 0, 0) has the bits of one at it) */
 } xyl_turtle_desc;
 
-/* Interprets the string with the ABOP turtle and builds a skeleton. desc may be NULL.
+/* Interprets the string with the ABOP turtle and builds a skeleton. desc may be NULL. Where a
+ * node lies so far from the start that its float position is coarser than 1/128 of its radius,
+ * diag gets a warning with the figures (plant the tree with desc.origin instead of moving it).
  * Errors: XYL_ERR_NON_FINITE (a parameter or the geometry became NaN/inf, or an origin that is
  * not finite; diag.index is the module, -1 for the origin), XYL_ERR_INVALID_GRAMMAR (unbalanced brackets), XYL_ERR_LIMIT_EXCEEDED (nodes, leaves,
  * nesting), XYL_ERR_INVALID_ARGUMENT (an option out of range), XYL_ERR_OUT_OF_MEMORY. */
