@@ -504,8 +504,8 @@ static int magnitude(const double v[3])
 }
 
 /* The origin: the first node's position where that keeps every node's float position at least
- * as fine as at (0, 0, 0) and makes some other node's finer (a tree far from the world's origin: floats
- * would round it), else 0 (a tree at the origin, or a forest spread around it, reads as it
+ * as fine as at (0, 0, 0) and makes some other node's finer (a tree far from the world's origin:
+ * floats would round it), else 0 (a tree at the origin, or a forest spread around it, reads as it
  * always did). Then every position becomes a float relative to it. */
 static void choose_origin(parser *p)
 {
@@ -518,6 +518,10 @@ static void choose_origin(parser *p)
         if (near > far || fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2]))) > FLT_MAX)
             none_coarser = false;
         some_finer = some_finer || near < far;
+    }
+    for (size_t i = 0; i < p->leaf_count && none_coarser && some_finer; ++i) {
+        const double *w = p->leaf_world + 3 * i; /* leaves must stay in a float's range too */
+        for (int k = 0; k < 3; ++k) none_coarser = none_coarser && fabs(w[k] - w0[k]) <= FLT_MAX;
     }
     if (none_coarser && some_finer) memcpy(p->origin, w0, sizeof p->origin);
     for (size_t i = 0; i < p->node_count; ++i) {
