@@ -22,6 +22,9 @@ expect() {
     sed 's/^/    /' "$tmp/out" | head -20
   fi
 }
+# ok / bad DESCRIPTION: count a check made by hand
+ok() { passed=$((passed + 1)); }
+bad() { failed=$((failed + 1)); echo "FAIL: $1"; }
 # contains TEXT DESCRIPTION: the last command's output holds TEXT
 contains() {
   if grep -qF -- "$1" "$tmp/out"; then passed=$((passed + 1)); else
@@ -67,6 +70,14 @@ contains "limit" "limit message"
 printf 'axiom: A(1)\nA(x) -> A(x-1)B(1/(x-1))\n' >"$tmp/nan.lsys"
 expect 65 "division by zero" -- "$XYLEM" derive --grammar "$tmp/nan.lsys" --depth 3
 contains "non-finite" "non-finite message"
+# 71: the allocator runs dry. Depth 11 of abop-1.24a needs about 280 MB; the address space is
+# capped below that. Not under AddressSanitizer, which reserves terabytes of address space.
+if ldd "$XYLEM" 2>/dev/null | grep -q libasan || nm "$XYLEM" 2>/dev/null | grep -q __asan_init; then
+  echo "test_cli: out of memory (71) not checked under AddressSanitizer"
+else
+  expect 71 "out of memory" -- bash -c 'ulimit -v 120000 && exec "$0" derive --preset abop-1.24a --depth 11' "$XYLEM"
+  contains "abop-1.24a: out of memory" "out of memory names the source"
+fi
 
 expect 0 "skeleton .skel" -- "$XYLEM" skeleton --out "$tmp/tree.skel"
 contains "nodes" "summary counts nodes"
@@ -123,10 +134,48 @@ contains "version" "unknown .skel version names the version"
 [ ! -e "$tmp/x.glb" ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: unknown .skel version wrote output"; }
 expect 65 "unknown .skel version (foliage)" -- "$XYLEM" foliage --skeleton "$data/skel/bad_version.skel" --out "$tmp/x.glb"
 expect 73 "unwritable mesh" -- "$XYLEM" mesh --out "$tmp/no/dir/x.glb"
+# Exit codes per error kind of a skeleton file: 66 unreadable (a directory), 65 a number no float
+# holds, and a mesh that leaves the float range fails in the stage that makes it, naming the
+# input, not the output.
+expect 66 "skeleton that is a directory" -- "$XYLEM" mesh --skeleton "$tmp" --out "$tmp/x.glb"
+printf 'xylem-skeleton 1\nnodes 1\nleaves 0\nn 0 -1 0 1e39 0 1\nend\n' >"$tmp/huge_number.skel"
+expect 65 "skeleton with a number too large for a float" -- "$XYLEM" mesh --skeleton "$tmp/huge_number.skel" --out "$tmp/x.glb"
+contains "huge_number.skel:4:" "a non-finite number names the line"
+printf 'xylem-skeleton 1\nnodes 2\nleaves 0\nn 0 -1 0 0 0 3e38\nn 1 0 0 3e38 0 3e38\nend\n' >"$tmp/overflow.skel"
+rm -f "$tmp/x.obj"
+expect 65 "rings beyond the float range" -- "$XYLEM" mesh --skeleton "$tmp/overflow.skel" --subdivide catmark --out "$tmp/x.obj"
+contains "overflow.skel: non-finite number: the stem mesher: vertex" "the failing stage and the input are named"
+grep -q "x.obj" "$tmp/out" && bad "the error names the output" || ok
+[ ! -e "$tmp/x.obj" ] && ok || bad "a failed mesh wrote x.obj"
+# Length / radius of 1e40: texture coordinates stay finite and the OBJ is written.
+printf 'xylem-skeleton 1\nnodes 2\nleaves 0\nn 0 -1 0 0 0 1e-40\nn 1 0 0 1 0 1e-40\nend\n' >"$tmp/needle.skel"
+expect 0 "a needle of radius 1e-40" -- "$XYLEM" mesh --skeleton "$tmp/needle.skel" --out "$tmp/needle.obj"
+grep -Eiq '^vt .*(inf|nan)' "$tmp/needle.obj" && bad "needle UVs not finite" || ok
+# World coordinates: a tree 1e5 units away keeps its 1e-3 twig; OBJ and .skel print world
+# positions, the GLB node carries the origin.
+printf 'xylem-skeleton 1\nnodes 3\nleaves 0\nn 0 -1 100000.0123 5 -7 0.01\nn 1 0 100000.0123 6 -7 0.002\nn 2 1 100000.0133 6.001 -7 0.001\nend\n' >"$tmp/far.skel"
+expect 0 "a far skeleton meshes" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --out "$tmp/far.obj"
+grep -q "warning" "$tmp/out" && bad "a far skeleton with an origin warns" || ok
+grep -Eq '^v 100000\.0[0-9]* ' "$tmp/far.obj" && ok || bad "far OBJ has world positions"
+expect 0 "a far skeleton as .glb" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --out "$tmp/far.glb"
+grep -aq '"translation":\[100000.0123,5,-7\]' "$tmp/far.glb" && ok || bad "far GLB node translation"
+# --origin plants a grown tree: world positions in .skel, the origin in the GLB, the same mesh.
+expect 0 "a tree planted far away" -- "$XYLEM" skeleton --preset abop-1.24a --origin 100000.0123,0,-2e7 --out "$tmp/planted.skel"
+grep -q '^n 0 -1 100000.0123 0 -20000000 ' "$tmp/planted.skel" && ok || bad "planted .skel starts at the origin"
+expect 0 "the planted tree meshes" -- "$XYLEM" mesh --skeleton "$tmp/planted.skel" --out "$tmp/planted.glb"
+"$XYLEM" mesh --preset abop-1.24a --out "$tmp/at0.glb" >/dev/null 2>&1
+grep -aq '"translation":\[100000.0123,0,-20000000\]' "$tmp/planted.glb" && ok || bad "planted GLB translation"
+# the binary chunks match: the files differ only by the translation in the JSON
+cmp -s <(tail -c 65536 "$tmp/planted.glb") <(tail -c 65536 "$tmp/at0.glb") && ok || bad "planted mesh differs from the mesh at the origin"
+expect 64 "bad --origin" -- "$XYLEM" skeleton --origin 1,2 --out "$tmp/x.skel"
+expect 64 "--origin with --skeleton" -- "$XYLEM" mesh --skeleton "$tmp/far.skel" --origin 1,2,3 --out "$tmp/x.glb"
+# A forest around the world's origin keeps origin 0; its far twig is reported with the figures.
+printf 'xylem-skeleton 1\nnodes 4\nleaves 0\nn 0 -1 0 0 0 0.5\nn 1 0 0 1 0 0.4\nn 2 -1 100000 0 0 0.01\nn 3 2 100000 1 0 0.01\nend\n' >"$tmp/forest.skel"
+expect 0 "a forest with a far twig" -- "$XYLEM" mesh --skeleton "$tmp/forest.skel" --out "$tmp/forest.obj"
+contains "warning: $tmp/forest.skel: the skeleton loses detail to float precision: node 2" "the reader warns with the node"
+contains "floats are spaced 0.0078125, 78.1 % of its radius 0.01" "the warning gives the figures"
 
 # foliage: leaves, their LODs, a .glb and the LOD table
-ok() { passed=$((passed + 1)); }
-bad() { failed=$((failed + 1)); echo "FAIL: $1"; }
 expect 0 "foliage with sectors and a table" -- "$XYLEM" foliage --sectors 4 --out "$tmp/leaves.glb" --table "$tmp/lods.csv"
 contains "5103 leaves -> " "foliage summary counts leaves"
 contains "4 sectors" "foliage summary names the sectors"

@@ -112,7 +112,8 @@ static xyl_skeleton *run_ok(const struct xyl_grammar *g, const char *text,
     xyl_result r = run(g, text, d, &sk, diag ? diag : &local);
     if (r != XYL_OK) fail_msg("'%s': %s", text, (diag ? diag : &local)->message);
     /* what the turtle hands to xyl__skeleton_adopt must pass the public checks */
-    xyl_skeleton_desc check = {sk->nodes, sk->node_count, sk->leaves, sk->leaf_count, {0}, {0}};
+    xyl_skeleton_desc check = {sk->nodes, sk->node_count, sk->leaves, sk->leaf_count, {0}, {0},
+                               {sk->origin[0], sk->origin[1], sk->origin[2]}};
     assert_int_equal(xyl__skeleton_validate(&check, &local), XYL_OK);
     return sk;
 }

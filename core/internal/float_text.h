@@ -21,6 +21,15 @@ extern "C" {
  * write, give "nan", "inf" and "-inf". */
 size_t xyl__float_text(float v, char out[XYL__FLOAT_TEXT_MAX]);
 
+/* Longest text xyl__double_text writes: "-0.0000" and 17 digits (24), "-1.2345678901234567e-308"
+ * (24), and room to spare. */
+#define XYL__DOUBLE_TEXT_MAX 32
+
+/* The same for a double: the fewest significant digits that strtod reads back as exactly v,
+ * plain when the first digit is at 10^-5 .. 10^16, else with an exponent. The writers use it for
+ * world positions (a local origin plus a float offset), which a float would round. */
+size_t xyl__double_text(double v, char out[XYL__DOUBLE_TEXT_MAX]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,9 +11,9 @@
 namespace {
 
 /* The decimal digits of d (d > 0) into out, most significant first; returns their count. */
-size_t put_digits(std::uint32_t d, char *out)
+size_t put_digits(std::uint64_t d, char *out)
 {
-    char rev[10];
+    char rev[20];
     size_t n = 0;
     do {
         rev[n++] = static_cast<char>('0' + d % 10u);
@@ -23,9 +23,10 @@ size_t put_digits(std::uint32_t d, char *out)
     return n;
 }
 
-} // namespace
-
-extern "C" size_t xyl__float_text(float v, char out[XYL__FLOAT_TEXT_MAX])
+/* The layout of float_text.h for either width: the significand and exponent come from
+ * Dragonbox's shortest round-trip decimal of v. */
+template <typename Real>
+size_t real_text(Real v, char *out)
 {
     size_t len = 0;
     if (std::isnan(v)) {
@@ -37,18 +38,19 @@ extern "C" size_t xyl__float_text(float v, char out[XYL__FLOAT_TEXT_MAX])
         out[len] = 'i', out[len + 1] = 'n', out[len + 2] = 'f';
         return len + 3;
     }
-    if (v == 0.0f) {
+    if (v == Real(0)) {
         out[len++] = '0';
         return len;
     }
     /* v = significand * 10^exponent, the significand as short as round-tripping allows */
     auto dec = jkj::dragonbox::to_decimal(v, jkj::dragonbox::policy::sign::ignore,
                                           jkj::dragonbox::policy::trailing_zero::remove);
-    char digits[10];
-    size_t n = put_digits(dec.significand, digits);
+    char digits[20];
+    size_t n = put_digits(static_cast<std::uint64_t>(dec.significand), digits);
     int point = static_cast<int>(n) + dec.exponent; /* digits before the decimal point */
     int first = point - 1;                          /* the power of ten of the first digit */
-    if (first >= -5 && first <= 8) {
+    int plain_max = sizeof(Real) == sizeof(float) ? 8 : 16;
+    if (first >= -5 && first <= plain_max) {
         if (point <= 0) {
             out[len++] = '0';
             out[len++] = '.';
@@ -74,5 +76,17 @@ extern "C" size_t xyl__float_text(float v, char out[XYL__FLOAT_TEXT_MAX])
         out[len++] = '-';
         first = -first;
     }
-    return len + put_digits(static_cast<std::uint32_t>(first), out + len);
+    return len + put_digits(static_cast<std::uint64_t>(first), out + len);
+}
+
+} // namespace
+
+extern "C" size_t xyl__float_text(float v, char out[XYL__FLOAT_TEXT_MAX])
+{
+    return real_text(v, out);
+}
+
+extern "C" size_t xyl__double_text(double v, char out[XYL__DOUBLE_TEXT_MAX])
+{
+    return real_text(v, out);
 }

@@ -27,6 +27,7 @@ typedef struct leaf_doc {
     xyl__glb_mesh stems;
     uint32_t first_accessor; /* the leaves' POSITION; NORMAL, TEXCOORD_0, indices follow */
     uint32_t image_view;
+    double origin[3]; /* the leaves' node translation (the desc's origin) */
 } leaf_doc;
 
 /* ==== the leaves' bytes ====================================================================== */
@@ -238,8 +239,13 @@ static void leaf_body(const void *ctx, xyl__sink *s)
     bool stems_mesh = d->has_stems && !d->stems.empty, leaves_mesh = d->f->leaf_count > 0;
     xyl__put_str(s, d->has_stems ? "\"scenes\":[{\"nodes\":[0,1]}],\"nodes\":["
                                  : "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[");
-    if (d->has_stems) xyl__put_str(s, stems_mesh ? "{\"name\":\"stems\",\"mesh\":0}," : "{\"name\":\"stems\"},");
+    if (d->has_stems) {
+        xyl__put_str(s, stems_mesh ? "{\"name\":\"stems\",\"mesh\":0" : "{\"name\":\"stems\"");
+        xyl__put_json_translation(s, d->stems.mesh->origin);
+        xyl__put_str(s, "},");
+    }
     xyl__put_str(s, "{\"name\":\"leaves\"");
+    xyl__put_json_translation(s, d->origin);
     if (leaves_mesh) {
         xyl__put_str(s, ",\"mesh\":");
         xyl__put_uint(s, stems_mesh ? 1 : 0);
@@ -290,6 +296,9 @@ static xyl_result check_desc(const xyl_foliage_glb_desc *desc, leaf_doc *d, xyl_
                          "texture_png is not a PNG image (no signature and IHDR chunk)");
     if (desc->texture_png && desc->texture_png_size > UINT32_MAX)
         return xyl__glb_too_large(desc->texture_png_size, diag);
+    if (!isfinite(desc->origin[0]) || !isfinite(desc->origin[1]) || !isfinite(desc->origin[2]))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the origin is not finite");
+    memcpy(d->origin, desc->origin, sizeof d->origin);
     return XYL_OK;
 }
 

@@ -137,6 +137,10 @@ static xyl_result resolve_options(const xyl_grammar *g, const xyl_turtle_desc *d
     o->max_nodes = d->limits.max_nodes ? d->limits.max_nodes : XYL__SKEL_DEFAULT_MAX_NODES;
     o->max_leaves = d->limits.max_leaves ? d->limits.max_leaves : XYL__SKEL_DEFAULT_MAX_LEAVES;
     o->max_nesting = g->limits.max_nesting ? g->limits.max_nesting : LSYS_DEFAULT_MAX_NESTING;
+    if (!isfinite(d->origin[0]) || !isfinite(d->origin[1]) || !isfinite(d->origin[2]))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "xyl_turtle_desc: the origin is not "
+                                                             "finite");
+    memcpy(o->origin, d->origin, sizeof o->origin);
     xyl_result r = resolve_angles(d, o, diag);
     return r != XYL_OK ? r : resolve_radii(g, d, o, diag);
 }
@@ -508,7 +512,8 @@ static xyl_result adopt(const turtle *t, const double *radius, xyl_skeleton **ou
         xyl__free(a, leaves);
         return r;
     }
-    return xyl__skeleton_adopt(nodes, t->node_count, leaves, t->leaf_count, a, out, t->diag);
+    return xyl__skeleton_adopt(nodes, t->node_count, leaves, t->leaf_count, t->o->origin, a, out,
+                               t->diag);
 }
 
 static xyl_result finish(turtle *t, xyl_skeleton **out)
@@ -531,6 +536,8 @@ static xyl_result finish(turtle *t, xyl_skeleton **out)
     if (clamped)
         xyl__warn(t->diag, "Murray angles clamped at %u of %u forks (min %.3g deg, max %.3g deg)",
                   clamped, forks, t->o->min_angle / DEG_TO_RAD, t->o->max_angle / DEG_TO_RAD);
+    /* a grammar that walks far from where it started (f(1e6)) still holds floats */
+    xyl__skeleton_warn_precision(sk->nodes, sk->node_count, "the skeleton", t->diag);
     *out = sk;
     return XYL_OK;
 }

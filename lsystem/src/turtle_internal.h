@@ -38,6 +38,7 @@ typedef struct lsys_turtle_opts {
     uint64_t max_nodes, max_leaves;
     uint32_t max_nesting;
     xyl_allocator alloc;
+    double origin[3];   /* the skeleton's origin */
 } lsys_turtle_opts;
 
 /* Applies one turtle rotation symbol (+ - & ^ \ / | $) to f by angle radians (ignored by '|'

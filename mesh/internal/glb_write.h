@@ -37,6 +37,10 @@ void xyl__put_str(xyl__sink *s, const char *text);
 void xyl__put_uint(xyl__sink *s, uint64_t v);
 /* The shortest text that reads back as the same float: valid JSON for finite values. */
 void xyl__put_float(xyl__sink *s, float v);
+/* The shortest text that reads back as the same double. */
+void xyl__put_double(xyl__sink *s, double v);
+/* A node's ",\"translation\":[x,y,z]" for a mesh's origin, nothing for an origin of 0. */
+void xyl__put_json_translation(xyl__sink *s, const double origin[3]);
 void xyl__put_u32le(xyl__sink *s, uint32_t v);
 void xyl__put_f32le(xyl__sink *s, float v);
 void xyl__put_padding(xyl__sink *s, size_t n, char byte);

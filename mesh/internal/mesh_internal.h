@@ -24,6 +24,7 @@ typedef struct xyl__mesh_arrays {
     size_t triangle_count;
     uint32_t *face_branches; /* one per face, quads first */
     uint8_t *uv_wraps;       /* one per face, quads first; NULL: adopt makes them 0 */
+    double origin[3];        /* the positions' origin (xyl_mesh.origin) */
 } xyl__mesh_arrays;
 
 /* The public view comes first so a xyl_mesh* is a xyl__mesh*. */
@@ -85,7 +86,7 @@ xyl_result xyl__mesh_validate(const xyl_mesh *m, unsigned reads, xyl_diag *diag)
 #define XYL__MESH_VIEW_OF(s)                                                                   \
     {(s)->positions, (s)->normals, (s)->uvs, (s)->branch_ids, (s)->vertex_count, (s)->quads,   \
      (s)->quad_count, (s)->triangles, (s)->triangle_count, (s)->face_branches, NULL, 0,        \
-     (s)->uv_wraps}
+     (s)->uv_wraps, {(s)->origin[0], (s)->origin[1], (s)->origin[2]}}
 
 /* What xyl_mesh_split_seams reads; xyl__mesh_split_seams is the call for a mesh that has passed
  * xyl__mesh_validate with these. */

@@ -64,6 +64,23 @@ void xyl__put_float(xyl__sink *s, float v)
     xyl__put(s, out, xyl__float_text(v, out));
 }
 
+void xyl__put_double(xyl__sink *s, double v)
+{
+    char out[XYL__DOUBLE_TEXT_MAX];
+    xyl__put(s, out, xyl__double_text(v, out));
+}
+
+void xyl__put_json_translation(xyl__sink *s, const double origin[3])
+{
+    if (origin[0] == 0.0 && origin[1] == 0.0 && origin[2] == 0.0) return;
+    xyl__put_str(s, ",\"translation\":[");
+    for (int k = 0; k < 3; ++k) {
+        if (k) xyl__put_str(s, ",");
+        xyl__put_double(s, origin[k]);
+    }
+    xyl__put_str(s, "]");
+}
+
 void xyl__put_u32le(xyl__sink *s, uint32_t v)
 {
     const unsigned char b[4] = {(unsigned char)v, (unsigned char)(v >> 8),

@@ -226,6 +226,8 @@ xyl_result xyl__mesh_validate(const xyl_mesh *m, unsigned reads, xyl_diag *diag)
 {
     if (reads & (XYL__MESH_FACE_BRANCHES | XYL__MESH_UV_WRAPS)) reads |= XYL__MESH_FACES;
     xyl_result r = check_arrays(m, reads, diag);
+    if (r == XYL_OK && !(isfinite(m->origin[0]) && isfinite(m->origin[1]) && isfinite(m->origin[2])))
+        r = xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the origin is not finite");
     if (r == XYL_OK) r = check_vertices(m, diag);
     if (r == XYL_OK && (reads & XYL__MESH_FACES))
         r = check_faces(m->quads, m->quad_count, 4, 0, m->vertex_count, diag);
@@ -285,6 +287,7 @@ xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *
     a.vertex_count = desc->vertex_count;
     a.quad_count = desc->quad_count;
     a.triangle_count = desc->triangle_count;
+    memcpy(a.origin, desc->origin, sizeof a.origin);
     a.positions = dup_or_zero(al, desc->positions, a.vertex_count, sizeof *a.positions, &ok);
     if (desc->normals) a.normals = dup_or_zero(al, desc->normals, a.vertex_count, sizeof *a.normals, &ok);
     a.uvs = dup_or_zero(al, desc->uvs, a.vertex_count, 2 * sizeof *a.uvs, &ok);
@@ -372,6 +375,7 @@ xyl_result xyl__mesh_adopt_view(xyl__mesh_arrays *a, uint32_t *tri_view,
     p->tri_view = tv;
     p->tri_view_count = 2 * a->quad_count + a->triangle_count;
     p->uv_wraps = a->uv_wraps;
+    memcpy(p->origin, a->origin, sizeof p->origin);
     memset(a, 0, sizeof *a);
     *out = p;
     xyl__diag_ok(diag);
@@ -451,6 +455,7 @@ xyl_result xyl__mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, 
     a.vertex_count = total;
     a.quad_count = m->quad_count;
     a.triangle_count = m->triangle_count;
+    memcpy(a.origin, m->origin, sizeof a.origin);
     a.positions = dup_with_room(alloc, m->positions, nv, total, sizeof *a.positions, &ok);
     a.normals = dup_with_room(alloc, m->normals, nv, total, sizeof *a.normals, &ok);
     a.uvs = dup_with_room(alloc, m->uvs, nv, total, 2 * sizeof *a.uvs, &ok);

@@ -47,13 +47,28 @@ static void obj_vec(sink *s, const char *tag, const float *c, int n)
     xyl__put_str(s, "\n");
 }
 
-/* Positions and normals of m; UVs of uvm, m with its seams split (or m itself), whose first
- * vertices are m's. */
+/* A position in world coordinates: origin + p summed in double, as the shortest text that
+ * reads back as that double. */
+static void obj_world(sink *s, const double origin[3], const float p[3])
+{
+    xyl__put_str(s, "v");
+    for (int k = 0; k < 3; ++k) {
+        xyl__put_str(s, " ");
+        xyl__put_double(s, origin[k] + (double)p[k]);
+    }
+    xyl__put_str(s, "\n");
+}
+
+/* Positions (in world coordinates) and normals of m; UVs of uvm, m with its seams split (or m
+ * itself), whose first vertices are m's. With origin 0 a position is its floats, as before
+ * meshes had origins. */
 static void obj_vertices(const xyl_mesh *m, const xyl_mesh *uvm, sink *s)
 {
+    const bool world = m->origin[0] != 0.0 || m->origin[1] != 0.0 || m->origin[2] != 0.0;
     for (size_t v = 0; v < m->vertex_count && !s->overflow; ++v) {
         const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
-        obj_vec(s, "v", p, 3);
+        if (world) obj_world(s, m->origin, p);
+        else obj_vec(s, "v", p, 3);
     }
     for (size_t v = 0; v < uvm->vertex_count && !s->overflow; ++v)
         obj_vec(s, "vt", uvm->uvs + 2 * v, 2);
@@ -283,7 +298,9 @@ static void mesh_body(const void *ctx, sink *s)
         xyl__put_str(s, "\"nodes\":[{\"name\":\"xylem\"}]");
         return;
     }
-    xyl__put_str(s, "\"nodes\":[{\"name\":\"xylem\",\"mesh\":0}],\"meshes\":[");
+    xyl__put_str(s, "\"nodes\":[{\"name\":\"xylem\",\"mesh\":0");
+    xyl__put_json_translation(s, p->mesh->origin);
+    xyl__put_str(s, "}],\"meshes\":[");
     xyl__glb_mesh_json(p, s);
     xyl__put_str(s, "]");
 }

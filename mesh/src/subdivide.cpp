@@ -1697,5 +1697,6 @@ extern "C" xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivi
     xyl_result r = xyl__subdivide(&view, scheme, !d->keep_control_points, &d->limits, &d->alloc,
                                   &refined, diag);
     if (r) return r;
+    std::memcpy(refined.origin, mesh->origin, sizeof refined.origin);
     return xyl__mesh_adopt(&refined, &d->alloc, out, diag); /* smooth normals unless copied */
 }

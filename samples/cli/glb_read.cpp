@@ -155,7 +155,16 @@ xyl_result build(const tinygltf::Model &m, xyl_mesh **out, xyl_diag *d)
     md.quad_count = p.quads.size() / 4;
     md.triangles = p.triangles.data();
     md.triangle_count = p.triangles.size() / 3;
-    return xyl_mesh_create(&md, out, d);
+    // xylem's writers put the mesh's origin in its node's translation (docs/mesh-export.md)
+    for (const tinygltf::Node &n : m.nodes)
+        if (ours && n.mesh >= 0 && n.translation.size() == 3 &&
+            m.meshes[size_t(n.mesh)].name != "leaves")
+            for (int k = 0; k < 3; ++k) md.origin[k] = n.translation[size_t(k)];
+    xyl_result r = xyl_mesh_create(&md, out, d);
+    // a face the file gets wrong (an index repeated in a triangle) is bad input, not a bad call
+    if (r == XYL_ERR_INVALID_ARGUMENT)
+        return fail(d, XYL_ERR_PARSE, std::string("the mesh is not valid: ") + (d ? d->message : ""));
+    return r;
 }
 
 // Embedded images are kept as bytes and not decoded: the readers need geometry only.

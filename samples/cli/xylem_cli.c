@@ -115,7 +115,7 @@ static const char usage_text[] =
     "                               print the derived module string\n"
     "  skeleton [source] [--seed N] [--depth N] [--radius pipe|grammar]\n"
     "           [--radius-exponent X] [--tip-radius R] [--angles grammar|murray]\n"
-    "           [--merge-collinear] --out FILE.skel|FILE.obj\n"
+    "           [--merge-collinear] [--origin X,Y,Z] --out FILE.skel|FILE.obj\n"
     "                               grow the branch skeleton and write it\n"
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
@@ -243,6 +243,21 @@ static bool parse_double(const char *s, double *out)
     double v = strtod(s, &end);
     if (errno || *end || v != v) return false;
     *out = v;
+    return true;
+}
+
+/* "X,Y,Z": three finite numbers, where a grown tree is planted (the skeleton's origin). */
+static bool parse_origin(const char *s, double out[3])
+{
+    for (int k = 0; k < 3; ++k) {
+        char *end = NULL;
+        errno = 0;
+        double v = s && *s ? strtod(s, &end) : NAN;
+        if (errno || !end || end == s || !isfinite(v) || *end != (k < 2 ? ',' : '\0'))
+            return false;
+        out[k] = v;
+        s = end + 1;
+    }
     return true;
 }
 
@@ -413,6 +428,9 @@ static int parse_turtle_option(options *o, const char *opt, const char *val)
     } else if (strcmp(opt, "--tip-radius") == 0) {
         if (!parse_double(val, &t->tip_radius) || !(t->tip_radius > 0.0) || t->tip_radius > 1e30)
             return usage_error("--tip-radius takes a positive number, not '%s'", val);
+    } else if (strcmp(opt, "--origin") == 0) {
+        if (!parse_origin(val, t->origin))
+            return usage_error("--origin takes three finite numbers X,Y,Z, not '%s'", val);
     } else {
         return parse_mesh_option(o, opt, val);
     }
@@ -479,6 +497,10 @@ static int parse_options(int argc, char **argv, options *o)
         }
     }
     if (o->preset && o->grammar_path) return usage_error("%s", "give --preset or --grammar, not both");
+    const double *at = o->turtle.origin;
+    if ((o->skeleton_path || o->mesh_path) && (at[0] != 0.0 || at[1] != 0.0 || at[2] != 0.0))
+        return usage_error("%s", "--origin plants a grown tree; a .skel or .glb file holds its own "
+                                 "place");
     return 0;
 }
 
@@ -661,6 +683,7 @@ static int load_skeleton(const options *o, xyl_skeleton **sk, const char **sourc
         *source = o->skeleton_path;
         xyl_diag d = {0};
         xyl_result r = xyl_skeleton_read_file(o->skeleton_path, NULL, sk, &d);
+        if (!r && d.warning_count) printf("warning: %s: %s\n", o->skeleton_path, d.warning);
         return r ? report(o->skeleton_path, r, &d) : 0;
     }
     xyl_grammar *g = NULL;
@@ -878,11 +901,14 @@ static void print_foliage(const xyl_foliage *f, const char *source)
            (double)coarse);
 }
 
-/* The .glb of the leaves (and the stems, when given), then the table. */
-static int write_foliage(const options *o, const leaf_job *j, const xyl_mesh *stems)
+/* The .glb of the leaves (and the stems, when given), then the table. Leaves from a skeleton
+ * stand at its origin. */
+static int write_foliage(const options *o, const leaf_job *j, const xyl_skeleton *sk,
+                         const xyl_mesh *stems)
 {
     xyl_foliage_glb_desc gd = {0};
     gd.stems = stems;
+    if (sk) memcpy(gd.origin, sk->origin, sizeof gd.origin);
     gd.texture_png = j->png;
     gd.texture_png_size = j->png_size;
     xyl_diag d = {0};
@@ -909,7 +935,7 @@ static int cmd_foliage(const options *o)
     if (!rc) rc = build_foliage(o, sk, source, &j);
     double t2 = now_seconds();
     if (!rc) rc = leaf_texture_png(o, &j);
-    if (!rc) rc = write_foliage(o, &j, NULL);
+    if (!rc) rc = write_foliage(o, &j, sk, NULL);
     if (!rc) {
         print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, leaves and LODs %.3f ms, write %.3f ms (leaf texture "
@@ -950,7 +976,7 @@ static int cmd_mesh(const options *o)
     if (!rc && o->foliage.enabled) rc = build_foliage(o, sk, source, &j);
     double t2 = now_seconds();
     if (!rc && o->foliage.enabled) rc = leaf_texture_png(o, &j);
-    if (!rc) rc = o->foliage.enabled ? write_foliage(o, &j, m) : write_mesh(m, o->out);
+    if (!rc) rc = o->foliage.enabled ? write_foliage(o, &j, sk, m) : write_mesh(m, o->out);
     if (!rc) {
         printf("%s: %zu nodes -> %zu vertices, %zu quads, %zu triangles (%zu in the triangulated "
                "view)\n",

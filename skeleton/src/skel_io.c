@@ -48,6 +48,9 @@ typedef struct parser {
     size_t node_cap, node_count;
     xyl_skel_leaf *leaves;
     size_t leaf_cap, leaf_count;
+    double *node_world, *leaf_world; /* 3 per node / leaf: positions as read, in double */
+    size_t node_world_cap, leaf_world_cap;
+    double origin[3]; /* chosen once all is read (choose_origin) */
 } parser;
 
 static xyl_result need_token(parser *p, xyl__token *t, const char *what)
@@ -91,9 +94,10 @@ static xyl_result next_record(parser *p, xyl__token *keyword, bool *eof)
 
 typedef enum num_status { NUM_OK, NUM_BAD, NUM_NON_FINITE, NUM_TOO_LARGE } num_status;
 
-/* A number as xyl__text_real reads it (NaN payloads "nan(...)" are non-finite too), to the nearest
- * float. Every value the writer or "%.9g" prints comes back as the same float. */
-static num_status parse_real(const xyl__token *t, float *out)
+/* A number as xyl__text_real reads it (NaN payloads "nan(...)" are non-finite too), in the range
+ * of a float (a double up to FLT_MAX + half an ulp is FLT_MAX). Rounded to a float, every value
+ * the writer or "%.9g" prints comes back as the same float. */
+static num_status parse_real(const xyl__token *t, double *out)
 {
     double v;
     xyl__num_status st = xyl__text_real(t->s, t->n, &v);
@@ -107,13 +111,13 @@ static num_status parse_real(const xyl__token *t, float *out)
     /* A double up to FLT_MAX + half an ulp still rounds to FLT_MAX; from there on to inf. */
     if (!(fabs(v) < (double)FLT_MAX + ldexp(1.0, 103))) return NUM_TOO_LARGE;
     if (fabs(v) > FLT_MAX) v = v < 0 ? -(double)FLT_MAX : (double)FLT_MAX;
-    *out = (float)v;
+    *out = v;
     return NUM_OK;
 }
 
 /* ---- records ------------------------------------------------------------------------------- */
 
-static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *col)
+static xyl_result real_field_d(parser *p, const char *what, double *out, uint32_t *col)
 {
     xyl__token t = {0};
     char buf[40];
@@ -137,6 +141,14 @@ static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *
     }
 }
 
+static xyl_result real_field(parser *p, const char *what, float *out, uint32_t *col)
+{
+    double v = 0.0;
+    xyl_result r = real_field_d(p, what, &v, col);
+    if (r == XYL_OK) *out = (float)v;
+    return r;
+}
+
 /* The names of a vector's three fields, in messages: fixed text, so that reading a number costs
  * no formatting. */
 typedef const char *const vec3_names[3];
@@ -158,6 +170,24 @@ static xyl_result vec3_field(parser *p, vec3_names names, xyl_vec3 *v)
         xyl_result r = real_field(p, names[k], c[k], NULL);
         if (r != XYL_OK) return r;
     }
+    return XYL_OK;
+}
+
+/* A position, kept in double until the origin is chosen (choose_origin); *v stays 0 till then. */
+static xyl_result position_field(parser *p, vec3_names names, double **world, size_t *cap,
+                                 size_t count)
+{
+    double w[3];
+    for (int k = 0; k < 3; ++k) {
+        xyl_result r = real_field_d(p, names[k], &w[k], NULL);
+        if (r != XYL_OK) return r;
+    }
+    void *arr = *world;
+    if (!xyl__grow(&p->alloc, &arr, cap, 3 * count, 3 * count + 3, sizeof **world))
+        return xyl__text_fail(&p->txt, XYL_ERR_OUT_OF_MEMORY, 0, "out of memory for %zu positions",
+                              count + 1);
+    *world = arr;
+    memcpy(*world + 3 * count, w, sizeof w);
     return XYL_OK;
 }
 
@@ -231,7 +261,7 @@ static xyl_result parse_node(parser *p)
                               "(or be -1 for a root)",
                               p->node_count, (long long)parent);
     n.parent = (int32_t)parent;
-    r = vec3_field(p, NODE_POSITION, &n.pos);
+    r = position_field(p, NODE_POSITION, &p->node_world, &p->node_world_cap, p->node_count);
     if (r == XYL_OK) r = real_field(p, "the node radius", &n.radius, &col);
     if (r != XYL_OK) return r;
     if (!(n.radius > 0.0f))
@@ -257,7 +287,7 @@ static xyl_result parse_leaf(parser *p)
                               "leaf %zu hangs from node %lld, which does not exist", p->leaf_count,
                               (long long)node);
     l.node = (int32_t)node;
-    r = vec3_field(p, LEAF_POSITION, &l.pos);
+    r = position_field(p, LEAF_POSITION, &p->leaf_world, &p->leaf_world_cap, p->leaf_count);
     if (r == XYL_OK) r = vec3_field(p, LEAF_HEADING, &l.heading);
     if (r == XYL_OK) r = vec3_field(p, LEAF_LEFT, &l.left);
     if (r == XYL_OK) r = vec3_field(p, LEAF_UP, &l.up);
@@ -466,9 +496,50 @@ static void init_parser(parser *p, const char *text, size_t length,
         p->max_leaves = SIZE_MAX / sizeof(xyl_skel_leaf);
 }
 
+/* The exponent of a vector's largest coordinate: floats there are spaced 2^(e - 23). */
+static int magnitude(const double v[3])
+{
+    double m = fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
+    return m > 0.0 ? ilogb(m) : INT32_MIN;
+}
+
+/* The origin: the first node's position where that keeps every node's float position at least
+ * as fine as at (0, 0, 0) and makes some other node's finer (a tree far from the world's origin:
+ * floats would round it), else 0 (a tree at the origin, or a forest spread around it, reads as it
+ * always did). Then every position becomes a float relative to it. */
+static void choose_origin(parser *p)
+{
+    const double *w0 = p->node_world;
+    bool some_finer = false, none_coarser = p->node_count > 0;
+    for (size_t i = 1; i < p->node_count && none_coarser; ++i) {
+        const double *w = p->node_world + 3 * i;
+        const double d[3] = {w[0] - w0[0], w[1] - w0[1], w[2] - w0[2]};
+        int near = magnitude(d), far = magnitude(w);
+        if (near > far || fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2]))) > FLT_MAX)
+            none_coarser = false;
+        some_finer = some_finer || near < far;
+    }
+    for (size_t i = 0; i < p->leaf_count && none_coarser && some_finer; ++i) {
+        const double *w = p->leaf_world + 3 * i; /* leaves must stay in a float's range too */
+        for (int k = 0; k < 3; ++k) none_coarser = none_coarser && fabs(w[k] - w0[k]) <= FLT_MAX;
+    }
+    if (none_coarser && some_finer) memcpy(p->origin, w0, sizeof p->origin);
+    for (size_t i = 0; i < p->node_count; ++i) {
+        const double *w = p->node_world + 3 * i;
+        p->nodes[i].pos = (xyl_vec3){(float)(w[0] - p->origin[0]), (float)(w[1] - p->origin[1]),
+                                     (float)(w[2] - p->origin[2])};
+    }
+    for (size_t i = 0; i < p->leaf_count; ++i) {
+        const double *w = p->leaf_world + 3 * i;
+        p->leaves[i].pos = (xyl_vec3){(float)(w[0] - p->origin[0]), (float)(w[1] - p->origin[1]),
+                                      (float)(w[2] - p->origin[2])};
+    }
+}
+
 /* Runs the same validation as xyl_skeleton_create and derives branches the same way. */
 static xyl_result build(parser *p, xyl_skeleton **out)
 {
+    choose_origin(p);
     xyl_skeleton_desc d;
     memset(&d, 0, sizeof d);
     d.nodes = p->nodes;
@@ -477,14 +548,19 @@ static xyl_result build(parser *p, xyl_skeleton **out)
     d.leaf_count = p->leaf_count;
     d.limits = p->limits;
     d.alloc = p->alloc;
+    memcpy(d.origin, p->origin, sizeof d.origin);
     xyl_result r = xyl__skeleton_validate(&d, p->txt.diag);
     if (r != XYL_OK) {
         xyl__free(&p->alloc, p->nodes);
         xyl__free(&p->alloc, p->leaves);
         return r;
     }
-    return xyl__skeleton_adopt(p->nodes, p->node_count, p->leaves, p->leaf_count, &p->alloc, out,
-                               p->txt.diag);
+    r = xyl__skeleton_adopt(p->nodes, p->node_count, p->leaves, p->leaf_count, p->origin,
+                            &p->alloc, out, p->txt.diag);
+    if (r == XYL_OK)
+        xyl__skeleton_warn_precision((*out)->nodes, (*out)->node_count, "the skeleton",
+                                     p->txt.diag);
+    return r;
 }
 
 xyl_result xyl_skeleton_read_text(const char *text, size_t length,
@@ -497,9 +573,14 @@ xyl_result xyl_skeleton_read_text(const char *text, size_t length,
     parser p;
     init_parser(&p, text, length, desc, diag);
     xyl_result r = parse_all(&p);
-    if (r == XYL_OK) return build(&p, out);
-    xyl__free(&p.alloc, p.nodes);
-    xyl__free(&p.alloc, p.leaves);
+    if (r == XYL_OK) {
+        r = build(&p, out);
+    } else {
+        xyl__free(&p.alloc, p.nodes);
+        xyl__free(&p.alloc, p.leaves);
+    }
+    xyl__free(&p.alloc, p.node_world);
+    xyl__free(&p.alloc, p.leaf_world);
     return r;
 }
 
@@ -567,6 +648,22 @@ static void put_vec3(sink *s, xyl_vec3 v)
     put_float(s, v.z);
 }
 
+/* A position in world coordinates. With origin 0 the float itself, as before origins existed;
+ * else origin + v summed in double, as the shortest text that reads back as that double. */
+static void put_position(sink *s, const double origin[3], xyl_vec3 v)
+{
+    if (origin[0] == 0.0 && origin[1] == 0.0 && origin[2] == 0.0) {
+        put_vec3(s, v);
+        return;
+    }
+    const float c[3] = {v.x, v.y, v.z};
+    for (int k = 0; k < 3; ++k) {
+        char out[1 + XYL__DOUBLE_TEXT_MAX];
+        out[0] = ' ';
+        put(s, out, 1 + xyl__double_text(origin[k] + (double)c[k], out + 1));
+    }
+}
+
 static void render_skel(const xyl_skeleton *sk, sink *s)
 {
     put_str(s, "xylem-skeleton");
@@ -581,7 +678,7 @@ static void render_skel(const xyl_skeleton *sk, sink *s)
         put_str(s, "n");
         put_int(s, (long long)i);
         put_int(s, n->parent);
-        put_vec3(s, n->pos);
+        put_position(s, sk->origin, n->pos);
         put_float(s, n->radius);
         put_str(s, "\n");
     }
@@ -589,7 +686,7 @@ static void render_skel(const xyl_skeleton *sk, sink *s)
         const xyl_skel_leaf *l = &sk->leaves[i];
         put_str(s, "l");
         put_int(s, l->node);
-        put_vec3(s, l->pos);
+        put_position(s, sk->origin, l->pos);
         put_vec3(s, l->heading);
         put_vec3(s, l->left);
         put_vec3(s, l->up);
@@ -614,7 +711,7 @@ static void render_obj(const xyl_skeleton *sk, sink *s)
     put_str(s, " (leaves are not written to OBJ)\n");
     for (size_t i = 0; i < sk->node_count && !s->overflow; ++i) {
         put_str(s, "v");
-        put_vec3(s, sk->nodes[i].pos);
+        put_position(s, sk->origin, sk->nodes[i].pos);
         put_str(s, "\n");
     }
     for (size_t i = 0; i < sk->node_count && !s->overflow; ++i) {
@@ -637,6 +734,7 @@ static xyl_result check_view(const xyl_skeleton *sk, xyl_diag *diag)
     d.leaf_count = sk->leaf_count;
     d.limits.max_nodes = UINT64_MAX;
     d.limits.max_leaves = UINT64_MAX;
+    memcpy(d.origin, sk->origin, sizeof d.origin);
     return xyl__skeleton_validate(&d, diag);
 }
 

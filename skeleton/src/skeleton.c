@@ -1,4 +1,5 @@
 /* Skeleton construction: validation, copy, and derivation of branch ids and orders. */
+#include <float.h>
 #include <string.h>
 
 #include "skeleton_internal.h"
@@ -19,6 +20,8 @@ static xyl_result validate(const xyl_skeleton_desc *d, xyl_diag *diag)
         return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                          "%zu leaves exceed the limit of %llu", d->leaf_count,
                          (unsigned long long)max_leaves);
+    if (!isfinite(d->origin[0]) || !isfinite(d->origin[1]) || !isfinite(d->origin[2]))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the origin is not finite");
     for (size_t i = 0; i < d->node_count; ++i) {
         const xyl_skel_node *n = &d->nodes[i];
         if (!isfinite(n->pos.x) || !isfinite(n->pos.y) || !isfinite(n->pos.z) ||
@@ -88,8 +91,8 @@ static uint32_t assign_branches(xyl_skel_node *nodes, size_t n, int32_t *main_ch
 }
 
 xyl_result xyl__skeleton_adopt(xyl_skel_node *nodes, size_t node_count, xyl_skel_leaf *leaves,
-                               size_t leaf_count, const xyl_allocator *alloc, xyl_skeleton **out,
-                               xyl_diag *diag)
+                               size_t leaf_count, const double *origin,
+                               const xyl_allocator *alloc, xyl_skeleton **out, xyl_diag *diag)
 {
     xyl__skeleton *s = xyl__calloc(alloc, 1, sizeof *s);
     int32_t *main_child = xyl__calloc(alloc, node_count ? node_count : 1, sizeof *main_child);
@@ -115,9 +118,38 @@ xyl_result xyl__skeleton_adopt(xyl_skel_node *nodes, size_t node_count, xyl_skel
     s->pub.branch_count = branches;
     s->pub.root_count = roots;
     s->pub.max_order = max_order;
+    if (origin) memcpy(s->pub.origin, origin, sizeof s->pub.origin);
     *out = &s->pub;
     xyl__diag_ok(diag);
     return XYL_OK;
+}
+
+double xyl__skel_float_spacing(xyl_vec3 p)
+{
+    double m = fabs((double)p.x);
+    if (fabs((double)p.y) > m) m = fabs((double)p.y);
+    if (fabs((double)p.z) > m) m = fabs((double)p.z);
+    if (!(m >= (double)FLT_MIN)) return m > 0.0 ? ldexp(1.0, -149) : 0.0;
+    return ldexp(1.0, ilogb(m) - 23);
+}
+
+void xyl__skeleton_warn_precision(const xyl_skel_node *nodes, size_t count, const char *what,
+                                  xyl_diag *diag)
+{
+    double worst = 0.0;
+    size_t at = 0;
+    for (size_t i = 0; i < count; ++i) {
+        double ratio = xyl__skel_float_spacing(nodes[i].pos) / (double)nodes[i].radius;
+        if (ratio > worst) worst = ratio, at = i;
+    }
+    if (!(worst > XYL__SKEL_PRECISION_WARN)) return;
+    const xyl_vec3 p = nodes[at].pos;
+    xyl__warn(diag,
+              "%s loses detail to float precision: node %zu lies at (%g, %g, %g) from the "
+              "origin, where floats are spaced %g, %.3g %% of its radius %g; give the "
+              "skeleton an origin near the tree",
+              what, at, (double)p.x, (double)p.y, (double)p.z,
+              xyl__skel_float_spacing(p), 100.0 * worst, (double)nodes[at].radius);
 }
 
 xyl_result xyl_skeleton_create(const xyl_skeleton_desc *desc, xyl_skeleton **out, xyl_diag *diag)
@@ -136,7 +168,10 @@ xyl_result xyl_skeleton_create(const xyl_skeleton_desc *desc, xyl_skeleton **out
     }
     if (desc->node_count) memcpy(nodes, desc->nodes, desc->node_count * sizeof *nodes);
     if (desc->leaf_count) memcpy(leaves, desc->leaves, desc->leaf_count * sizeof *leaves);
-    return xyl__skeleton_adopt(nodes, desc->node_count, leaves, desc->leaf_count, a, out, diag);
+    r = xyl__skeleton_adopt(nodes, desc->node_count, leaves, desc->leaf_count, desc->origin, a, out,
+                            diag);
+    if (r == XYL_OK) xyl__skeleton_warn_precision(desc->nodes, desc->node_count, "the skeleton", diag);
+    return r;
 }
 
 xyl_result xyl__skeleton_validate(const xyl_skeleton_desc *desc, xyl_diag *diag)

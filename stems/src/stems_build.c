@@ -12,9 +12,11 @@
  * laterals), stems_rings.c builds a branch's tube, stems_fork.c the rings around its forks and
  * its laterals' bridges, stems_normals.c the normals, stems_joints.c judges a mesh's
  * intersecting pairs for checked joints, and this file drives them. */
+#include <float.h>
 #include <string.h>
 
 #include "mesh_internal.h"
+#include "skeleton_internal.h"
 #include "stems_internal.h"
 #include "subdivide.h"
 
@@ -243,6 +245,8 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
                          xyl_mesh **out)
 {
     xyl_result r = XYL_OK;
+    /* the mesh's positions are the skeleton's local coordinates */
+    memcpy(a->origin, s->sk->origin, sizeof a->origin);
     if (a->normals) return xyl__mesh_adopt_view(a, tv, &s->alloc, out, s->diag);
     if (d->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl__mesh_arrays fine;
@@ -251,6 +255,7 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
         xyl__mesh_arrays_free(a, &s->alloc);
         if (r) return r;
         *a = fine;
+        memcpy(a->origin, s->sk->origin, sizeof a->origin);
     }
     if (a->normals && d->normals == XYL_NORMALS_BRANCH) {
         r = xyl__stems_branch_normals_on_limit(s, a);
@@ -295,6 +300,25 @@ static xyl_result hand_over(stems *s, xyl__mesh_arrays *a, uint32_t **tv)
     return XYL_OK;
 }
 
+/* Every position and UV of the built mesh is finite, or the error names this stage and where in
+ * the skeleton it failed: positions plus radii (inflated for subdivision) can leave the float
+ * range although every number of the skeleton is in it. */
+static xyl_result check_finite(const stems *s)
+{
+    for (size_t v = 0; v < s->nv; ++v) {
+        const xyl_vec3 p = s->pos[v];
+        if (isfinite(p.x) && isfinite(p.y) && isfinite(p.z) && isfinite(s->uv[2 * v]) &&
+            isfinite(s->uv[2 * v + 1]))
+            continue;
+        return xyl__fail(s->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
+                         "the stem mesher: vertex %zu (branch %u) leaves the float range: the "
+                         "skeleton's positions plus its radii%s pass %g there",
+                         v, s->vbranch[v], s->inflate != 1.0 ? " (inflated for subdivision)" : "",
+                         (double)FLT_MAX);
+    }
+    return XYL_OK;
+}
+
 /* One mesh of the skeleton, with checked joints' levels per branch in drop (NULL: none). */
 static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                              const uint8_t *drop, xyl_mesh **out, xyl_diag *diag)
@@ -318,6 +342,7 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     s.limit_centres = inflate;
     s.open_base = desc->base == XYL_STEMS_BASE_OPEN;
     r = build_all(&s);
+    if (!r) r = check_finite(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)
         r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
                       "the stem mesh needs more than %llu faces", (unsigned long long)s.max_faces);
@@ -414,5 +439,6 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
         r = build_checked(skeleton, desc, out, &st, diag);
     }
     if (!r && stats) *stats = st;
+    if (!r) xyl__skeleton_warn_precision(skeleton->nodes, skeleton->node_count, "the stem mesh", diag);
     return r;
 }

@@ -543,6 +543,11 @@ typedef struct xyl_foliage_glb_desc {
     size_t texture_png_size;          /* 0 with texture_png NULL */
     float alpha_cutoff;               /* the material's alphaCutoff, [0, 1]; default (0): 0.5 */
     xyl_allocator alloc;              /* the file variant's buffer and the stems' seam split */
+    double origin[3];                 /* default (0): world position of the leaves' (0, 0, 0),
+                                         the "leaves" node's translation; finite. Leaves from a
+                                         skeleton are relative to its origin: pass
+                                         skeleton->origin. The stems node takes the stem mesh's
+                                         own origin */
 } xyl_foliage_glb_desc;
 
 /* Count-then-fill: *size = the file's bytes (out NULL is fine then); with out and capacity <
@@ -551,7 +556,7 @@ typedef struct xyl_foliage_glb_desc {
  * texture is then left out, since no material uses it. desc may be NULL (defaults, leaves only).
  * Errors: XYL_ERR_INVALID_ARGUMENT (NULL foliage, out and size both NULL, alpha_cutoff outside
  * [0, 1], texture bytes and size not both given, bytes that are not a PNG, a bad stem mesh),
- * XYL_ERR_NON_FINITE (alpha_cutoff, the stem mesh), XYL_ERR_LIMIT_EXCEEDED (a file over the
+ * XYL_ERR_NON_FINITE (alpha_cutoff, origin, the stem mesh), XYL_ERR_LIMIT_EXCEEDED (a file over the
  * 4 GiB a GLB's length fields hold), XYL_ERR_OUT_OF_MEMORY (the stems' seam split; a mesh
  * without seams needs no memory). foliage must come from xyl_foliage_build. */
 XYL_API xyl_result xyl_foliage_write_glb_memory(const xyl_foliage *foliage,

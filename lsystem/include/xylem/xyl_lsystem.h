@@ -133,11 +133,16 @@ typedef struct xyl_turtle_desc {
                                  one node per F, the positions the grammar implies) */
     xyl_skeleton_limits limits;
     xyl_allocator alloc;
+    double origin[3];         /* default (0): world position where the turtle starts; becomes
+                                 the skeleton's origin, the nodes stay relative to it (so a
+                                 tree planted far from (0, 0, 0) has the bits of one at it) */
 } xyl_turtle_desc;
 
-/* Interprets the string with the ABOP turtle and builds a skeleton. desc may be NULL.
- * Errors: XYL_ERR_NON_FINITE (a parameter or the geometry became NaN/inf; diag.index is the
- * module), XYL_ERR_INVALID_GRAMMAR (unbalanced brackets), XYL_ERR_LIMIT_EXCEEDED (nodes, leaves,
+/* Interprets the string with the ABOP turtle and builds a skeleton. desc may be NULL. Where a
+ * node lies so far from the start that its float position is coarser than 1/128 of its radius,
+ * diag gets a warning with the figures (plant the tree with desc.origin instead of moving it).
+ * Errors: XYL_ERR_NON_FINITE (a parameter or the geometry became NaN/inf, or an origin that is
+ * not finite; diag.index is the module, -1 for the origin), XYL_ERR_INVALID_GRAMMAR (unbalanced brackets), XYL_ERR_LIMIT_EXCEEDED (nodes, leaves,
  * nesting), XYL_ERR_INVALID_ARGUMENT (an option out of range), XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_lsystem_interpret(const xyl_grammar *grammar, const xyl_lstring *string,
                                          const xyl_turtle_desc *desc, xyl_skeleton **out,

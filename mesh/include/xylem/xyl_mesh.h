@@ -12,6 +12,12 @@
  *     xyl_mesh_write_file(m, "out.glb", XYL_MESH_FORMAT_GLB, NULL, &diag);
  *     xyl_mesh_destroy(m);
  *
+ * World coordinates: positions are floats relative to a local origin held in double
+ * (xyl_mesh.origin; the stem mesher takes the skeleton's), so a tree far from (0, 0, 0) keeps
+ * the precision of a tree at it. The OBJ writer prints world positions (origin + position,
+ * summed in double), the GLB writer puts the origin in the node's translation. An origin of 0
+ * changes nothing.
+ *
  * Every call is reentrant; a mesh is immutable once made, so threads may read it at once. Every
  * allocation of a call comes from its allocator: desc.alloc, or an `alloc` argument where NULL
  * (or a zero-filled one) means the default allocator; a mesh is freed with the allocator it was
@@ -60,6 +66,8 @@ typedef struct xyl_mesh {
     const uint8_t *uv_wraps;      /* one per face, quads first: bit c set means corner c's u is
                                      its vertex's u + 1 (see above); NULL in a view a caller
                                      built means none */
+    double origin[3];             /* world position of the local (0, 0, 0): world = origin +
+                                     position, in double; 0 in a view built without it */
 } xyl_mesh;
 
 typedef struct xyl_mesh_limits {
@@ -81,13 +89,15 @@ typedef struct xyl_mesh_desc {
     const uint8_t *uv_wraps;       /* optional, one per face: NULL means none (xyl_mesh) */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
+    double origin[3];              /* default (0): world position the positions are relative
+                                      to; finite. Copied to xyl_mesh.origin */
 } xyl_mesh_desc;
 
 /* Validates (indices in range, finite numbers, no face repeating a vertex, wrap bits within a
  * face's corners), copies, and builds the triangulated view. Errors: XYL_ERR_INVALID_ARGUMENT
  * (NULL arrays with counts, an index out of range or repeated within a face, a wrap bit beyond a
  * face's corners: diag.index is the face, quads first), XYL_ERR_NON_FINITE (diag.index is the
- * vertex), XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched. */
+ * vertex; -1 for an origin that is not finite), XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched. */
 XYL_API xyl_result xyl_mesh_create(const xyl_mesh_desc *desc, xyl_mesh **out, xyl_diag *diag);
 XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
 
@@ -98,14 +108,15 @@ XYL_API void xyl_mesh_destroy(xyl_mesh *mesh);
  * split mesh's uv_wraps are all 0. Its seams are open by index (an edge along a seam is used once
  * by each side's vertices) but closed by position, so it is for drawing and export, not for
  * xyl_mesh_check, subdivision or the intersection test. A mesh without wraps comes back as a
- * copy. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, an index out of range or
+ * copy; the origin is kept. Errors: XYL_ERR_INVALID_ARGUMENT (NULL arguments or arrays, an index out of range or
  * repeated within a face, a wrap bit beyond a face's corners: diag.index is the face),
  * XYL_ERR_NON_FINITE (diag.index is the vertex), XYL_ERR_LIMIT_EXCEEDED (more than 2^32 - 1
  * vertices), XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_split_seams(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         xyl_mesh **out, xyl_diag *diag);
 
-/* Axis-aligned bounds of all positions (for framing a camera: xyl_tess_camera_frame). A NULL
+/* Axis-aligned bounds of all positions, relative to the origin (for framing a camera:
+ * xyl_tess_camera_frame). A NULL
  * or empty mesh gives lo = hi = 0. */
 XYL_API void xyl_mesh_bounds(const xyl_mesh *mesh, float lo[3], float hi[3]);
 
@@ -132,7 +143,7 @@ typedef struct xyl_subdivide_desc {
  * (vertex and varying), then positions moved to the limit surface (unless keep_control_points),
  * face branch ids are inherited from the parent face, vertex branch ids follow the rules of
  * docs/subdivision.md; normals are the limit normals (or, with keep_control_points, recomputed
- * smooth). Errors:
+ * smooth); the origin is kept. Errors:
  * XYL_ERR_INVALID_ARGUMENT, XYL_ERR_NON_FINITE, XYL_ERR_UNSUPPORTED (topology OpenSubdiv refuses),
  * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. */
 XYL_API xyl_result xyl_mesh_subdivide(const xyl_mesh *mesh, const xyl_subdivide_desc *desc,

@@ -15,6 +15,12 @@
  *     ...
  *     xyl_skeleton_destroy(s);
  *
+ *   World coordinates: positions are floats relative to a local origin held in double
+ *   (xyl_skeleton.origin), so a tree far from (0, 0, 0) keeps the precision of a tree at it.
+ *   Put the tree's own coordinates in the nodes and its place in the world in desc.origin; the
+ *   .skel reader takes the first root's position as the origin, the writers print world
+ *   positions (origin + local, docs/skeleton-format.md). An origin of 0 changes nothing.
+ *
  *     // from / to the .skel text format (docs/skeleton-format.md)
  *     xyl_skeleton_read_file("tree.skel", NULL, &s, &diag);
  *     xyl_skeleton_write_file(s, "tree.skel", XYL_SKEL_FORMAT_SKEL, NULL, &diag);
@@ -31,7 +37,7 @@ extern "C" {
 #endif
 
 typedef struct xyl_skel_node {
-    xyl_vec3 pos;      /* world units */
+    xyl_vec3 pos;      /* world units, relative to the skeleton's origin */
     float radius;      /* > 0, finite */
     int32_t parent;    /* index of the parent node (< own index), or -1 for a root */
     uint32_t branch;   /* derived: branch id, 0..branch_count-1, roots' branches first seen first */
@@ -39,7 +45,7 @@ typedef struct xyl_skel_node {
 } xyl_skel_node;
 
 typedef struct xyl_skel_leaf {
-    xyl_vec3 pos;      /* attachment point */
+    xyl_vec3 pos;      /* attachment point, relative to the skeleton's origin */
     xyl_vec3 heading;  /* unit: the turtle's heading when the leaf was placed */
     xyl_vec3 left;     /* unit, orthogonal to heading */
     xyl_vec3 up;       /* unit, heading x left */
@@ -57,6 +63,8 @@ typedef struct xyl_skeleton {
     uint32_t root_count;
     uint32_t max_order;
     uint32_t clamped_forks;  /* forks whose Murray angles were clamped (0 unless Murray mode) */
+    double origin[3];        /* world position of the local (0, 0, 0): node and leaf positions
+                                are relative to it; world = origin + pos, in double */
 } xyl_skeleton;
 
 typedef struct xyl_skeleton_limits {
@@ -71,11 +79,14 @@ typedef struct xyl_skeleton_desc {
     size_t leaf_count;
     xyl_skeleton_limits limits;
     xyl_allocator alloc;
+    double origin[3]; /* default (0): the world position the node and leaf positions are
+                         relative to; finite. Copied to xyl_skeleton.origin */
 } xyl_skeleton_desc;
 
 /* Validates and copies the arrays, then derives branch ids and orders. Errors:
  * XYL_ERR_INVALID_ARGUMENT (NULL desc/out, NULL arrays with a count),
- * XYL_ERR_NON_FINITE (a NaN/inf anywhere; diag.index = node or leaf),
+ * XYL_ERR_NON_FINITE (a NaN/inf anywhere, the origin included; diag.index = node or leaf, -1
+ *                    for the origin),
  * XYL_ERR_INVALID_SKELETON (parent >= own index or < -1, radius <= 0, leaf size <= 0,
  *                          leaf node out of range),
  * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY. On failure *out is left untouched. */
@@ -95,7 +106,9 @@ typedef struct xyl_skeleton_read_desc {
     xyl_allocator alloc;
 } xyl_skeleton_read_desc;
 
-/* Parses .skel text (docs/skeleton-format.md). desc may be NULL (defaults). Errors:
+/* Parses .skel text (docs/skeleton-format.md). desc may be NULL (defaults). Positions are read
+ * in double; the first node's position becomes the skeleton's origin and every position is
+ * stored relative to it (an empty skeleton has origin 0). Errors:
  * XYL_ERR_PARSE (line/column in diag), XYL_ERR_TRUNCATED (fewer records than announced or no
  * 'end' line), plus those of xyl_skeleton_create. */
 XYL_API xyl_result xyl_skeleton_read_text(const char *text, size_t length,
@@ -106,8 +119,11 @@ XYL_API xyl_result xyl_skeleton_read_file(const char *path, const xyl_skeleton_r
 
 /* Count-then-fill: with buffer == NULL (or too small) sets *needed to the byte count
  * (without the terminating NUL) and returns XYL_OK / XYL_ERR_INVALID_ARGUMENT respectively;
- * otherwise writes NUL-terminated text. A caller-built view that breaks the skeleton's
- * invariants gives XYL_ERR_NON_FINITE or XYL_ERR_INVALID_SKELETON, as xyl_skeleton_create. */
+ * otherwise writes NUL-terminated text. Positions are written in world coordinates: with origin
+ * 0 each float as the shortest text that reads back as it, else origin + pos summed in double
+ * and written as the shortest text that reads back as that double. A caller-built view that
+ * breaks the skeleton's invariants gives XYL_ERR_NON_FINITE or XYL_ERR_INVALID_SKELETON, as
+ * xyl_skeleton_create. */
 XYL_API xyl_result xyl_skeleton_write_text(const xyl_skeleton *skeleton, xyl_skel_format format,
                                            char *buffer, size_t capacity, size_t *needed);
 

@@ -95,8 +95,12 @@ typedef struct xyl_stems_desc {
 
 /* One closed quad mesh around the whole skeleton: a tube per branch, children grown out of their
  * parent (docs/stems.md). desc may be NULL (defaults); stats may be NULL, else it is filled
- * when the build succeeds (and left untouched when it fails). Errors: XYL_ERR_INVALID_ARGUMENT,
- * XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY, and those of xyl_mesh_subdivide. */
+ * when the build succeeds (and left untouched when it fails). The mesh's positions are the
+ * skeleton's local coordinates and its origin the skeleton's; where a node's float position is
+ * coarser than 1/128 of its radius, diag gets a warning with the figures. Errors:
+ * XYL_ERR_INVALID_ARGUMENT, XYL_ERR_LIMIT_EXCEEDED, XYL_ERR_OUT_OF_MEMORY, XYL_ERR_NON_FINITE
+ * (rings that leave the float range: positions plus radii above FLT_MAX; diag names the stem
+ * mesher and the vertex), and those of xyl_mesh_subdivide. */
 XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                                    xyl_mesh **out, xyl_stems_stats *stats, xyl_diag *diag);
 
