@@ -360,6 +360,30 @@ static void renders_cover_the_tree_with_lit_front_faces(void **state)
     pixel_counts cb = count_pixels(back, size);
     printf("back-face view: %zu covered, %zu red\n", cb.covered, cb.red);
     assert_true(cb.covered == c.covered && cb.red * 100 < cb.covered);
+    /* the transitions' dither: the ranges [0, t) and [t, 1) split the covered pixels, none in
+     * both, each pixel's colour the undithered one but where the surface in front was discarded
+     * and one behind it shows */
+    f.dither = xyl_tess_dither(0.0f, 0.25f);
+    uint8_t *low = render(&s, s.batches, &f, size, false, 1);
+    f.dither = xyl_tess_dither(0.25f, 1.0f);
+    uint8_t *high = render(&s, s.batches, &f, size, false, 1);
+    f.dither = 0;
+    size_t in_low = 0, in_both = 0, behind = 0;
+    for (size_t p = 0; p < 4u * size * size; p += 4) {
+        bool l = low[p + 3] != 0, h = high[p + 3] != 0;
+        in_low += l;
+        in_both += l && h;
+        behind += (plain[p + 3] != 0 && !l && !h) || (l && memcmp(low + p, plain + p, 4)) ||
+                  (h && memcmp(high + p, plain + p, 4));
+    }
+    printf("dither: %zu of %zu covered pixels in [0, 0.25), %zu in both, %zu show what lies "
+           "behind\n",
+           in_low, c.covered, in_both, behind);
+    assert_true(in_both <= behind);
+    assert_true(behind <= c.covered / 50);
+    assert_true(fabs((double)in_low / (double)c.covered - 0.25) < 0.05);
+    free(low);
+    free(high);
     /* 4x MSAA resolves to about the same coverage */
     f.flags = 0;
     uint8_t *msaa = render(&s, s.batches, &f, size, false, 4);
