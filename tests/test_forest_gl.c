@@ -365,6 +365,59 @@ static void hysteresis_keeps_a_still_camera_and_switches_once(void **state)
     xyl_forest_gl_destroy(f);
 }
 
+/* The frustum test keeps every instance whose sphere reaches into the frustum (the exact
+ * six-plane test, in double), and culls most of those behind the camera: one instance at 3000
+ * places around the eye, each chosen alone. */
+static void culling_keeps_every_instance_in_view(void **state)
+{
+    suite *s = need_gl(state);
+    xyl_forest_gl *f = make_forest(s, 0.0f, NULL);
+    xyl_forest_gl_species_info info;
+    xyl_diag d = {0};
+    expect(xyl_forest_gl_species(f, 0, &info, &d), XYL_OK, &d);
+    xyl_forest_gl_frame fr = {0};
+    const float eye[3] = {100.0f, 700.0f, -300.0f}, target[3] = {9000.0f, 200.0f, 2500.0f};
+    camera_frame(eye, target, &fr);
+    fr.error_px = 1.0f;
+    size_t kept = 0, inside = 0, behind = 0, behind_kept = 0;
+    uint64_t state_rng = 99;
+    for (int i = 0; i < 3000; ++i) {
+        state_rng = state_rng * 6364136223846793005ull + 1442695040888963407ull;
+        double u = (double)(state_rng >> 11) / 9007199254740992.0;
+        state_rng = state_rng * 6364136223846793005ull + 1442695040888963407ull;
+        double w = (double)(state_rng >> 11) / 9007199254740992.0;
+        xyl_forest_instance_values v = {{(float)(eye[0] + 40000.0 * (u - 0.5)), 0.0f,
+                                         (float)(eye[2] + 40000.0 * (w - 0.5))},
+                                        (float)(6.0 * u), 0.5f + (float)w, 0, 0};
+        xyl_forest_instance in;
+        expect(xyl_forest_instance_pack(&v, &in, &d), XYL_OK, &d);
+        xyl_forest_instance_unpack(&in, &v);
+        expect(xyl_forest_gl_set_instances(f, &in, 1, &d), XYL_OK, &d);
+        xyl_forest_gl_stats st;
+        expect(xyl_forest_gl_choose(f, &fr, &st, &d), XYL_OK, &d);
+        double c[3] = {v.position[0], v.position[1] + (double)info.center_y * v.scale,
+                       v.position[2]}, r = (double)info.radius * v.scale;
+        bool in_view = true;
+        for (int k = 0; k < 6; ++k) {
+            double pl[4], len = 0.0;
+            for (int j = 0; j < 4; ++j)
+                pl[j] = (double)fr.view_proj[4 * j + 3] + (k % 2 ? -1.0 : 1.0) * fr.view_proj[4 * j + k / 2];
+            for (int j = 0; j < 3; ++j) len += pl[j] * pl[j];
+            len = sqrt(len);
+            in_view = in_view && (pl[0] * c[0] + pl[1] * c[1] + pl[2] * c[2] + pl[3]) / len >= -r;
+        }
+        double fwd = (c[0] - eye[0]) * (target[0] - eye[0]) + (c[2] - eye[2]) * (target[2] - eye[2]);
+        if (in_view && st.visible != 1) fail_msg("instance %d in view was culled", i);
+        kept += st.visible, inside += in_view;
+        if (fwd < 0.0 && !in_view) behind++, behind_kept += st.visible;
+    }
+    print_message("%zu kept, %zu in the frustum, %zu of %zu behind the eye kept\n", kept, inside,
+                  behind_kept, behind);
+    assert_true(inside > 100 && behind > 1000);
+    assert_true(behind_kept * 20 < behind); /* under 5% */
+    xyl_forest_gl_destroy(f);
+}
+
 /* ---- pictures ------------------------------------------------------------------------------- */
 
 typedef struct target {
@@ -588,9 +641,9 @@ static void bad_input_gets_result_codes(void **state)
     sd.foliage = s->tree;
     sd.billboard_error = -1.0f;
     expect(xyl_forest_gl_add_species(f, &sd, &index, &d), XYL_ERR_INVALID_ARGUMENT, &d);
-    sd.billboard_error = 0.0f, sd.stem_radius = NAN;
+    sd.billboard_error = 0.0f, sd.stem_width = NAN;
     expect(xyl_forest_gl_add_species(f, &sd, &index, &d), XYL_ERR_NON_FINITE, &d);
-    sd.stem_radius = 0.0f;
+    sd.stem_width = 0.0f;
     expect(xyl_forest_gl_add_species(f, &sd, NULL, &d), XYL_ERR_INVALID_ARGUMENT, &d);
     expect(xyl_forest_gl_add_species(f, &sd, &index, &d), XYL_OK, &d);
     xyl_forest_gl_species_info info;
@@ -674,6 +727,7 @@ int main(void)
         cmocka_unit_test(grid_is_seeded_jittered_and_bounded),
         cmocka_unit_test(lod_choice_matches_the_cpu_rule),
         cmocka_unit_test(hysteresis_keeps_a_still_camera_and_switches_once),
+        cmocka_unit_test(culling_keeps_every_instance_in_view),
         cmocka_unit_test(forest_picture_matches_instances_drawn_alone),
         cmocka_unit_test(bad_input_gets_result_codes),
     };

@@ -185,18 +185,37 @@ void xyl__forest_plan_free(xyl__forest_plan *p, const xyl_allocator *alloc)
 
 /* ---- the choice ----------------------------------------------------------------------------- */
 
-void xyl__forest_frustum(const float m[16], float planes[6][4])
+/* Plane k of the clip-space frustum: row 3 +- row (k / 2), inside where >= 0; normalised. */
+static void clip_plane(const float m[16], int k, double out[4])
 {
-    /* rows of the column-major matrix: row i is m[i], m[4 + i], m[8 + i], m[12 + i] */
-    for (int k = 0; k < 6; ++k) {
-        int row = k / 2;
-        float sign = k % 2 ? -1.0f : 1.0f;
-        float v[4];
-        for (int c = 0; c < 4; ++c) v[c] = m[4 * c + 3] + sign * m[4 * c + row];
-        float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        float il = len > 0.0f ? 1.0f / len : 0.0f;
-        for (int c = 0; c < 4; ++c) planes[k][c] = v[c] * il;
+    int row = k / 2;
+    double sign = k % 2 ? -1.0 : 1.0, len = 0.0;
+    for (int c = 0; c < 4; ++c) out[c] = (double)m[4 * c + 3] + sign * m[4 * c + row];
+    for (int c = 0; c < 3; ++c) len += out[c] * out[c];
+    len = sqrt(len);
+    for (int c = 0; c < 4; ++c) out[c] = len > 0.0 ? out[c] / len : 0.0;
+}
+
+bool xyl__forest_cone(const float m[16], float axis[3], float *inv_sin, float *cos2)
+{
+    double near[4], side[4][4];
+    clip_plane(m, 4, near); /* row 3 + row 2: its normal looks along the view */
+    for (int k = 0; k < 4; ++k) clip_plane(m, k, side[k]);
+    /* a side plane through the apex at half-angle h to the axis has dot(normal, axis) = sin h */
+    double tan2[2] = {0.0, 0.0};
+    for (int k = 0; k < 4; ++k) {
+        double sh = side[k][0] * near[0] + side[k][1] * near[1] + side[k][2] * near[2];
+        if (!(sh > 1e-4 && sh < 0.999)) return false;
+        double t = sh / sqrt(1.0 - sh * sh);
+        tan2[k / 2] = fmax(tan2[k / 2], t * t);
     }
+    double t2 = tan2[0] + tan2[1]; /* the corner's half-angle */
+    double c2 = 1.0 / (1.0 + t2), s = sqrt(t2 / (1.0 + t2));
+    if (!(s > 1e-4 && c2 > 1e-4)) return false;
+    for (int c = 0; c < 3; ++c) axis[c] = (float)near[c];
+    *inv_sin = (float)(1.0 / s);
+    *cos2 = (float)c2;
+    return true;
 }
 
 static const float scale_of[256] = {
@@ -212,7 +231,12 @@ static const float scale_of[256] = {
 void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
                         uint16_t *bucket, uint32_t *counts)
 {
-    memset(counts, 0, (size_t)c->species_count * XYL__FOREST_BUCKETS_PER_SPECIES * sizeof *counts);
+    /* four interleaved histograms: consecutive instances mostly fall into one bucket, and one
+     * counter incremented back to back would chain every store to the next load */
+    enum { LANES = 4 };
+    size_t total = (size_t)c->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;
+    uint32_t lanes[LANES][XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES];
+    for (int l = 0; l < LANES; ++l) memset(lanes[l], 0, total * sizeof lanes[l][0]);
     for (size_t i = 0; i < n; ++i) {
         uint32_t p = inst[i].bits, sp = (p >> 8) & 63u;
         const xyl__forest_choice_species *s = &c->species[sp];
@@ -231,18 +255,17 @@ void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, 
             while (lv > 0 && s->refine2[lv] * s2 > d2) --lv;
         }
         inst[i].bits = (p & ~255u) | (lv == s->level_count ? XYL_FOREST_LOD_BILLBOARD : lv);
-        bool seen = true;
-        if (c->cull) {
-            float rr = s->radius * scale;
-            for (int k = 0; k < 6 && seen; ++k) {
-                const float *pl = c->planes[k];
-                seen = pl[0] * cx + pl[1] * cy + pl[2] * cz + pl[3] >= -rr;
-            }
-        }
+        /* the sphere against the view cone, its apex moved back by r / sin(angle) */
+        float back = s->radius * scale * c->inv_sin;
+        float t = -(dx * c->axis[0] + dy * c->axis[1] + dz * c->axis[2]) + back;
+        float l2 = d2 + 2.0f * back * (t - back) + back * back;
+        bool seen = !c->cull || (t > 0.0f && t * t >= c->cos2 * l2);
         uint32_t b = sp * XYL__FOREST_BUCKETS_PER_SPECIES + lv;
         bucket[i] = seen ? (uint16_t)b : UINT16_MAX;
-        counts[b] += seen;
+        lanes[i & (LANES - 1)][b] += seen;
     }
+    for (size_t b = 0; b < total; ++b)
+        counts[b] = lanes[0][b] + lanes[1][b] + lanes[2][b] + lanes[3][b];
 }
 
 void xyl__forest_sort(const xyl_forest_instance *inst, size_t n, const uint16_t *bucket,

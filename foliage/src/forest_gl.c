@@ -213,13 +213,13 @@ static xyl_result check_species(const xyl_forest_gl *f, const xyl_forest_gl_spec
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "the forest has %d species already, the most an instance can name",
                          XYL_FOREST_MAX_SPECIES);
-    if (!isfinite(d->billboard_error) || !isfinite(d->stem_radius))
+    if (!isfinite(d->billboard_error) || !isfinite(d->stem_width))
         return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1,
-                         "billboard_error or stem_radius is not finite");
-    if (d->billboard_error < 0.0f || d->stem_radius < 0.0f)
+                         "billboard_error or stem_width is not finite");
+    if (d->billboard_error < 0.0f || d->stem_width < 0.0f)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "billboard_error %g and stem_radius %g must not be negative",
-                         (double)d->billboard_error, (double)d->stem_radius);
+                         "billboard_error %g and stem_width %g must not be negative",
+                         (double)d->billboard_error, (double)d->stem_width);
     if (d->billboard) {
         xyl__billboard_parts bp;
         xyl__billboard_gl_parts(d->billboard, &bp);
@@ -295,9 +295,9 @@ static void resolve_species(species *s, const xyl_forest_gl_species_desc *d)
     s->billboard = d->billboard;
     s->billboard_error = fmaxf(d->billboard_error > 0.0f ? d->billboard_error : flat, coarsest);
     s->stem_levels = p->level_count;
-    if (d->stem_radius > 0.0f) {
+    if (d->stem_width > 0.0f) {
         s->stem_levels = 1;
-        while (s->stem_levels < p->level_count && p->levels[s->stem_levels].error < d->stem_radius)
+        while (s->stem_levels < p->level_count && p->levels[s->stem_levels].error < d->stem_width)
             ++s->stem_levels;
     }
 }
@@ -558,8 +558,7 @@ static void choose_sort(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, const r
     c.species = cs;
     c.species_count = f->species_count;
     memcpy(c.eye, fr->eye, sizeof c.eye);
-    xyl__forest_frustum(rs->leaf.view_proj, c.planes);
-    c.cull = !fr->no_cull;
+    c.cull = !fr->no_cull && xyl__forest_cone(rs->leaf.view_proj, c.axis, &c.inv_sin, &c.cos2);
     c.full = fr->mode == XYL_FOREST_FULL;
     xyl__forest_choose(&c, f->instances, f->count, f->bucket, counts);
     uint32_t total = f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;

@@ -56,8 +56,12 @@ typedef struct xyl__forest_choice {
     const xyl__forest_choice_species *species;
     uint32_t species_count;
     float eye[3];
-    float planes[6][4];     /* the frustum's planes, inside where dot >= -radius */
     bool cull;              /* false: every instance counts as visible */
+    /* the view cone around the frustum (xyl__forest_cone): a sphere (c, r) is kept when
+     * t = dot(c - eye, axis) + r / sin(angle) > 0 and t^2 >= cos^2(angle) |c - eye + axis
+     * r / sin(angle)|^2, the cone's apex moved back so that it holds every sphere touching
+     * the frustum's side planes */
+    float axis[3], inv_sin, cos2;
     bool full;              /* every instance at level 0 */
 } xyl__forest_choice;
 
@@ -73,7 +77,10 @@ void xyl__forest_sort(const xyl_forest_instance *inst, size_t n, const uint16_t 
                       const uint32_t *counts, uint32_t bucket_total, uint32_t *offsets,
                       xyl_forest_instance *sorted);
 
-/* The six planes of a GL clip-space frustum from a column-major view_proj, normalised. */
-void xyl__forest_frustum(const float m[16], float planes[6][4]);
+/* The cone from the eye that holds the frustum of a column-major GL view_proj: its axis and
+ * 1 / sin and cos^2 of its half-angle. false (nothing culled) for a frustum without a finite
+ * cone: parallel or diverging side planes (an orthographic matrix), a half-angle near 90
+ * degrees. */
+bool xyl__forest_cone(const float m[16], float axis[3], float *inv_sin, float *cos2);
 
 #endif

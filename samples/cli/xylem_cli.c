@@ -1038,7 +1038,8 @@ typedef struct render_job {
     xyl_foliage_view leaf_view;
     size_t leaves_drawn;
     bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
-    float stem_radius;    /* the skeleton's thickest node: where a forest leaves stems out */
+    float stem_width;     /* twice the skeleton's thickest node's radius: where a forest
+                             leaves stems out */
 } render_job;
 
 static void render_job_free(render_job *j)
@@ -1505,7 +1506,7 @@ static xyl_result render_forest(const options *o, render_job *j, xyl_billboard_g
     sd.foliage = j->leaves.foliage;
     sd.stems = j->mesh;
     sd.billboard = bb;
-    sd.stem_radius = j->stem_radius;
+    sd.stem_width = j->stem_width;
     uint32_t species = 0;
     uint32_t tw = XYL_LEAF_TEXTURE_WIDTH, th = XYL_LEAF_TEXTURE_HEIGHT;
     uint8_t *tex = malloc((size_t)tw * th * 4);
@@ -1780,7 +1781,7 @@ static int cmd_render(const options *o)
     int rc = load_mesh(o, &j.mesh, &source, ro->leaves == LEAVES_NONE ? NULL : &sk);
     if (!rc && sk) rc = prepare_leaves(o, &j, sk, source);
     for (size_t k = 0; sk && k < sk->node_count; ++k)
-        j.stem_radius = fmaxf(j.stem_radius, sk->nodes[k].radius);
+        j.stem_width = fmaxf(j.stem_width, 2.0f * sk->nodes[k].radius);
     xyl_skeleton_destroy(sk);
     if (!rc && ro->forest && !j.draw_leaves) {
         fprintf(stderr, "xylem: %s: --forest needs a source with leaves\n", source);

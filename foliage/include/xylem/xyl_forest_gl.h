@@ -46,7 +46,7 @@
  * bucket is drawn with one instanced draw per range of its level, gl_InstanceID split into the
  * leaf (id % range length) and the instance (id / range length). Stems (the base mesh,
  * per-vertex normals) are drawn for the instances at the levels whose error is under the
- * species' stem_radius (where the thickest stem still projects over the budget), one instanced
+ * species' stem_width (where the thickest stem is still wider than the budget), one instanced
  * draw per species; billboards one instanced draw per species.
  *
  * Every call checks its input before its first GL call, and must come from the thread where
@@ -85,8 +85,9 @@ typedef struct xyl_forest_gl_species_desc {
                                      (0): the radius of the tree about its axis (flattening the
                                      crown onto planes through the axis moves no point
                                      farther), at least the coarsest leaf level's error */
-    float stem_radius;            /* the thickest stem's radius, world units: stems are left
-                                     out at levels whose error is at least this; default (0):
+    float stem_width;             /* the thickest stem's diameter, world units: stems are
+                                     left out at levels whose error is at least this (where
+                                     the trunk is narrower than the budget); default (0):
                                      stems at every leaf level */
 } xyl_forest_gl_species_desc;
 
@@ -147,7 +148,7 @@ XYL_API void xyl_forest_gl_destroy(xyl_forest_gl *forest);
 
 /* Adds a species; *index receives its number (0, 1, ...). Errors: XYL_ERR_INVALID_ARGUMENT
  * (NULL forest, desc, foliage or index; a foliage with no leaves, a malformed table, a stem
- * mesh without triangles or normals, a negative billboard_error or stem_radius, 64 species
+ * mesh without triangles or normals, a negative billboard_error or stem_width, 64 species
  * already), XYL_ERR_UNSUPPORTED (an octahedral billboard), XYL_ERR_NON_FINITE, those of
  * xyl_foliage_pack_gpu, XYL_ERR_LIMIT_EXCEEDED (a leaf
  * array over the driver's storage block), XYL_ERR_OUT_OF_MEMORY. On failure nothing changes. */
