@@ -254,7 +254,8 @@ void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, 
             while (lv < s->top && s->coarsen2[lv + 1] * s2 <= d2) ++lv;
             while (lv > 0 && s->refine2[lv] * s2 > d2) --lv;
         }
-        inst[i].bits = (p & ~255u) | (lv == s->level_count ? XYL_FOREST_LOD_BILLBOARD : lv);
+        uint32_t bits = (p & ~255u) | (lv == s->level_count ? XYL_FOREST_LOD_BILLBOARD : lv);
+        if (bits != p) inst[i].bits = bits; /* a still forest dirties no cache line */
         /* the sphere against the view cone, its apex moved back by r / sin(angle) */
         float back = s->radius * scale * c->inv_sin;
         float t = -(dx * c->axis[0] + dy * c->axis[1] + dz * c->axis[2]) + back;

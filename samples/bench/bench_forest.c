@@ -15,9 +15,9 @@
  *
  * The error budget is E pixels (default 1): a leaf level's collapse error, a billboard's error
  * (the tree's radius about its axis) and the stems' radius all project under E pixels where
- * they are used. Path: N views (default 3) on a circle around the forest, 1.2 times its
- * half-width plus two trees out, at a fifth of that radius plus a tree's height above the
- * ground, looking at the forest's centre. S: default 320 x 240, one sample a pixel. Modes
+ * they are used. Path: a dolly out, N views (default 3) looking at the forest's centre from
+ * azimuths 0.6, 1.3, 2.0, ... radians, view v at 3^v times the distance R (1.2 times the
+ * forest's half-width plus two trees) and at (0.2 R plus a third of a tree's height) 3^v above the ground. S: default 320 x 240, one sample a pixel. Modes
  * whose choice puts more than --max-triangles (default 60 M) in one view are counted and not
  * drawn either. On Mesa's llvmpipe the times are CPU figures: only their ratios mean anything.
  * Exit status: 0; 1 when GL or a build fails; 2 on bad usage. */
@@ -177,17 +177,17 @@ static xyl_result path_views(const tree *t, uint64_t count, float spacing, const
 {
     uint64_t side = (uint64_t)ceil(sqrt((double)count));
     double half = 0.5 * (double)(side - 1) * spacing, width = t->hi[0] - t->lo[0];
-    double radius = 1.2 * half + 2.0 * width, height = 0.2 * radius + t->hi[1];
+    double radius = 1.2 * half + 2.0 * width, height = 0.2 * radius + t->hi[1] / 3.0;
     for (int v = 0; v < o->views; ++v) {
-        double a = 0.6 + 2.0 * v / o->views;
+        double a = 0.6 + 0.7 * v, k = pow(3.0, v);
         xyl_tess_camera cam = {0};
-        cam.eye[0] = (float)(radius * cos(a)), cam.eye[1] = (float)height;
-        cam.eye[2] = (float)(radius * sin(a));
+        cam.eye[0] = (float)(k * radius * cos(a)), cam.eye[1] = (float)(k * height);
+        cam.eye[2] = (float)(k * radius * sin(a));
         cam.target[1] = 0.5f * (t->lo[1] + t->hi[1]);
         cam.fovy = 0.8f;
         cam.aspect = (float)o->width / (float)o->height;
         cam.near_plane = (float)(0.02 * width);
-        cam.far_plane = (float)(4.0 * radius + 2.0 * half);
+        cam.far_plane = (float)(4.0 * k * radius + 2.0 * half);
         xyl_forest_gl_frame *fr = &views[v].fr;
         memset(fr, 0, sizeof *fr);
         xyl_result r = xyl_tess_camera_matrix(&cam, XYL_TESS_CLIP_GL, fr->view_proj, d);

@@ -42,7 +42,8 @@
  * coarser level only when the distance is (1 + hysteresis) times that level's threshold, and
  * back to a finer one as soon as its own level's threshold is not met, so the budget always
  * holds and a still camera never changes a choice. The loop then counts instances per species
- * and level (after a frustum test), sorts the visible ones into buckets and uploads them; each
+ * and level (those whose sphere reaches into a cone from the eye around the view frustum:
+ * conservative, and free of the six planes' cost), sorts them into buckets and uploads them; each
  * bucket is drawn with one instanced draw per range of its level, gl_InstanceID split into the
  * leaf (id % range length) and the instance (id / range length). Stems (the base mesh,
  * per-vertex normals) are drawn for the instances at the levels whose error is under the
@@ -99,12 +100,14 @@ typedef enum xyl_forest_mode {
 
 typedef struct xyl_forest_gl_frame {
     float view_proj[16];      /* column-major world-to-clip (GL clip convention); all 0 refused */
-    float eye[3];             /* the camera's position, world */
+    float eye[3];             /* the camera's position, world (the matrix's own eye: the
+                                 choice measures distances and culls from it) */
     float fovy;               /* radians, (0, pi); default (0): 0.8 */
     uint32_t viewport_height; /* pixels; default (0): 1080 */
     float error_px;           /* the pixel budget, > 0 (0 and negative are refused) */
     xyl_forest_mode mode;
-    bool no_cull;             /* true: draw instances outside the frustum too */
+    bool no_cull;             /* true: draw instances outside the view too; an orthographic
+                                 matrix (no view cone) culls nothing either */
     float light_dir[3];       /* towards the light; default (all 0): +Y */
     float leaf_color[4];      /* default (all 0): 0.42, 0.62, 0.25, 1 */
     float stem_color[4];      /* default (all 0): 0.47, 0.35, 0.24, 1 */
