@@ -608,6 +608,65 @@ static void forest_picture_matches_instances_drawn_alone(void **state)
     xyl_foliage_gl_destroy(leaves);
 }
 
+/* A species with stems: in full mode every visible instance draws its base mesh (the stats
+ * count its triangles), the stems add pixels the leaves alone do not cover, and a stem_width
+ * larger than every level's error keeps the stems at every level while one under level 1's
+ * error keeps them at level 0 only. */
+static void stems_are_drawn_where_the_trunk_is_wide_enough(void **state)
+{
+    suite *s = need_gl(state);
+    xyl_skeleton *sk = tu_grow(xyl_lsystem_preset_source("abop-2.8-ternary"), NULL);
+    xyl_mesh *stems = NULL;
+    xyl_diag d = {0};
+    expect(xyl_stems_build(sk, NULL, &stems, NULL, &d), XYL_OK, &d);
+    xyl_skeleton_destroy(sk);
+    xyl_forest_gl *f = NULL;
+    expect(xyl_forest_gl_create(NULL, &f, &d), XYL_OK, &d);
+    xyl_forest_gl_species_desc sd = {0};
+    sd.foliage = s->tree;
+    uint32_t bare = 0, with = 0, wide = 0;
+    expect(xyl_forest_gl_add_species(f, &sd, &bare, &d), XYL_OK, &d);
+    sd.stems = stems;
+    expect(xyl_forest_gl_add_species(f, &sd, &with, &d), XYL_OK, &d);
+    xyl_forest_gl_species_info info;
+    expect(xyl_forest_gl_species(f, with, &info, &d), XYL_OK, &d);
+    assert_int_equal(info.stem_triangles, stems->tri_view_count);
+    assert_int_equal(info.stem_levels, info.level_count);
+    sd.stem_width = 0.5f * info.level_error[1];
+    expect(xyl_forest_gl_add_species(f, &sd, &wide, &d), XYL_OK, &d);
+    expect(xyl_forest_gl_species(f, wide, &info, &d), XYL_OK, &d);
+    assert_int_equal(info.stem_levels, 1);
+    uint8_t *img[2] = {malloc(4 * SIDE * SIDE), malloc(4 * SIDE * SIDE)};
+    assert_true(img[0] && img[1]);
+    size_t covered[2];
+    for (int k = 0; k < 2; ++k) {
+        xyl_forest_instance in = {{0, 0, 0}, (k ? with : bare) << 8 | 63u << 24};
+        expect(xyl_forest_gl_set_instances(f, &in, 1, &d), XYL_OK, &d);
+        const float eye[3] = {0.0f, 0.5f * (s->lo[1] + s->hi[1]), 2.5f * (s->hi[1] - s->lo[1])};
+        const float tgt[3] = {0.0f, 0.5f * (s->lo[1] + s->hi[1]), 0.0f};
+        xyl_forest_gl_frame fr = {0};
+        camera_frame(eye, tgt, &fr);
+        fr.error_px = 1.0f;
+        fr.mode = XYL_FOREST_FULL;
+        target t;
+        target_begin(&t);
+        xyl_forest_gl_stats st;
+        expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_OK, &d);
+        target_end(&t, img[k]);
+        assert_int_equal(st.with_stems, (uint64_t)k);
+        assert_int_equal(st.triangles, 2 * s->tree->original_count + (k ? stems->tri_view_count : 0));
+        assert_int_equal(st.draws, (uint64_t)(1 + k));
+        covered[k] = 0;
+        for (size_t i = 0; i < (size_t)SIDE * SIDE; ++i) covered[k] += img[k][4 * i + 3] > 0;
+    }
+    print_message("covered: leaves %zu, leaves and stems %zu\n", covered[0], covered[1]);
+    assert_true(covered[1] > covered[0] + 50);
+    free(img[0]);
+    free(img[1]);
+    xyl_forest_gl_destroy(f);
+    xyl_mesh_destroy(stems);
+}
+
 /* ---- bad input -------------------------------------------------------------------------------- */
 
 static void bad_input_gets_result_codes(void **state)
@@ -729,6 +788,7 @@ int main(void)
         cmocka_unit_test(hysteresis_keeps_a_still_camera_and_switches_once),
         cmocka_unit_test(culling_keeps_every_instance_in_view),
         cmocka_unit_test(forest_picture_matches_instances_drawn_alone),
+        cmocka_unit_test(stems_are_drawn_where_the_trunk_is_wide_enough),
         cmocka_unit_test(bad_input_gets_result_codes),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
