@@ -376,6 +376,7 @@ contains "--forest takes" "a bad forest size is named"
 expect 64 "--forest of absurd size" -- "$XYLEM" render --forest 100000000000 --out "$tmp/x.png"
 expect 64 "--forest on Vulkan" -- "$XYLEM" render --backend vulkan --forest 4 --out "$tmp/x.png"
 expect 64 "--forest with --foliage none" -- "$XYLEM" render --foliage none --forest 4 --out "$tmp/x.png"
+expect 64 "--forest with an impostor" -- "$XYLEM" render --foliage impostor --forest 4 --out "$tmp/x.png"
 [ ! -e "$tmp/x.png" ] && ok || bad "a refused forest render left x.png"
 expect 64 "render --foliage without a value" -- "$XYLEM" render --out "$tmp/x.png" --foliage
 expect 64 "--foliage is not view's" -- "$XYLEM" view --foliage

@@ -539,6 +539,17 @@ static void forest_picture_matches_instances_drawn_alone(void **state)
     xyl_forest_gl *f = make_forest(s, 0.0f, bb);
     xyl_forest_gl_species_info info;
     expect(xyl_forest_gl_species(f, 0, &info, &d), XYL_OK, &d);
+    /* an octahedral impostor is not one of the kinds the forest draws */
+    xyl_billboard_gl_desc od = bd;
+    od.kind = XYL_BILLBOARD_OCTAHEDRAL, od.planes = 0, od.grid = 2, od.resolution = 32;
+    xyl_billboard_gl *oct = NULL;
+    expect(xyl_billboard_gl_bake(&od, bake_leaves, leaves, &oct, &d), XYL_OK, &d);
+    xyl_forest_gl_species_desc sd = {0};
+    sd.foliage = s->tree;
+    sd.billboard = oct;
+    uint32_t index = 0;
+    expect(xyl_forest_gl_add_species(f, &sd, &index, &d), XYL_ERR_UNSUPPORTED, &d);
+    xyl_billboard_gl_destroy(oct);
     xyl_forest_instance in[9];
     xyl_forest_grid_desc gd = {0};
     gd.count = 9, gd.spacing = 1.1f * (s->hi[0] - s->lo[0]), gd.jitter = 0.5f, gd.seed = 5;
