@@ -79,7 +79,9 @@ typedef struct xyl_forest_gl_desc {
 typedef struct xyl_forest_gl_species_desc {
     const xyl_foliage *foliage;   /* required, with leaves; copied (may be destroyed after) */
     const xyl_mesh *stems;        /* optional: the stems' base mesh, drawn as its triangles
-                                     with its per-vertex normals; copied */
+                                     with its per-vertex normals; copied. Its positions are
+                                     taken in the species' own coordinates, like the leaves'
+                                     (its origin is not used: instances place the tree) */
     xyl_billboard_gl *billboard;  /* optional, borrowed: must outlive the forest; spherical,
                                      cylindrical or cross (an octahedral one is refused) */
     float billboard_error;        /* world units the billboard may be off the tree; default
