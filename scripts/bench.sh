@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Benchmarks: installs the peers (npm packages lindenmayer and @dgreenheck/ez-tree, pinned in
-# samples/bench/), builds bench_lsystem, bench_stems, bench_tess, bench_foliage and
-# bench_leaf_lod (leaves on the GL backend, headless) in Release
+# samples/bench/), builds bench_lsystem, bench_stems, bench_tess, bench_foliage,
+# bench_leaf_lod (leaves on the GL backend, headless) and bench_forest (forests of 1 to 100 000
+# trees on the GL backend) in Release
 # and runs them one after the other; the figures go to the terminal and to
 # $BUILD_DIR/<name>.txt, bench_tess's rows also to $BUILD_DIR/bench_tess.dat (+ .front), plotted
 # by gnuplot into $BUILD_DIR/bench_tess.png, and bench_foliage's comparison with meshoptimizer
@@ -13,8 +14,8 @@
 #
 # bench_lsystem and bench_stems take --quick, --no-peer, --repeats N and --node PATH
 # (--peer-script would name one script for both: run the binaries directly for that);
-# bench_tess and bench_foliage get --quick only (bench_tess has no peer; bench_foliage's is
-# meshoptimizer, linked in when libmeshoptimizer-dev is installed).
+# bench_tess, bench_foliage, bench_leaf_lod and bench_forest get --quick only (bench_tess has
+# no peer; bench_foliage's is meshoptimizer, linked in when libmeshoptimizer-dev is installed).
 #
 # Without node/npm it tries apt-get (Debian/Ubuntu); if that is not possible the benchmark still
 # runs and reports the peer as not available.
@@ -66,7 +67,8 @@ if [ ! -f "$BUILD_DIR/CMakeCache.txt" ] && command -v ninja >/dev/null 2>&1; the
     generator=(-G Ninja)
 fi
 cmake -S . -B "$BUILD_DIR" "${generator[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess bench_foliage bench_leaf_lod
+cmake --build "$BUILD_DIR" --target bench_lsystem bench_stems bench_tess bench_foliage bench_leaf_lod \
+    bench_forest
 
 if commit="$(git rev-parse --short HEAD 2>/dev/null)"; then
     git diff --quiet HEAD || commit="$commit (with local changes)"
@@ -128,4 +130,6 @@ echo
 leaf_args=()
 for a in "$@"; do [ "$a" = --quick ] && leaf_args+=(--quick); done
 run_bench bench_leaf_lod "${leaf_args[@]}" || status=$?
+echo
+run_bench bench_forest "${leaf_args[@]}" || status=$?
 exit "$status"

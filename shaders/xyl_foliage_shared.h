@@ -64,7 +64,57 @@
 #define XYL_FOLIAGE_VK_BINDING_COMMAND 5
 #define XYL_FOLIAGE_VK_CUT_PUSH_SIZE 20
 
+/* The forest renderer's (xylem/xyl_forest_gl.h, forest_*.vert): a frame's instances sorted by
+ * species and level in one storage buffer of xyl_forest_instance records, the leaf records at
+ * XYL_FOLIAGE_GL_BINDING_LEAVES, and the uniforms its vertex shaders add to the leaf and
+ * billboard fragment shaders' own (from 16 up, clear of theirs). */
+#define XYL_FOREST_GL_BINDING_INSTANCES 4
+#define XYL_FOREST_GL_UNIFORM_FIRST 16    /* first leaf record of the range drawn */
+#define XYL_FOREST_GL_UNIFORM_LENGTH 17   /* leaves in the range */
+#define XYL_FOREST_GL_UNIFORM_INSTANCE 18 /* first instance of the bucket drawn */
+#define XYL_FOREST_GL_UNIFORM_STEM_COLOR 19
+#define XYL_FOREST_GL_UNIFORM_BB_CENTER 20
+#define XYL_FOREST_GL_UNIFORM_BB_HALF 21
+#define XYL_FOREST_GL_UNIFORM_BB_KIND 22
+#define XYL_FOREST_GL_UNIFORM_BB_PLANES 23
+#define XYL_FOREST_GL_UNIFORM_EYE 24
+
+/* A forest instance in 16 bytes (the same in C and std430):
+ *   bytes 0..11  the tree's base point, 3 floats, world units;
+ *   bytes 12..15 bits, one little-endian word: bits 0..7 the LOD (a leaf level, or
+ *                XYL_FOREST_LOD_BILLBOARD), bits 8..13 the species, bits 14..23 the rotation
+ *                about +Y in steps of 2 pi / 1024, bits 24..31 the scale as (q + 1) / 64, so
+ *                1/64 to 4 in steps of 1/64. */
+#define XYL_FOREST_INSTANCE_SIZE 16
+#define XYL_FOREST_LOD_BILLBOARD 255u
+#define XYL_FOREST_ROTATION_STEPS 1024u
+#define XYL_FOREST_SCALE_STEPS 64.0
+
 #ifdef XYL_GLSL
+
+struct xyl_forest_instance {
+    vec3 position;
+    uint bits;
+};
+
+/* The instance's rotation about +Y as (cos, sin) and its scale. */
+vec3 xyl_forest_rotation_scale(uint bits)
+{
+    float a = float((bits >> 14) & 1023u) * (6.283185307179586 / 1024.0);
+    return vec3(cos(a), sin(a), float((bits >> 24) + 1u) / 64.0);
+}
+
+/* A point of the species' own coordinates placed by the instance: turned about +Y by the
+ * angle a (x' = x cos a + z sin a, z' = -x sin a + z cos a), scaled, moved. */
+vec3 xyl_forest_place(vec3 p, vec3 cs, vec3 position)
+{
+    return position + cs.z * vec3(cs.x * p.x + cs.y * p.z, p.y, -cs.y * p.x + cs.x * p.z);
+}
+
+vec3 xyl_forest_turn(vec3 n, vec3 cs)
+{
+    return vec3(cs.x * n.x + cs.y * n.z, n.y, -cs.y * n.x + cs.x * n.z);
+}
 
 struct xyl_foliage_gpu_leaf {
     vec3 center;
@@ -147,6 +197,12 @@ typedef struct xyl_foliage_vk_cut_push {
     float per_distance;
     uint32_t count;
 } xyl_foliage_vk_cut_push;
+
+/* One forest instance (the layout above; xyl_forest_instance_pack / _unpack read and write it). */
+typedef struct xyl_forest_instance {
+    float position[3];
+    uint32_t bits;
+} xyl_forest_instance;
 
 #endif
 

@@ -362,6 +362,22 @@ expect 64 "--planes on a spherical billboard" -- "$XYLEM" render --foliage billb
 expect 64 "--billboard without --foliage billboard" -- "$XYLEM" render --billboard cross --out "$tmp/x.png"
 expect 64 "billboard on Vulkan" -- "$XYLEM" render --backend vulkan --foliage billboard --out "$tmp/x.png"
 [ ! -e "$tmp/x.png" ] && ok || bad "a refused billboard render left x.png"
+# a forest of the tree: N instances on a grid, per-instance leaf levels (GL only)
+expect 0 "render --forest 9" -- "$XYLEM" render --forest 9 --size 64x48 --out "$tmp/forest9.png"
+contains "forest: 9 trees (16 bytes each)" "--forest prints the trees and bytes per instance"
+contains "forest frame: " "--forest prints the frame time"
+contains " draws, " "--forest prints the draws"
+contains " leaves, " "--forest prints the leaves drawn"
+contains " triangles" "--forest prints the triangles drawn"
+expect 0 "render --forest 4 --foliage billboard" -- "$XYLEM" render --forest 4 --foliage billboard --billboard-size 32 --size 64x48 --camera 10,20,40 --error-px 4 --out "$tmp/forest4.png"
+contains "billboard " "a far forest draws billboards"
+expect 64 "--forest 0" -- "$XYLEM" render --forest 0 --out "$tmp/x.png"
+contains "--forest takes" "a bad forest size is named"
+expect 64 "--forest of absurd size" -- "$XYLEM" render --forest 100000000000 --out "$tmp/x.png"
+expect 64 "--forest on Vulkan" -- "$XYLEM" render --backend vulkan --forest 4 --out "$tmp/x.png"
+expect 64 "--forest with --foliage none" -- "$XYLEM" render --foliage none --forest 4 --out "$tmp/x.png"
+expect 64 "--forest with an impostor" -- "$XYLEM" render --foliage impostor --forest 4 --out "$tmp/x.png"
+[ ! -e "$tmp/x.png" ] && ok || bad "a refused forest render left x.png"
 expect 64 "render --foliage without a value" -- "$XYLEM" render --out "$tmp/x.png" --foliage
 expect 64 "--foliage is not view's" -- "$XYLEM" view --foliage
 expect 64 "render bad camera distance" -- "$XYLEM" render --camera 10,10,0 --out "$tmp/x.png"

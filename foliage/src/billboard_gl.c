@@ -6,6 +6,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "billboard_gl_internal.h"
 #include "foliage_draw.h"
 #include "foliage_gl_util.h"
 #include "foliage_internal.h"
@@ -575,4 +576,15 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
     xyl_result r = xyl__fgl_check(diag, "drawing the billboard");
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
+}
+
+void xyl__billboard_gl_parts(const xyl_billboard_gl *bb, xyl__billboard_parts *out)
+{
+    out->color_tex = bb->color_tex;
+    out->normal_tex = bb->normal_tex;
+    out->kind = (int)bb->kind;
+    out->views = bb->views;
+    memcpy(out->center, bb->center, sizeof out->center);
+    memcpy(out->half, bb->half, sizeof out->half);
+    memcpy(out->bake_light, bb->bake_light, sizeof out->bake_light);
 }

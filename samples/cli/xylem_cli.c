@@ -22,6 +22,7 @@
 #include <epoxy/gl.h>
 #include <xylem/xyl_billboard_gl.h>
 #include <xylem/xyl_foliage_gl.h>
+#include <xylem/xyl_forest_gl.h>
 #endif
 #ifdef XYL_HAVE_VULKAN
 #include <xylem/xyl_tess_vk.h> /* needs <vulkan/vulkan.h> */
@@ -73,6 +74,7 @@ typedef struct render_options {
     uint32_t grid;           /* --grid: the octahedral's views per side, 0: 8 */
     uint32_t billboard_size; /* --billboard-size: texels per baked view, 0: 512 */
     bool billboard_error;    /* --billboard-error: the 20-view image error table */
+    uint64_t forest;         /* --forest N: N instances of the tree on a grid (0: one tree) */
 } render_options;
 
 /* The leaves of 'foliage' and 'mesh --foliage'. */
@@ -140,7 +142,7 @@ static const char usage_text[] =
     "           [--size WxH] [--wireframe] [--samples N]\n"
     "           [--foliage full|lod|adaptive|none|billboard|impostor]\n"
     "           [--billboard spherical|cylindrical|cross|octahedral] [--planes N] [--grid N]\n"
-    "           [--billboard-size N] [--billboard-error] --out FILE.png\n"
+    "           [--billboard-size N] [--billboard-error] [--forest N] --out FILE.png\n"
     "                               refine the stem mesh (PN patches) and render it headless,\n"
     "                               with the source's leaves (GL): lod (default) the leaf LOD\n"
     "                               within the pixel budget, adaptive the coarsest leaf within\n"
@@ -150,7 +152,11 @@ static const char usage_text[] =
     "                               --planes of a cross, 2..8, default 4; --billboard-size\n"
     "                               texels per baked view, default 512; --billboard-error: its\n"
     "                               image error over 20 views); impostor the octahedral\n"
-    "                               billboard (--grid views per side, 2..32, default 8)\n"
+    "                               billboard (--grid views per side, 2..32, default 8);\n"
+    "                               --forest N: N instances of the tree on a jittered grid,\n"
+    "                               each at the leaf level its distance allows (lod; with\n"
+    "                               billboard, billboards far away; full: every leaf), framed\n"
+    "                               as a whole or by --camera\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -323,6 +329,11 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
             return usage_error("--billboard-size takes a whole number from 8 to 4096, not '%s'",
                                val);
         r->billboard_size = (uint32_t)u;
+    } else if (strcmp(opt, "--forest") == 0) {
+        if (!parse_u64(val, XYL_FOREST_DEFAULT_MAX_INSTANCES, &u) || u < 1)
+            return usage_error("--forest takes a whole number of trees from 1 to 4194304, not "
+                               "'%s'", val);
+        r->forest = u;
     } else if (strcmp(opt, "--screenshot") == 0) {
         r->screenshot = val;
     } else if (strcmp(opt, "--size") == 0) {
@@ -1027,6 +1038,8 @@ typedef struct render_job {
     xyl_foliage_view leaf_view;
     size_t leaves_drawn;
     bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
+    float stem_width;     /* twice the skeleton's thickest node's radius: where a forest
+                             leaves stems out */
 } render_job;
 
 static void render_job_free(render_job *j)
@@ -1413,6 +1426,132 @@ static xyl_result billboard_error(const options *o, tree_gl *t, xyl_billboard_gl
     return r;
 }
 
+/* --forest N: the tree as a species of xyl_forest_gl, N instances on a jittered grid
+ * (spacing 1.1 times the tree's width, scales 0.8 to 1.2, seed 1), the camera framing the
+ * whole grid (or --camera); one frame to warm up, the second timed to glFinish. */
+static xyl_result forest_frame(const options *o, render_job *j, xyl_forest_gl *forest,
+                               xyl_forest_gl_stats *st, double *ms, xyl_diag *d)
+{
+    xyl_forest_gl_frame fr = {0};
+    memcpy(fr.view_proj, j->frame.view_proj, sizeof fr.view_proj);
+    memcpy(fr.eye, j->camera.eye, sizeof fr.eye);
+    fr.fovy = j->camera.fovy;
+    fr.viewport_height = j->image.height;
+    fr.error_px = o->render.error_px > 0.0 ? (float)o->render.error_px : 0.5f;
+    fr.mode = o->render.leaves == LEAVES_FULL ? XYL_FOREST_FULL :
+              o->render.leaves == LEAVES_BILLBOARD ? XYL_FOREST_LOD : XYL_FOREST_LEAF_LEVELS;
+    memcpy(fr.light_dir, j->frame.light_dir, sizeof fr.light_dir);
+    fr.leaf_color[0] = fr.leaf_color[1] = fr.leaf_color[2] = fr.leaf_color[3] = 1.0f;
+    memcpy(fr.stem_color, j->frame.color, sizeof fr.stem_color);
+    own_target tg;
+    memset(&tg, 0, sizeof tg);
+    xyl_result r = own_target_make(&tg, j->image.width, j->image.height, j->image.samples, d);
+    for (int pass = 0; r == XYL_OK && pass < 2; ++pass) {
+        glBindFramebuffer(GL_FRAMEBUFFER, tg.fbo);
+        glViewport(0, 0, (GLsizei)j->image.width, (GLsizei)j->image.height);
+        const float *bg = j->image.background;
+        glClearColor(bg[0], bg[1], bg[2], bg[3]);
+        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        glFinish();
+        double t0 = now_seconds();
+        r = xyl_forest_gl_draw(forest, &fr, st, d);
+        glFinish();
+        *ms = (now_seconds() - t0) * 1e3;
+    }
+    if (r == XYL_OK) read_image(&tg, j);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    own_target_free(&tg);
+    return r;
+}
+
+static xyl_result forest_camera(const options *o, render_job *j, float spacing)
+{
+    float lo[3], hi[3];
+    tree_bounds(j, lo, hi);
+    uint64_t side = (uint64_t)ceil(sqrt((double)o->render.forest));
+    float half = 0.5f * (float)(side - 1) * spacing + 0.6f * spacing;
+    const float flo[3] = {-half, lo[1], -half}, fhi[3] = {half, hi[1] * 1.2f, half};
+    double deg = 3.14159265358979323846 / 180.0;
+    double az = o->render.has_camera ? o->render.azimuth : 30.0;
+    double el = o->render.has_camera ? o->render.elevation : 25.0;
+    xyl_tess_camera_frame(flo, fhi, (float)(az * deg), (float)(el * deg), 0.8f,
+                          (float)j->image.width / (float)j->image.height, &j->camera);
+    if (o->render.has_camera && o->render.zoom != 1.0)
+        xyl_tess_camera_zoom(&j->camera, (float)o->render.zoom);
+    float dx = j->camera.eye[0] - j->camera.target[0], dy = j->camera.eye[1] - j->camera.target[1],
+          dz = j->camera.eye[2] - j->camera.target[2];
+    float dist = sqrtf(dx * dx + dy * dy + dz * dz);
+    j->camera.near_plane = 0.01f * dist; /* depth precision over the whole forest */
+    j->camera.far_plane = 4.0f * dist + 4.0f * half;
+    return xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_GL, j->frame.view_proj, NULL);
+}
+
+static xyl_result render_forest(const options *o, render_job *j, xyl_billboard_gl *bb,
+                                xyl_diag *d)
+{
+    float lo[3], hi[3];
+    tree_bounds(j, lo, hi);
+    float spacing = 1.1f * fmaxf(hi[0] - lo[0], hi[2] - lo[2]);
+    xyl_forest_grid_desc gd = {0};
+    gd.count = o->render.forest;
+    gd.spacing = spacing;
+    gd.jitter = 0.6f;
+    gd.scale_min = 0.8f;
+    gd.scale_max = 1.2f;
+    gd.seed = 1;
+    xyl_forest_instance *inst = malloc((size_t)gd.count * sizeof *inst);
+    if (!inst) return XYL_ERR_OUT_OF_MEMORY;
+    xyl_forest_gl *forest = NULL;
+    xyl_forest_gl_species_desc sd = {0};
+    sd.foliage = j->leaves.foliage;
+    sd.stems = j->mesh;
+    sd.billboard = bb;
+    sd.stem_width = j->stem_width;
+    uint32_t species = 0;
+    uint32_t tw = XYL_LEAF_TEXTURE_WIDTH, th = XYL_LEAF_TEXTURE_HEIGHT;
+    uint8_t *tex = malloc((size_t)tw * th * 4);
+    xyl_result r = tex ? xyl_forest_grid(&gd, inst, gd.count, d) : XYL_ERR_OUT_OF_MEMORY;
+    if (r == XYL_OK) r = forest_camera(o, j, spacing);
+    if (r == XYL_OK) r = xyl_forest_gl_create(NULL, &forest, d);
+    if (r == XYL_OK) r = xyl_forest_gl_add_species(forest, &sd, &species, d);
+    if (r == XYL_OK) {
+        xyl_leaf_texture(tex, tw, th);
+        r = xyl_forest_gl_set_texture(forest, tex, tw, th, d);
+    }
+    if (r == XYL_OK) r = xyl_forest_gl_set_instances(forest, inst, gd.count, d);
+    xyl_forest_gl_stats st;
+    double ms = 0.0;
+    if (r == XYL_OK) r = forest_frame(o, j, forest, &st, &ms, d);
+    xyl_forest_gl_species_info info;
+    if (r == XYL_OK) r = xyl_forest_gl_species(forest, species, &info, d);
+    if (r == XYL_OK) {
+        printf("forest: %llu trees (%u bytes each), %llu in view, spacing %.2f; leaf levels "
+               "0..%u%s\n", (unsigned long long)st.instances, st.bytes_per_instance,
+               (unsigned long long)st.visible, (double)spacing, info.level_count - 1,
+               info.has_billboard ? " and billboards" : "");
+        printf("forest frame: %.3f ms (wall, to glFinish), LOD choice %.3f ms CPU, upload "
+               "%.3f ms; %llu draws, %llu leaves, %llu triangles, %llu with stems\n", ms,
+               st.choose_ms, st.upload_ms, (unsigned long long)st.draws,
+               (unsigned long long)st.leaves, (unsigned long long)st.triangles,
+               (unsigned long long)st.with_stems);
+        printf("level leaves (error):");
+        for (uint32_t k = 0; k < info.level_count; ++k)
+            printf(" %u (%.3g)", info.level_leaves[k], (double)info.level_error[k]);
+        printf("; billboard error %.3g, stems at levels below %u\n",
+               (double)info.billboard_error, info.stem_levels);
+        printf("instances per level:");
+        for (uint32_t k = 0; k < info.level_count; ++k)
+            printf(" %llu", (unsigned long long)st.per_level[k]);
+        if (info.has_billboard)
+            printf(", billboard %llu", (unsigned long long)st.per_level[XYL_FOREST_MAX_LEVELS]);
+        printf("\n");
+    }
+    xyl_forest_gl_destroy(forest);
+    free(tex);
+    free(inst);
+    return r;
+}
+
 static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
 {
     xyl_gl_context *ctx = NULL;
@@ -1428,10 +1567,13 @@ static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
                  o->render.tess == TESS_HARDWARE ? XYL_TESS_PATH_HARDWARE : XYL_TESS_PATH_INSTANCED,
                  j->image.wireframe};
     bool billboard = o->render.leaves == LEAVES_BILLBOARD;
+    if (o->render.forest && j->lods) /* a forest's billboard shows every leaf */
+        memset(j->lods, 0, j->leaves.foliage->sector_count * sizeof *j->lods);
     if (r == XYL_OK && billboard) r = bake_billboard(o, &t, &bb, d);
     if (r == XYL_OK && bb && o->render.billboard_error) r = billboard_error(o, &t, bb, d);
     double t0 = now_seconds();
-    if (r == XYL_OK && (leaves || bb)) r = draw_picture(&t, bb, j->rgba, d);
+    if (r == XYL_OK && o->render.forest) r = render_forest(o, j, bb, d);
+    else if (r == XYL_OK && (leaves || bb)) r = draw_picture(&t, bb, j->rgba, d);
     else if (r == XYL_OK)
         r = xyl_tess_gl_render_rgba(gl, j->batches, &j->frame, t.path, &j->image, j->rgba, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
@@ -1516,6 +1658,10 @@ static xyl_result render_vk(render_job *j, xyl_diag *d)
 
 static void print_render(const options *o, const render_job *j, const char *path)
 {
+    if (o->render.forest) { /* render_forest printed its figures */
+        printf("wrote %s\n", path);
+        return;
+    }
     if (j->draw_leaves && j->adaptive) {
         printf("leaves: --foliage adaptive: the coarsest leaf within the budget per cluster, "
                "%zu of %zu leaves drawn (LOD array built in %.3f ms)\n", j->leaves_drawn,
@@ -1617,6 +1763,10 @@ static int cmd_render(const options *o)
         return usage_error("%s", "--planes is the cross billboard's");
     if (ro->grid && ro->billboard_kind != 4 && !ro->impostor)
         return usage_error("%s", "--grid is the octahedral billboard's (--foliage impostor)");
+    if (ro->forest && (ro->vulkan || ro->leaves == LEAVES_NONE || ro->leaves == LEAVES_ADAPTIVE ||
+                       ro->billboard_error || ro->impostor || ro->billboard_kind == 4))
+        return usage_error("%s", "--forest draws with the GL backend, with --foliage lod, full "
+                                 "or billboard (not octahedral), without --billboard-error");
     render_job j;
     memset(&j, 0, sizeof j);
     j.image.width = ro->width ? ro->width : 1024;
@@ -1630,7 +1780,13 @@ static int cmd_render(const options *o)
     xyl_skeleton *sk = NULL;
     int rc = load_mesh(o, &j.mesh, &source, ro->leaves == LEAVES_NONE ? NULL : &sk);
     if (!rc && sk) rc = prepare_leaves(o, &j, sk, source);
+    for (size_t k = 0; sk && k < sk->node_count; ++k)
+        j.stem_width = fmaxf(j.stem_width, 2.0f * sk->nodes[k].radius);
     xyl_skeleton_destroy(sk);
+    if (!rc && ro->forest && !j.draw_leaves) {
+        fprintf(stderr, "xylem: %s: --forest needs a source with leaves\n", source);
+        rc = EXIT_DATA;
+    }
     if (!rc && r == XYL_OK) r = prepare_render(o, &j, &d);
     if (!rc && r == XYL_OK) {
         j.rgba = malloc((size_t)j.image.width * j.image.height * 4);

@@ -521,6 +521,64 @@ XYL_API xyl_result xyl_foliage_lod_resolution(const xyl_foliage *f, uint32_t sec
 XYL_API xyl_result xyl_foliage_pack_gpu(const xyl_leaf *leaves, size_t count,
                                         xyl_foliage_gpu_leaf *out, xyl_diag *diag);
 
+/* ---- forest instances (docs/foliage.md, "Forests") ------------------------------------------
+ *
+ * A forest is many instances of a few species. An instance is 16 bytes (xyl_forest_instance,
+ * layout in xyl_foliage_shared.h): its base point, rotation about +Y, scale, species and chosen
+ * LOD; the leaves, LOD table, stems and billboard are the species', uploaded once. */
+#if !defined(__cplusplus)
+_Static_assert(sizeof(xyl_forest_instance) == XYL_FOREST_INSTANCE_SIZE, "an instance in 16 bytes");
+_Static_assert(offsetof(xyl_forest_instance, bits) == 12, "the packed word follows the point");
+#endif
+
+#define XYL_FOREST_MAX_SPECIES 64   /* the 6 bits of an instance's species */
+#define XYL_FOREST_MAX_LEVELS 16    /* leaf levels of a species (LODs 0 .. 15) */
+#define XYL_FOREST_MIN_SCALE (1.0f / 64.0f)
+#define XYL_FOREST_MAX_SCALE 4.0f
+
+/* An instance unpacked. */
+typedef struct xyl_forest_instance_values {
+    float position[3]; /* the tree's base point, world units, finite */
+    float rotation;    /* radians about +Y, any finite value (wrapped to [0, 2 pi)) */
+    float scale;       /* XYL_FOREST_MIN_SCALE .. XYL_FOREST_MAX_SCALE */
+    uint32_t species;  /* < XYL_FOREST_MAX_SPECIES */
+    uint32_t lod;      /* a leaf level < XYL_FOREST_MAX_LEVELS, or XYL_FOREST_LOD_BILLBOARD */
+} xyl_forest_instance_values;
+
+/* Packs v into *out: the rotation rounded to the nearest of 1024 steps (error <= pi / 1024),
+ * the scale to the nearest 1/64 (error <= 1/128). Errors: XYL_ERR_INVALID_ARGUMENT (NULL v or
+ * out, a scale outside [1/64, 4], species >= 64, a LOD that is neither a level < 16 nor
+ * XYL_FOREST_LOD_BILLBOARD), XYL_ERR_NON_FINITE; *out is then untouched. */
+XYL_API xyl_result xyl_forest_instance_pack(const xyl_forest_instance_values *v,
+                                            xyl_forest_instance *out, xyl_diag *diag);
+/* The values of a packed instance (rotation in [0, 2 pi)). NULL arguments: nothing happens. */
+XYL_API void xyl_forest_instance_unpack(const xyl_forest_instance *in,
+                                        xyl_forest_instance_values *out);
+
+/* N instances on a jittered square grid in the XZ plane (y = 0), centred on the origin. */
+typedef struct xyl_forest_grid_desc {
+    uint64_t count;        /* instances, >= 1, at most max_instances */
+    float spacing;         /* world units between grid points, > 0 */
+    float jitter;          /* each point moves by up to jitter * spacing / 2 along x and z,
+                              [0, 1]; default 0: none */
+    float scale_min, scale_max; /* each scale uniform in [min, max] within [1/64, 4];
+                              default (both 0): 1 */
+    uint32_t species_count;/* species 0 .. species_count - 1, uniform; default (0): 1 */
+    uint64_t seed;         /* the same seed gives the same forest */
+    uint64_t max_instances;/* default (0): XYL_FOREST_DEFAULT_MAX_INSTANCES */
+} xyl_forest_grid_desc;
+
+#define XYL_FOREST_DEFAULT_MAX_INSTANCES ((uint64_t)1 << 22)
+#define XYL_FOREST_LIMIT_MAX_INSTANCES ((uint64_t)1 << 26)
+
+/* Fills out[0 .. count): row-major on a ceil(sqrt(count)) wide grid, rotations uniform, LOD 0.
+ * Errors: XYL_ERR_INVALID_ARGUMENT (NULL desc or out, count 0, capacity < count, a spacing
+ * <= 0, a jitter outside [0, 1], a scale range outside [1/64, 4] or inverted, species_count
+ * over 64), XYL_ERR_NON_FINITE, XYL_ERR_LIMIT_EXCEEDED (count over max_instances, or
+ * max_instances over XYL_FOREST_LIMIT_MAX_INSTANCES). Allocates nothing. */
+XYL_API xyl_result xyl_forest_grid(const xyl_forest_grid_desc *desc, xyl_forest_instance *out,
+                                   size_t capacity, xyl_diag *diag);
+
 /* ---- glTF export ----------------------------------------------------------------------------
  *
  * A .glb with the node "leaves": the whole array (f->leaves, sector after sector) as one

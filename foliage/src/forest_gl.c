@@ -1,0 +1,742 @@
+/* The GL 4.5 forest renderer (xyl_forest_gl.h): per species the packed leaves, the leaf levels,
+ * the stems' base mesh and a borrowed billboard; per frame the flat CPU choice of forest.c,
+ * the visible instances sorted by species and level into one storage buffer, and a few
+ * instanced draws per species. */
+#include <epoxy/gl.h>
+#include <math.h>
+#include <string.h>
+#include <time.h>
+
+#include "billboard_gl_internal.h"
+#include "foliage_draw.h"
+#include "foliage_gl_util.h"
+#include "forest_internal.h"
+#include "xylem/xyl_foliage_gl.h"
+#include "xylem/xyl_forest_gl.h"
+
+extern const unsigned char xyl__shader_gl_forest_leaf_vert[];
+extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
+extern const unsigned char xyl__shader_gl_forest_stem_vert[];
+extern const unsigned char xyl__shader_gl_forest_stem_frag[];
+extern const unsigned char xyl__shader_gl_forest_billboard_vert[];
+extern const unsigned char xyl__shader_gl_billboard_frag[];
+
+#define BB_UNIFORM_LIGHT 6  /* billboard.frag's */
+#define BB_UNIFORM_CUTOFF 7
+#define BB_UNIFORM_BAKE_LIGHT 8
+#define BB_UNIFORM_TO_COVERAGE 9
+#define BB_UNIFORM_DITHER 10
+
+typedef struct species {
+    GLuint leaf_buf, stem_vao, stem_vbo, stem_ibo;
+    xyl__forest_plan plan;
+    uint32_t stem_index_count, stem_levels;
+    xyl_billboard_gl *billboard;
+    float billboard_error, center_y, radius;
+} species;
+
+struct xyl_forest_gl {
+    GLuint leaf_program, stem_program, bb_program, vao, instance_buf, texture;
+    GLsizeiptr instance_capacity; /* bytes */
+    species species[XYL_FOREST_MAX_SPECIES];
+    uint32_t species_count;
+    xyl_forest_instance *instances, *sorted;
+    uint16_t *bucket;
+    size_t count;
+    uint64_t max_instances;
+    uint32_t max_levels;
+    float hysteresis;
+    GLint64 max_ssbo_bytes;
+    GLint max_texture_side;
+    xyl_allocator alloc;
+};
+
+_Static_assert(sizeof(xyl_forest_instance) == 16, "std430 stride of xyl_forest_instance");
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
+}
+
+/* ---- programs ----------------------------------------------------------------------------- */
+
+static xyl_result link(const unsigned char *vs, const unsigned char *fs, const char *name,
+                       GLuint *out, xyl_diag *diag)
+{
+    char log[192] = "";
+    const GLenum stages[2] = {GL_VERTEX_SHADER, GL_FRAGMENT_SHADER};
+    const unsigned char *texts[2] = {vs, fs};
+    GLuint p = glCreateProgram();
+    for (int i = 0; i < 2; ++i) {
+        GLuint sh = xyl__fgl_compile(stages[i], texts[i], log, (GLsizei)sizeof log);
+        if (!sh) {
+            glDeleteProgram(p);
+            return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader of %s: %s", name, log);
+        }
+        glAttachShader(p, sh);
+        glDeleteShader(sh);
+    }
+    glLinkProgram(p);
+    GLint ok = GL_FALSE;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, (GLsizei)sizeof log, NULL, log);
+        glDeleteProgram(p);
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "program %s: %s", name, log);
+    }
+    *out = p;
+    return XYL_OK;
+}
+
+static GLuint make_texture(const uint8_t *rgba, uint32_t w, uint32_t h)
+{
+    GLsizei levels = 1;
+    for (uint32_t side = w > h ? w : h; side > 1; side >>= 1) ++levels;
+    GLuint t = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &t);
+    glTextureStorage2D(t, levels, GL_RGBA8, (GLsizei)w, (GLsizei)h);
+    GLint align = 4, row = 0, unpack_buf = 0;
+    glGetIntegerv(GL_UNPACK_ALIGNMENT, &align);
+    glGetIntegerv(GL_UNPACK_ROW_LENGTH, &row);
+    glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &unpack_buf);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glTextureSubImage2D(t, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, align);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, row);
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, (GLuint)unpack_buf);
+    glGenerateTextureMipmap(t);
+    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return t;
+}
+
+static xyl_result check_desc(const xyl_forest_gl_desc *d, xyl_diag *diag)
+{
+    if (!isfinite(d->hysteresis))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "hysteresis is not finite");
+    if (d->hysteresis > 1.0f || d->max_levels > XYL_FOREST_MAX_LEVELS)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "hysteresis %g (at most 1) or max_levels %u (at most %d)",
+                         (double)d->hysteresis, d->max_levels, XYL_FOREST_MAX_LEVELS);
+    if (d->max_instances > XYL_FOREST_LIMIT_MAX_INSTANCES)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "max_instances %llu is over the limit of %llu",
+                         (unsigned long long)d->max_instances,
+                         (unsigned long long)XYL_FOREST_LIMIT_MAX_INSTANCES);
+    return XYL_OK;
+}
+
+xyl_result xyl_forest_gl_create(const xyl_forest_gl_desc *desc, xyl_forest_gl **out,
+                                xyl_diag *diag)
+{
+    if (!out) return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out is required");
+    xyl_forest_gl_desc d = {0};
+    if (desc) d = *desc;
+    xyl_result r = check_desc(&d, diag);
+    if (r == XYL_OK) r = xyl__fgl_need_context(diag);
+    if (r != XYL_OK) return r;
+    xyl_forest_gl *f = xyl__calloc(&d.alloc, 1, sizeof *f);
+    if (!f) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    f->alloc = d.alloc;
+    f->max_instances = d.max_instances ? d.max_instances : XYL_FOREST_DEFAULT_MAX_INSTANCES;
+    f->max_levels = d.max_levels ? d.max_levels : XYL_FOREST_MAX_LEVELS;
+    f->hysteresis = d.hysteresis > 0.0f ? d.hysteresis : d.hysteresis < 0.0f ? 0.0f : 0.1f;
+    xyl__fgl_drain_errors();
+    r = link(xyl__shader_gl_forest_leaf_vert, xyl__shader_gl_foliage_leaf_frag, "forest_leaf",
+             &f->leaf_program, diag);
+    if (r == XYL_OK)
+        r = link(xyl__shader_gl_forest_stem_vert, xyl__shader_gl_forest_stem_frag, "forest_stem",
+                 &f->stem_program, diag);
+    if (r == XYL_OK)
+        r = link(xyl__shader_gl_forest_billboard_vert, xyl__shader_gl_billboard_frag,
+                 "forest_billboard", &f->bb_program, diag);
+    if (r == XYL_OK) {
+        glCreateVertexArrays(1, &f->vao);
+        glCreateBuffers(1, &f->instance_buf);
+        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &f->max_ssbo_bytes);
+        glGetIntegerv(GL_MAX_TEXTURE_SIZE, &f->max_texture_side);
+        const uint8_t white[4] = {255, 255, 255, 255};
+        f->texture = make_texture(white, 1, 1);
+        r = xyl__fgl_check(diag, "creating the forest renderer's objects");
+    }
+    if (r != XYL_OK) {
+        xyl_forest_gl_destroy(f);
+        return r;
+    }
+    *out = f;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+static void species_free(xyl_forest_gl *f, species *s, bool gl)
+{
+    if (gl) {
+        GLuint bufs[3] = {s->leaf_buf, s->stem_vbo, s->stem_ibo};
+        glDeleteBuffers(3, bufs);
+        glDeleteVertexArrays(1, &s->stem_vao);
+    }
+    xyl__forest_plan_free(&s->plan, &f->alloc);
+}
+
+void xyl_forest_gl_destroy(xyl_forest_gl *f)
+{
+    if (!f) return;
+    bool gl = epoxy_gl_version() != 0;
+    if (gl) {
+        glDeleteProgram(f->leaf_program);
+        glDeleteProgram(f->stem_program);
+        glDeleteProgram(f->bb_program);
+        glDeleteVertexArrays(1, &f->vao);
+        glDeleteBuffers(1, &f->instance_buf);
+        glDeleteTextures(1, &f->texture);
+    }
+    for (uint32_t s = 0; s < f->species_count; ++s) species_free(f, &f->species[s], gl);
+    xyl_allocator a = f->alloc;
+    xyl__free(&a, f->instances);
+    xyl__free(&a, f->sorted);
+    xyl__free(&a, f->bucket);
+    xyl__free(&a, f);
+}
+
+/* ---- species ------------------------------------------------------------------------------ */
+
+static xyl_result check_species(const xyl_forest_gl *f, const xyl_forest_gl_species_desc *d,
+                                xyl_diag *diag)
+{
+    if (f->species_count >= XYL_FOREST_MAX_SPECIES)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the forest has %d species already, the most an instance can name",
+                         XYL_FOREST_MAX_SPECIES);
+    if (!isfinite(d->billboard_error) || !isfinite(d->stem_width))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1,
+                         "billboard_error or stem_width is not finite");
+    if (d->billboard_error < 0.0f || d->stem_width < 0.0f)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "billboard_error %g and stem_width %g must not be negative",
+                         (double)d->billboard_error, (double)d->stem_width);
+    if (d->billboard) {
+        xyl__billboard_parts bp;
+        xyl__billboard_gl_parts(d->billboard, &bp);
+        if (bp.kind != XYL_BILLBOARD_SPHERICAL && bp.kind != XYL_BILLBOARD_CYLINDRICAL &&
+            bp.kind != XYL_BILLBOARD_CROSS)
+            return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                             "a forest draws spherical, cylindrical and cross billboards, not "
+                             "kind %d", bp.kind);
+    }
+    const xyl_mesh *m = d->stems;
+    if (m && (m->tri_view_count == 0 || !m->tri_view || !m->positions || !m->normals ||
+              m->vertex_count > UINT32_MAX || m->tri_view_count > UINT32_MAX / 3))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "the stem mesh has no triangles, positions or normals");
+    size_t n = d->foliage->leaf_count;
+    if ((GLint64)(n * sizeof(xyl_foliage_gpu_leaf)) > f->max_ssbo_bytes)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%zu leaves exceed the driver's storage block size", n);
+    for (size_t k = 0; m && k < m->tri_view_count * 3; ++k)
+        if (m->tri_view[k] >= m->vertex_count)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)(k / 3),
+                             "stem triangle %zu names a vertex beyond the mesh", k / 3);
+    return XYL_OK;
+}
+
+/* The sphere on the +Y axis that holds the box lo..hi however the instance turns. */
+static void axis_sphere(const float lo[3], const float hi[3], float *cy, float *radius)
+{
+    double rx = fmax(fabs(lo[0]), fabs(hi[0])), rz = fmax(fabs(lo[2]), fabs(hi[2]));
+    double hh = 0.5 * ((double)hi[1] - lo[1]);
+    *cy = 0.5f * (lo[1] + hi[1]);
+    *radius = (float)sqrt(rx * rx + rz * rz + hh * hh);
+}
+
+static xyl_result upload_stems(species *s, const xyl_mesh *m, const xyl_allocator *a,
+                               xyl_diag *diag)
+{
+    float *v = xyl__alloc_array(a, m->vertex_count, 6 * sizeof *v);
+    if (!v) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    for (size_t i = 0; i < m->vertex_count; ++i) {
+        const xyl_vec3 p = m->positions[i], nn = m->normals[i];
+        const float e[6] = {p.x, p.y, p.z, nn.x, nn.y, nn.z};
+        memcpy(v + 6 * i, e, sizeof e);
+    }
+    glCreateBuffers(1, &s->stem_vbo);
+    glCreateBuffers(1, &s->stem_ibo);
+    glNamedBufferStorage(s->stem_vbo, (GLsizeiptr)(m->vertex_count * 6 * sizeof *v), v, 0);
+    glNamedBufferStorage(s->stem_ibo, (GLsizeiptr)(m->tri_view_count * 3 * sizeof(uint32_t)),
+                         m->tri_view, 0);
+    xyl__free(a, v);
+    glCreateVertexArrays(1, &s->stem_vao);
+    glVertexArrayVertexBuffer(s->stem_vao, 0, s->stem_vbo, 0, 6 * sizeof(float));
+    glVertexArrayElementBuffer(s->stem_vao, s->stem_ibo);
+    for (GLuint k = 0; k < 2; ++k) {
+        glEnableVertexArrayAttrib(s->stem_vao, k);
+        glVertexArrayAttribFormat(s->stem_vao, k, 3, GL_FLOAT, GL_FALSE, k * 3 * sizeof(float));
+        glVertexArrayAttribBinding(s->stem_vao, k, 0);
+    }
+    s->stem_index_count = (uint32_t)(m->tri_view_count * 3);
+    return XYL_OK;
+}
+
+static void resolve_species(species *s, const xyl_forest_gl_species_desc *d)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    xyl_foliage_bounds(d->foliage, lo, hi);
+    if (d->stems) xyl_mesh_bounds(d->stems, lo, hi);
+    axis_sphere(lo, hi, &s->center_y, &s->radius);
+    const xyl__forest_plan *p = &s->plan;
+    float coarsest = p->levels[p->level_count - 1].error;
+    double rx = fmax(fabs(lo[0]), fabs(hi[0])), rz = fmax(fabs(lo[2]), fabs(hi[2]));
+    float flat = (float)sqrt(rx * rx + rz * rz);
+    s->billboard = d->billboard;
+    s->billboard_error = fmaxf(d->billboard_error > 0.0f ? d->billboard_error : flat, coarsest);
+    s->stem_levels = p->level_count;
+    if (d->stem_width > 0.0f) {
+        s->stem_levels = 1;
+        while (s->stem_levels < p->level_count && p->levels[s->stem_levels].error < d->stem_width)
+            ++s->stem_levels;
+    }
+}
+
+xyl_result xyl_forest_gl_add_species(xyl_forest_gl *f, const xyl_forest_gl_species_desc *d,
+                                     uint32_t *index, xyl_diag *diag)
+{
+    if (!f || !d || !d->foliage || !index)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "forest, desc, desc->foliage and index are required");
+    xyl__foliage_tables tables; /* the tables' checks: no leaves, ranges outside the array */
+    xyl_result r = xyl__foliage_tables_make(d->foliage, &f->alloc, &tables, diag);
+    if (r != XYL_OK) return r;
+    xyl__foliage_tables_free(&tables, &f->alloc);
+    r = check_species(f, d, diag);
+    if (r != XYL_OK) return r;
+    species s;
+    memset(&s, 0, sizeof s);
+    size_t n = d->foliage->leaf_count;
+    xyl_foliage_gpu_leaf *records = xyl__alloc_array(&f->alloc, n, sizeof *records);
+    if (!records) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    r = xyl_foliage_pack_gpu(d->foliage->leaves, n, records, diag);
+    if (r == XYL_OK) r = xyl__forest_plan_make(d->foliage, f->max_levels, &f->alloc, &s.plan, diag);
+    if (r == XYL_OK) {
+        xyl__fgl_drain_errors();
+        glCreateBuffers(1, &s.leaf_buf);
+        glNamedBufferStorage(s.leaf_buf, (GLsizeiptr)(n * sizeof *records), records, 0);
+        if (d->stems) r = upload_stems(&s, d->stems, &f->alloc, diag);
+        if (r == XYL_OK) r = xyl__fgl_check(diag, "uploading a species");
+    }
+    xyl__free(&f->alloc, records);
+    if (r != XYL_OK) {
+        species_free(f, &s, true);
+        return r;
+    }
+    resolve_species(&s, d);
+    *index = f->species_count;
+    f->species[f->species_count++] = s;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_forest_gl_set_texture(xyl_forest_gl *f, const uint8_t *rgba, uint32_t width,
+                                     uint32_t height, xyl_diag *diag)
+{
+    if (!f || !rgba)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "forest and rgba are required");
+    uint32_t cap = XYL_FOLIAGE_GL_MAX_TEXTURE_SIDE;
+    if (f->max_texture_side > 0 && (uint32_t)f->max_texture_side < cap)
+        cap = (uint32_t)f->max_texture_side;
+    if (width == 0 || height == 0 || width > cap || height > cap)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a leaf texture of %u x %u: each side from 1 to %u", width, height, cap);
+    xyl__fgl_drain_errors();
+    GLuint t = make_texture(rgba, width, height);
+    xyl_result r = xyl__fgl_check(diag, "uploading the leaf texture");
+    if (r != XYL_OK) {
+        glDeleteTextures(1, &t);
+        return r;
+    }
+    glDeleteTextures(1, &f->texture);
+    f->texture = t;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+xyl_result xyl_forest_gl_species(const xyl_forest_gl *f, uint32_t sp,
+                                 xyl_forest_gl_species_info *info, xyl_diag *diag)
+{
+    if (!f || !info || sp >= f->species_count)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "forest and info are required, and species %u must have been added", sp);
+    const species *s = &f->species[sp];
+    memset(info, 0, sizeof *info);
+    info->level_count = s->plan.level_count;
+    for (uint32_t k = 0; k < s->plan.level_count; ++k) {
+        info->level_error[k] = s->plan.levels[k].error;
+        info->level_leaves[k] = s->plan.levels[k].leaves;
+    }
+    info->stem_levels = s->stem_levels;
+    info->has_billboard = s->billboard != NULL;
+    info->billboard_error = s->billboard_error;
+    info->center_y = s->center_y;
+    info->radius = s->radius;
+    info->stem_triangles = s->stem_index_count / 3;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+/* ---- instances ---------------------------------------------------------------------------- */
+
+static xyl_result check_instances(const xyl_forest_gl *f, const xyl_forest_instance *in,
+                                  size_t n, xyl_diag *diag)
+{
+    if (n == 0)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a forest of 0 instances: give at least one");
+    if (n > f->max_instances)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%zu instances exceed max_instances (%llu)", n,
+                         (unsigned long long)f->max_instances);
+    for (size_t i = 0; i < n; ++i) {
+        uint32_t p = in[i].bits, sp = (p >> 8) & 63u, lod = p & 255u;
+        if (!isfinite(in[i].position[0]) || !isfinite(in[i].position[1]) ||
+            !isfinite(in[i].position[2]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)i,
+                             "instance %zu's position is not finite", i);
+        if (sp >= f->species_count)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)i,
+                             "instance %zu names species %u of %u", i, sp, f->species_count);
+        const species *s = &f->species[sp];
+        bool ok = lod == XYL_FOREST_LOD_BILLBOARD ? s->billboard != NULL
+                                                  : lod < s->plan.level_count;
+        if (!ok)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)i,
+                             "instance %zu has LOD %u; species %u has levels 0 to %u%s", i, lod,
+                             sp, s->plan.level_count - 1,
+                             s->billboard ? " and a billboard" : " and no billboard");
+    }
+    return XYL_OK;
+}
+
+xyl_result xyl_forest_gl_set_instances(xyl_forest_gl *f, const xyl_forest_instance *in,
+                                       size_t n, xyl_diag *diag)
+{
+    if (!f || (!in && n))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "forest, and instances with a count, are required");
+    xyl_result r = check_instances(f, in, n, diag);
+    if (r != XYL_OK) return r;
+    xyl_forest_instance *copy = xyl__alloc_array(&f->alloc, n, sizeof *copy);
+    xyl_forest_instance *sorted = xyl__alloc_array(&f->alloc, n, sizeof *sorted);
+    uint16_t *bucket = xyl__alloc_array(&f->alloc, n, sizeof *bucket);
+    if (!copy || !sorted || !bucket) {
+        xyl__free(&f->alloc, copy);
+        xyl__free(&f->alloc, sorted);
+        xyl__free(&f->alloc, bucket);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    }
+    memcpy(copy, in, n * sizeof *copy);
+    xyl__free(&f->alloc, f->instances);
+    xyl__free(&f->alloc, f->sorted);
+    xyl__free(&f->alloc, f->bucket);
+    f->instances = copy, f->sorted = sorted, f->bucket = bucket, f->count = n;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+const xyl_forest_instance *xyl_forest_gl_instances(const xyl_forest_gl *f, size_t *count)
+{
+    if (count) *count = f ? f->count : 0;
+    return f ? f->instances : NULL;
+}
+
+/* ---- a frame ------------------------------------------------------------------------------ */
+
+typedef struct resolved {
+    xyl__foliage_frame leaf;  /* view_proj, light, leaf colour, cutoff, translucency */
+    float stem_color[4];
+    double per_distance;
+} resolved;
+
+static xyl_result check_frame(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                              resolved *out, xyl_diag *diag)
+{
+    if (!f || !fr)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "forest and frame are required");
+    if (f->count == 0)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "no instances (set_instances first)");
+    if (!isfinite(fr->eye[0]) || !isfinite(fr->eye[1]) || !isfinite(fr->eye[2]) ||
+        !isfinite(fr->fovy) || !isfinite(fr->error_px))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the eye, fovy or budget is not finite");
+    for (int k = 0; k < 4; ++k)
+        if (!isfinite(fr->stem_color[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "stem_color is not finite");
+    if (!(fr->error_px > 0.0f))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a pixel budget of %g: error_px must be > 0", (double)fr->error_px);
+    if (fr->fovy < 0.0f || fr->fovy >= 3.14159265f)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "fovy %g must be in (0, pi) (0: 0.8)", (double)fr->fovy);
+    if (fr->mode != XYL_FOREST_LOD && fr->mode != XYL_FOREST_LEAF_LEVELS &&
+        fr->mode != XYL_FOREST_FULL)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "unknown forest mode %d (lod 0, leaf levels 1, full 2)", (int)fr->mode);
+    xyl__foliage_tables any = {0};
+    any.leaf_count = 1; /* the leaf frame's checks without a table */
+    const float no_dither[2] = {0.0f, 0.0f}; /* every fragment */
+    const xyl__foliage_frame_in in = {fr->view_proj, fr->light_dir, fr->leaf_color, no_dither,
+                                      fr->alpha_cutoff, 0.0f};
+    xyl_result r = xyl__foliage_frame_check(&any, &in, &out->leaf, diag);
+    if (r != XYL_OK) return r;
+    const float bark[4] = {0.47f, 0.35f, 0.24f, 1.0f};
+    bool none = fr->stem_color[0] == 0.0f && fr->stem_color[1] == 0.0f &&
+                fr->stem_color[2] == 0.0f && fr->stem_color[3] == 0.0f;
+    memcpy(out->stem_color, none ? bark : fr->stem_color, sizeof out->stem_color);
+    double fovy = fr->fovy > 0.0f ? fr->fovy : 0.8;
+    double height = fr->viewport_height ? fr->viewport_height : 1080;
+    out->per_distance = fr->error_px * 2.0 * tan(0.5 * fovy) / height;
+    return XYL_OK;
+}
+
+static void choice_species(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                           double per_distance, xyl__forest_choice_species *cs)
+{
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        xyl__forest_choice_species *c = &cs[s];
+        memset(c, 0, sizeof *c);
+        c->center_y = sp->center_y;
+        c->radius = sp->radius;
+        c->level_count = sp->plan.level_count;
+        bool bb = sp->billboard && fr->mode == XYL_FOREST_LOD;
+        double r = sp->radius, grow = 1.0 + f->hysteresis;
+        for (uint32_t k = 1; k <= c->level_count; ++k) {
+            double t = k < c->level_count ? sp->plan.levels[k].error / per_distance
+                       : bb ? sp->billboard_error / per_distance : INFINITY;
+            c->refine2[k] = (float)((t + r) * (t + r));
+            c->coarsen2[k] = (float)((t * grow + r) * (t * grow + r));
+        }
+        c->top = bb ? c->level_count : c->level_count - 1;
+    }
+}
+
+static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, xyl_forest_gl_stats *st)
+{
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        const uint32_t *c = counts + s * XYL__FOREST_BUCKETS_PER_SPECIES;
+        for (uint32_t k = 0; k < sp->plan.level_count; ++k) {
+            st->per_level[k] += c[k];
+            st->visible += c[k];
+            st->leaves += (uint64_t)c[k] * sp->plan.levels[k].leaves;
+            if (k < sp->stem_levels && sp->stem_index_count) {
+                st->with_stems += c[k];
+                st->triangles += (uint64_t)c[k] * (sp->stem_index_count / 3);
+            }
+        }
+        uint32_t nb = c[sp->plan.level_count];
+        st->per_level[XYL_FOREST_MAX_LEVELS] += nb;
+        st->visible += nb;
+        if (nb && sp->billboard)
+            st->triangles += 2ull * nb * xyl_billboard_gl_view_count(sp->billboard);
+    }
+    st->triangles += 2 * st->leaves;
+}
+
+/* The choice and the sort; counts and offsets per bucket. */
+static void choose_sort(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, const resolved *rs,
+                        uint32_t *counts, uint32_t *offsets, xyl_forest_gl_stats *st)
+{
+    double t0 = now_ms();
+    xyl__forest_choice_species cs[XYL_FOREST_MAX_SPECIES];
+    choice_species(f, fr, rs->per_distance, cs);
+    xyl__forest_choice c;
+    memset(&c, 0, sizeof c);
+    c.species = cs;
+    c.species_count = f->species_count;
+    memcpy(c.eye, fr->eye, sizeof c.eye);
+    c.cull = !fr->no_cull && xyl__forest_cone(rs->leaf.view_proj, c.axis, &c.inv_sin, &c.cos2);
+    c.full = fr->mode == XYL_FOREST_FULL;
+    xyl__forest_choose(&c, f->instances, f->count, f->bucket, counts);
+    uint32_t total = f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;
+    xyl__forest_sort(f->instances, f->count, f->bucket, counts, total, offsets, f->sorted);
+    memset(st, 0, sizeof *st);
+    st->choose_ms = now_ms() - t0;
+    st->instances = f->count;
+    st->bytes_per_instance = XYL_FOREST_INSTANCE_SIZE;
+    count_stats(f, counts, st);
+}
+
+xyl_result xyl_forest_gl_choose(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                                xyl_forest_gl_stats *stats, xyl_diag *diag)
+{
+    resolved rs;
+    xyl_result r = check_frame(f, fr, &rs, diag);
+    if (r != XYL_OK) return r;
+    uint32_t counts[XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES];
+    uint32_t offsets[XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES + 1];
+    xyl_forest_gl_stats st;
+    choose_sort(f, fr, &rs, counts, offsets, &st);
+    if (stats) *stats = st;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
+
+static xyl_result upload_sorted(xyl_forest_gl *f, uint32_t visible, xyl_diag *diag)
+{
+    GLsizeiptr bytes = (GLsizeiptr)((visible ? visible : 1) * sizeof(xyl_forest_instance));
+    if (bytes > f->max_ssbo_bytes)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "%u visible instances exceed the driver's storage block size", visible);
+    if (bytes > f->instance_capacity) {
+        glNamedBufferData(f->instance_buf, bytes, NULL, GL_STREAM_DRAW);
+        f->instance_capacity = bytes;
+    } else {
+        glInvalidateBufferData(f->instance_buf);
+    }
+    if (visible)
+        glNamedBufferSubData(f->instance_buf, 0, (GLsizeiptr)(visible * sizeof *f->sorted),
+                             f->sorted);
+    return xyl__fgl_check(diag, "uploading the forest's instances");
+}
+
+/* A bucket's leaves: per range of its level, draws of as many instances as GLsizei holds. */
+static uint64_t draw_leaf_bucket(const xyl_forest_gl *f, const species *sp, uint32_t level,
+                                 uint32_t first, uint32_t count)
+{
+    const xyl__forest_level *lv = &sp->plan.levels[level];
+    GLuint p = f->leaf_program;
+    uint64_t draws = 0;
+    for (uint32_t r = 0; r < lv->range_count; ++r) {
+        const xyl__forest_range *rg = &sp->plan.ranges[lv->first_range + r];
+        uint32_t chunk = (uint32_t)(INT32_MAX / rg->count);
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_FIRST, rg->first);
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_LENGTH, rg->count);
+        for (uint32_t at = 0; at < count; at += chunk) {
+            uint32_t n = count - at < chunk ? count - at : chunk;
+            glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, first + at);
+            glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)(n * rg->count));
+            ++draws;
+        }
+    }
+    return draws;
+}
+
+static uint64_t draw_leaves(const xyl_forest_gl *f, const resolved *rs, const uint32_t *counts,
+                            const uint32_t *offsets)
+{
+    GLuint p = f->leaf_program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE, rs->leaf.view_proj);
+    glProgramUniform3fv(p, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rs->leaf.light);
+    glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rs->leaf.color);
+    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rs->leaf.cutoff);
+    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rs->leaf.translucency);
+    glProgramUniform2fv(p, XYL_FOLIAGE_GL_UNIFORM_DITHER, 1, rs->leaf.dither);
+    glBindVertexArray(f->vao);
+    glBindTextureUnit(XYL_FOLIAGE_GL_BINDING_TEXTURE, f->texture);
+    uint64_t draws = 0;
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LEAVES, sp->leaf_buf);
+        for (uint32_t k = 0; k < sp->plan.level_count; ++k) {
+            uint32_t b = s * XYL__FOREST_BUCKETS_PER_SPECIES + k;
+            if (counts[b]) draws += draw_leaf_bucket(f, sp, k, offsets[b], counts[b]);
+        }
+    }
+    return draws;
+}
+
+/* Stems for the levels under stem_levels: their buckets are consecutive in the sort. */
+static uint64_t draw_stems(const xyl_forest_gl *f, const resolved *rs, const uint32_t *counts,
+                           const uint32_t *offsets)
+{
+    GLuint p = f->stem_program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE, rs->leaf.view_proj);
+    glProgramUniform3fv(p, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rs->leaf.light);
+    glProgramUniform4fv(p, XYL_FOREST_GL_UNIFORM_STEM_COLOR, 1, rs->stem_color);
+    uint64_t draws = 0;
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        uint32_t b = s * XYL__FOREST_BUCKETS_PER_SPECIES, n = 0;
+        for (uint32_t k = 0; k < sp->stem_levels; ++k) n += counts[b + k];
+        if (!sp->stem_index_count || !n) continue;
+        glBindVertexArray(sp->stem_vao);
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, offsets[b]);
+        glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)sp->stem_index_count, GL_UNSIGNED_INT,
+                                NULL, (GLsizei)n);
+        ++draws;
+    }
+    return draws;
+}
+
+static uint64_t draw_billboards(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                                const resolved *rs, const uint32_t *counts,
+                                const uint32_t *offsets)
+{
+    GLuint p = f->bb_program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, 0, 1, GL_FALSE, rs->leaf.view_proj);
+    glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_EYE, 1, fr->eye);
+    glProgramUniform3fv(p, BB_UNIFORM_LIGHT, 1, rs->leaf.light);
+    glProgramUniform1f(p, BB_UNIFORM_CUTOFF, rs->leaf.cutoff);
+    glProgramUniform2fv(p, BB_UNIFORM_DITHER, 1, rs->leaf.dither);
+    glBindVertexArray(f->vao);
+    uint64_t draws = 0;
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        uint32_t b = s * XYL__FOREST_BUCKETS_PER_SPECIES + sp->plan.level_count;
+        if (!sp->billboard || !counts[b]) continue;
+        xyl__billboard_parts bp;
+        xyl__billboard_gl_parts(sp->billboard, &bp);
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, offsets[b]);
+        glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_BB_CENTER, 1, bp.center);
+        glProgramUniform2fv(p, XYL_FOREST_GL_UNIFORM_BB_HALF, 1, bp.half);
+        glProgramUniform1i(p, XYL_FOREST_GL_UNIFORM_BB_KIND, bp.kind);
+        glProgramUniform1i(p, XYL_FOREST_GL_UNIFORM_BB_PLANES, (GLint)bp.views);
+        glProgramUniform3fv(p, BB_UNIFORM_BAKE_LIGHT, 1, bp.bake_light);
+        glProgramUniform1i(p, BB_UNIFORM_TO_COVERAGE, 0); /* alpha-tested at the cutoff */
+        glBindTextureUnit(0, bp.color_tex);
+        glBindTextureUnit(1, bp.normal_tex);
+        glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)(counts[b] * bp.views));
+        ++draws;
+    }
+    return draws;
+}
+
+xyl_result xyl_forest_gl_draw(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                              xyl_forest_gl_stats *stats, xyl_diag *diag)
+{
+    resolved rs;
+    xyl_result r = check_frame(f, fr, &rs, diag);
+    if (r != XYL_OK) return r;
+    uint32_t counts[XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES];
+    uint32_t offsets[XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES + 1];
+    xyl_forest_gl_stats st;
+    choose_sort(f, fr, &rs, counts, offsets, &st);
+    xyl__fgl_drain_errors();
+    double t0 = now_ms();
+    r = upload_sorted(f, offsets[f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES], diag);
+    st.upload_ms = now_ms() - t0;
+    if (r != XYL_OK) return r;
+    GLboolean cull = glIsEnabled(GL_CULL_FACE);
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOREST_GL_BINDING_INSTANCES, f->instance_buf);
+    st.draws = draw_stems(f, &rs, counts, offsets);
+    st.draws += draw_leaves(f, &rs, counts, offsets);
+    st.draws += draw_billboards(f, fr, &rs, counts, offsets);
+    glBindVertexArray(0);
+    if (cull) glEnable(GL_CULL_FACE);
+    r = xyl__fgl_check(diag, "drawing the forest");
+    if (r != XYL_OK) return r;
+    if (stats) *stats = st;
+    xyl__diag_ok(diag);
+    return XYL_OK;
+}
