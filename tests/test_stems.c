@@ -2,6 +2,7 @@
  * per root, self-intersection counts, per-branch normals, determinism, errors. */
 #include <math.h>
 
+#include "fold_count.h"
 #include "skel_overlap.h"
 #include "test_util.h"
 #include "mesh_internal.h"
@@ -600,6 +601,230 @@ static void no_hard_case_intersects_at_a_joint_k32(void **state)
     assert_no_joint_intersects(32);
 }
 
+/* ---- folds (docs/stems.md, "Folds") ---------------------------------------------------------- */
+
+/* A mesh of the given corners, quads and triangles. */
+static xyl_mesh *mesh_of(const xyl_vec3 *p, size_t nv, const uint32_t *quads, size_t nq,
+                         const uint32_t *tris, size_t nt)
+{
+    xyl_mesh_desc d = {0};
+    d.positions = p;
+    d.vertex_count = nv;
+    d.quads = quads;
+    d.quad_count = nq;
+    d.triangles = tris;
+    d.triangle_count = nt;
+    xyl_mesh *m = NULL;
+    assert_int_equal(xyl_mesh_create(&d, &m, NULL), XYL_OK);
+    return m;
+}
+
+/* The metric itself: a cube (normals 90 degrees apart across every edge) has no fold; a flat
+ * pillow (two triangles back to back) folds at its three edges; a wedge folds only where its two
+ * long faces meet at less than 30 degrees, and a quad's normal is its diagonals' cross product,
+ * so a quad bent along its diagonal still counts by its mean plane. */
+static void fold_count_sees_pillows_and_thin_wedges_not_cubes(void **state)
+{
+    (void)state;
+    static const xyl_vec3 cube[8] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                     {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    static const uint32_t cq[24] = {0, 3, 2, 1, 4, 5, 6, 7, 0, 1, 5, 4,
+                                    1, 2, 6, 5, 2, 3, 7, 6, 3, 0, 4, 7};
+    xyl_mesh *m = mesh_of(cube, 8, cq, 6, NULL, 0);
+    assert_int_equal(fc_count(m), 0);
+    xyl_mesh_destroy(m);
+
+    static const xyl_vec3 pillow[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    static const uint32_t pt[6] = {0, 1, 2, 0, 2, 1};
+    m = mesh_of(pillow, 3, NULL, 0, pt, 2);
+    assert_int_equal(fc_count(m), 3);
+    xyl_mesh_destroy(m);
+
+    /* a triangular prism whose apex edge opens by angle a: two long quads meet there, the
+     * triangle ends meet the quads at 90 degrees; the apex edge folds when a < 30 degrees */
+    for (int deg = 20; deg <= 40; deg += 20) {
+        double h = tan((double)deg * 3.14159265358979323846 / 360.0);
+        xyl_vec3 w[6] = {{0, 0, 0}, {1, (float)-h, 0}, {1, (float)h, 0},
+                         {0, 0, 1}, {1, (float)-h, 1}, {1, (float)h, 1}};
+        static const uint32_t wq[12] = {0, 1, 4, 3, 0, 3, 5, 2, 1, 2, 5, 4};
+        static const uint32_t wt[6] = {0, 2, 1, 3, 4, 5};
+        m = mesh_of(w, 6, wq, 3, wt, 2);
+        xyl_mesh_report rep;
+        assert_int_equal(xyl_mesh_check(m, NULL, &rep, NULL), XYL_OK);
+        assert_true(rep.closed_manifold);
+        assert_int_equal(fc_count(m), deg < 30 ? 1 : 0);
+        xyl_mesh_destroy(m);
+    }
+}
+
+/* Folds of the presets' meshes (normals more than 150 degrees apart across an edge): a ceiling
+ * per preset and k = 3..8, unchecked (the construction alone) and checked (the default build),
+ * measured when the count was introduced. A change may lower a ceiling, never raise one, and
+ * every preset needs its row. The causes (where each fold lies) are printed for k = 4. */
+static const struct {
+    const char *name;
+    size_t unchecked[6], checked[6];
+} preset_fold_ceilings[] = {
+    {"abop-1.24a", {473, 343, 269, 223, 311, 414}, {470, 340, 260, 223, 302, 407}},
+    {"abop-1.24b", {536, 276, 65, 60, 171, 108}, {505, 251, 35, 18, 121, 71}},
+    {"abop-1.24c", {321, 194, 161, 126, 226, 177}, {292, 179, 122, 119, 60, 85}},
+    {"abop-1.24d", {258, 240, 0, 0, 0, 0}, {258, 240, 0, 0, 0, 0}},
+    {"abop-1.24e", {4, 1, 0, 0, 0, 0}, {3, 1, 0, 0, 0, 0}},
+    {"abop-1.24f", {47, 8, 0, 3, 2, 0}, {49, 8, 0, 1, 0, 0}},
+    {"abop-1.25-bush", {2954, 1266, 1059, 669, 996, 693}, {2948, 1266, 973, 665, 719, 694}},
+    {"abop-1.28-stochastic", {106, 58, 41, 43, 57, 63}, {106, 58, 40, 45, 59, 64}},
+    {"abop-1.31a", {217, 147, 95, 66, 103, 100}, {213, 136, 82, 62, 92, 102}},
+    {"abop-2.6-monopodial", {218, 129, 66, 116, 126, 161}, {209, 132, 66, 114, 116, 156}},
+    {"abop-2.7-sympodial", {39, 24, 20, 13, 21, 17}, {38, 24, 28, 13, 18, 19}},
+    {"abop-2.8-ternary", {1129, 371, 222, 103, 418, 256}, {1093, 371, 222, 103, 413, 256}},
+    {"faycal-leaves", {79, 45, 32, 49, 44, 48}, {66, 49, 17, 36, 18, 27}},
+};
+
+static size_t preset_fold_ceiling(const char *name, uint32_t k, bool checked)
+{
+    for (size_t i = 0; i < sizeof preset_fold_ceilings / sizeof preset_fold_ceilings[0]; ++i)
+        if (strcmp(preset_fold_ceilings[i].name, name) == 0)
+            return checked ? preset_fold_ceilings[i].checked[k - 3]
+                           : preset_fold_ceilings[i].unchecked[k - 3];
+    fail_msg("preset %s has no row in preset_fold_ceilings", name);
+    return 0;
+}
+
+/* Holds mesh m of preset `name` to its fold ceiling; at k = 4 prints the folds by cause
+ * (fold_count.h): the table of docs/stems.md, "Folds". Returns the count. */
+static size_t assert_folds_within_ceiling(const char *name, const xyl_skeleton *sk,
+                                          const xyl_mesh *m, uint32_t k, bool checked)
+{
+    size_t folds = fc_count(m), ceiling = preset_fold_ceiling(name, k, checked);
+    assert_true(folds != SIZE_MAX);
+    const char *mode = checked ? "checked" : "unchecked";
+    if (folds > ceiling)
+        fail_msg("%s k = %u %s: %zu folds, more than %zu", name, k, mode, folds, ceiling);
+    if (folds < ceiling)
+        print_message("  %s k = %u %s: %zu folds, below its ceiling %zu\n", name, k, mode, folds,
+                      ceiling);
+    if (k == 4) {
+        fc_tally t;
+        assert_true(fc_tally_of(sk, m, k, &t));
+        assert_int_equal(t.folds, folds);
+        char row[512];
+        int w = snprintf(row, sizeof row, "  %-20s %s: %5zu folds of %6zu edges, %4zu where the "
+                         "skeleton overlaps itself;", name, mode, folds, t.edges, t.overlapped);
+        for (int c = 0; c < FC_CAUSES && w > 0 && (size_t)w < sizeof row; ++c)
+            if (t.by_cause[c])
+                w += snprintf(row + w, sizeof row - (size_t)w, " %s %zu (branch %u),",
+                              fc_cause_names[c], t.by_cause[c], t.first_branch[c]);
+        print_message("%s\n", row);
+    }
+    return folds;
+}
+
+static void assert_preset_folds_within_ceilings(uint32_t k)
+{
+    size_t total = 0, clean = 0;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        xyl_skeleton *sk = grow_preset(name);
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        size_t folds = assert_folds_within_ceiling(name, sk, m, k, false);
+        total += folds;
+        clean += folds == 0;
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+    print_message("k = %u unchecked: %zu folds in all, %zu presets without\n", k, total, clean);
+}
+
+static void presets_fold_no_more_than_measured_k3(void **state)
+{
+    (void)state;
+    assert_preset_folds_within_ceilings(3);
+}
+
+static void presets_fold_no_more_than_measured_k4(void **state)
+{
+    (void)state;
+    assert_preset_folds_within_ceilings(4);
+}
+
+static void presets_fold_no_more_than_measured_k5(void **state)
+{
+    (void)state;
+    assert_preset_folds_within_ceilings(5);
+}
+
+static void presets_fold_no_more_than_measured_k6(void **state)
+{
+    (void)state;
+    assert_preset_folds_within_ceilings(6);
+}
+
+static void presets_fold_no_more_than_measured_k7(void **state)
+{
+    (void)state;
+    assert_preset_folds_within_ceilings(7);
+}
+
+static void presets_fold_no_more_than_measured_k8(void **state)
+{
+    (void)state;
+    assert_preset_folds_within_ceilings(8);
+}
+
+/* Hard cases: none folds at k = 3..8 (straight stems, tapers, simple forks, spokes, kinks up to
+ * 120 degrees) but these, held like the presets. */
+static const struct {
+    const char *name;
+    size_t at_most[6];
+} hard_fold_ceilings[] = {
+    {"binary_depth7.skel", {15, 2, 0, 0, 0, 0}},
+    {"close_forks.skel", {0, 0, 2, 0, 0, 0}},
+    {"fork_10.skel", {0, 0, 4, 2, 0, 0}},
+    {"fork_30.skel", {3, 0, 0, 0, 0, 0}},
+    {"fork_back_150.skel", {3, 0, 0, 0, 0, 0}},
+    {"fork_on_child.skel", {2, 0, 0, 0, 0, 0}},
+    {"fork_siblings_1deg.skel", {1, 0, 0, 0, 0, 0}},
+    {"fork_thin_1e-4.skel", {1, 0, 0, 0, 0, 0}},
+    {"fork_up_down.skel", {1, 0, 0, 0, 0, 0}},
+    {"kink_150.skel", {0, 1, 1, 1, 1, 1}},
+    {"kink_170.skel", {1, 2, 1, 2, 2, 3}},
+    {"spokes_16.skel", {1, 0, 0, 0, 0, 0}},
+    {"spokes_8_thick.skel", {0, 0, 0, 2, 0, 0}},
+};
+
+static void check_hard_folds(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    size_t *total = ctx;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+        size_t folds = fc_count(m), ceiling = 0;
+        for (size_t i = 0; i < sizeof hard_fold_ceilings / sizeof hard_fold_ceilings[0]; ++i)
+            if (strcmp(hard_fold_ceilings[i].name, name) == 0)
+                ceiling = hard_fold_ceilings[i].at_most[k - 3];
+        if (folds > ceiling)
+            fail_msg("%s k = %u: %zu folds, more than %zu", name, k, folds, ceiling);
+        if (folds < ceiling)
+            print_message("  %s k = %u: %zu folds, below its ceiling %zu\n", name, k, folds,
+                          ceiling);
+        *total += folds;
+        xyl_mesh_destroy(m);
+    }
+}
+
+static void hard_cases_fold_only_where_measured(void **state)
+{
+    (void)state;
+    size_t total = 0;
+    assert_true(tu_for_each_hard_case(check_hard_folds, &total) >= 40);
+    print_message("hard cases, k = 3..8: %zu folds in all\n", total);
+    /* the simplest ones by name, so that a table entry cannot hide them */
+    static const char *const zero[] = {"stem_up.skel", "stem_taper.skel", "stem_diagonal.skel",
+                                       "fork_60.skel", "fork_90.skel", "fork_y_symmetric.skel"};
+    for (size_t i = 0; i < sizeof zero / sizeof zero[0]; ++i)
+        for (size_t j = 0; j < sizeof hard_fold_ceilings / sizeof hard_fold_ceilings[0]; ++j)
+            assert_true(strcmp(zero[i], hard_fold_ceilings[j].name) != 0);
+}
+
 /* The construction alone does not yet keep the presets free of intersecting pairs at joints
  * (docs/stems.md, "State"). Their counts for k = 3..8 may not rise above these, measured when
  * laterals came to be hidden inside their parent, a thicker sibling or a tube they run into and
@@ -715,7 +940,7 @@ static void assert_presets_free_of_joint_intersections(uint32_t k)
                       "sanitizers; k = 4 and 5 run here)\n", k);
         return;
     }
-    size_t first = 0, kept = 0, dropped = 0, later = 0, worst_i = 0;
+    size_t first = 0, kept = 0, dropped = 0, later = 0, worst_i = 0, folds = 0;
     double worst = 1.0;
     for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
         const char *name = xyl_lsystem_preset_name(i);
@@ -735,6 +960,7 @@ static void assert_presets_free_of_joint_intersections(uint32_t k)
         if (t.joint)
             fail_msg("%s k = %u: %zu intersecting pairs at joints after the check (one on branches "
                      "%u and %u)", name, k, t.joint, t.joint_branches[0], t.joint_branches[1]);
+        folds += assert_folds_within_ceiling(name, sk, m, k, true);
         assert_int_equal(st.joint_pairs_left, 0);
         assert_int_equal(st.skeleton_pairs, t.overlap);
         assert_true(st.builds >= 1 && faces == st.faces_checked);
@@ -750,6 +976,7 @@ static void assert_presets_free_of_joint_intersections(uint32_t k)
                   "left out, %.1f %% of the faces kept (fewest: %s, %.1f %%)\n", k, later, dropped,
                   100.0 * (double)kept / (double)first, xyl_lsystem_preset_name(worst_i),
                   100.0 * worst);
+    print_message("k = %u checked: %zu folds in all\n", k, folds);
 }
 
 static void presets_are_free_of_intersections_at_joints_k3(void **state)
@@ -1720,8 +1947,11 @@ static void build_survives_every_allocation_failure(void **state)
     xyl_skeleton_destroy(small);
 }
 
-int main(void)
+/* An argument runs only the tests whose names match it (cmocka's pattern: * and ?), e.g.
+ * test_stems 'presets_fold*'. */
+int main(int argc, char **argv)
 {
+    if (argc > 1) cmocka_set_test_filter(argv[1]);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(every_hard_case_is_a_closed_manifold),
         cmocka_unit_test(simd_loops_give_the_scalar_bits),
@@ -1754,6 +1984,14 @@ int main(void)
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k6),
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k7),
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k8),
+        cmocka_unit_test(fold_count_sees_pillows_and_thin_wedges_not_cubes),
+        cmocka_unit_test(presets_fold_no_more_than_measured_k3),
+        cmocka_unit_test(presets_fold_no_more_than_measured_k4),
+        cmocka_unit_test(presets_fold_no_more_than_measured_k5),
+        cmocka_unit_test(presets_fold_no_more_than_measured_k6),
+        cmocka_unit_test(presets_fold_no_more_than_measured_k7),
+        cmocka_unit_test(presets_fold_no_more_than_measured_k8),
+        cmocka_unit_test(hard_cases_fold_only_where_measured),
         cmocka_unit_test(crossing_roots_are_left_and_reported),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(a_twig_of_one_segment_ends_at_its_tip),
