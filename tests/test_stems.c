@@ -721,6 +721,11 @@ static size_t assert_folds_within_ceiling(const char *name, const xyl_skeleton *
 
 static void assert_preset_folds_within_ceilings(uint32_t k)
 {
+    if (SANITIZED && k != 4 && k != 5) {
+        print_message("k = %u: left to the Release build (the sanitizers' build runs k = 4 and "
+                      "5)\n", k);
+        return;
+    }
     size_t total = 0, clean = 0;
     for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
         const char *name = xyl_lsystem_preset_name(i);
