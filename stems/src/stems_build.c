@@ -237,12 +237,32 @@ static void free_state(stems *s)
     void *arrays[] = {s->child_start, s->child_list, s->main,  s->pos,      s->uv,
                       s->vbranch,     s->nrm,        s->quads, s->fbranch,  s->qwrap,
                       s->tris,        s->tbranch,    s->twrap, s->taken,    s->chain,
-                      s->stations,    s->rings,      s->spans, s->pending,  s->cones};
+                      s->stations,    s->rings,      s->spans, s->pending,  s->cones,
+                      s->base_rings};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 
+/* The edges of every capped root ring as vertex pairs (from s->alloc; NULL with *count 0 when
+ * there are none): subdivision keeps them infinitely sharp, so the ring and its cap stay in the
+ * root's plane instead of being rounded off and lifted (docs/stems.md, "The base"). */
+static xyl_result base_creases(stems *s, uint32_t **pairs, size_t *count)
+{
+    *pairs = NULL;
+    *count = s->nbase * s->k;
+    if (*count == 0) return XYL_OK;
+    *pairs = xyl__alloc_array(&s->alloc, *count, 2 * sizeof **pairs);
+    if (!*pairs) return xyl__stems_oom(s);
+    uint32_t *p = *pairs;
+    for (size_t b = 0; b < s->nbase; ++b)
+        for (uint32_t j = 0; j < s->k; ++j) {
+            *p++ = s->base_rings[b] + j;
+            *p++ = s->base_rings[b] + (j + 1 < s->k ? j + 1 : 0);
+        }
+    return XYL_OK;
+}
+
 static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, uint32_t *tv,
-                         xyl_mesh **out)
+                         const xyl__creases *creases, xyl_mesh **out)
 {
     xyl_result r = XYL_OK;
     /* the mesh's positions are the skeleton's local coordinates */
@@ -250,8 +270,8 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
     if (a->normals) return xyl__mesh_adopt_view(a, tv, &s->alloc, out, s->diag);
     if (d->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl__mesh_arrays fine;
-        r = xyl__subdivide(a, d->subdivision, !d->keep_control_points, &d->limits, &s->alloc,
-                           &fine, s->diag);
+        r = xyl__subdivide_creased(a, creases, d->subdivision, !d->keep_control_points,
+                                   &d->limits, XYL__SUBDIVIDE_ANY, &s->alloc, &fine, s->diag);
         xyl__mesh_arrays_free(a, &s->alloc);
         if (r) return r;
         *a = fine;
@@ -348,9 +368,15 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
                       "the stem mesh needs more than %llu faces", (unsigned long long)s.max_faces);
     xyl__mesh_arrays a;
     uint32_t *tv = NULL;
+    xyl__creases creases = {NULL, 0};
+    uint32_t *pairs = NULL;
+    if (!r && desc->subdivision != XYL_SUBDIVIDE_NONE) r = base_creases(&s, &pairs, &creases.count);
+    creases.pairs = pairs;
     if (!r) r = hand_over(&s, &a, &tv);
     free_state(&s);
-    return r ? r : finish(&s, desc, &a, tv, out);
+    if (!r) r = finish(&s, desc, &a, tv, &creases, out);
+    xyl__free(&s.alloc, pairs);
+    return r;
 }
 
 /* Judges the intersecting pairs of mesh m (stems_joints.c): *t counts them, and drop has the

@@ -82,6 +82,9 @@ typedef struct stems {
     uint32_t apex[2];   /* the domed caps' apexes of the branch being built (root, tip), or
                            UINT32_MAX (k < 5, no root cap) */
     bool open_base;     /* roots get no cap (XYL_STEMS_BASE_OPEN) */
+    uint32_t *base_rings; /* the first vertex of each capped root ring, whose k edges
+                             subdivision keeps as creases (docs/stems.md, "The base") */
+    size_t nbase, bcap;
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     uint8_t *qwrap; /* per quad: its uv_wraps bits, set as it is made */
