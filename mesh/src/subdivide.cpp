@@ -949,11 +949,12 @@ struct Base {
     Buffer<int> ring_start;  /* nv + 1 */
     Buffer<int> ring;        /* each vertex's outgoing half-edges, counter-clockwise */
     Buffer<float> sharp;     /* ne: each edge's sharpness (a crease's infinite), or NULL */
+    Buffer<uint8_t> on_crease; /* nv: the vertex has a crease edge (with sharp) */
 
     explicit Base(const xyl_allocator *alloc)
         : nv(0), nf(0), ne(0), corners(0), size(nullptr), vert(nullptr), start(alloc),
           face_of(alloc), twin(alloc), edge(alloc), edge_corner(alloc), ring_start(alloc),
-          ring(alloc), sharp(alloc)
+          ring(alloc), sharp(alloc), on_crease(alloc)
     {
     }
     bool creased() const { return sharp.get() != nullptr; }
@@ -1048,7 +1049,8 @@ Fit order_rings(Base *b)
 Fit mark_creases(Base *b, const Creases &c, size_t *bad)
 {
     if (c.count == 0) return Fit::YES;
-    if (!b->sharp.allocate(size_t(b->ne))) return Fit::NO_MEMORY;
+    if (!b->sharp.allocate(size_t(b->ne)) || !b->on_crease.allocate(size_t(b->nv)))
+        return Fit::NO_MEMORY;
     const int *rs = b->ring_start.get(), *ring = b->ring.get();
     for (size_t i = 0; i < c.count; ++i) {
         const int from = int(c.pairs[2 * i]), to = int(c.pairs[2 * i + 1]);
@@ -1059,6 +1061,7 @@ Fit mark_creases(Base *b, const Creases &c, size_t *bad)
             return Fit::NO;
         }
         b->sharp.get()[b->edge.get()[ring[j]]] = Sdc::Crease::SHARPNESS_INFINITE;
+        b->on_crease.get()[from] = b->on_crease.get()[to] = 1;
     }
     return Fit::YES;
 }
@@ -1126,6 +1129,7 @@ public:
         const float *es = b_.sharp.get();
         int count = 0;
         if (u < b_.nv) {
+            if (!b_.on_crease.get()[u]) return 0;
             const int s = b_.ring_start.get()[u], n = b_.valence(u);
             for (int i = 0; i < n; ++i) {
                 sharp[i] = es[b_.edge.get()[b_.ring.get()[s + i]]];
