@@ -218,9 +218,9 @@ typedef struct base_ctx {
 
 /* Every root's ring lies in the root's plane (at least k vertices within BASE_TOL r of it,
  * about r from the root; a creased ring subdivided: 2k, its vertex and edge points, on the
- * presets none with a normal facing down), and no vertex passes below the plane by more than BASE_TOL r: of the
- * whole tree, or (hard cases, some of which grow back below their root) of the root's branch
- * within 3 r of the root. */
+ * presets none with a normal facing down), and no vertex passes below the plane by more than
+ * BASE_TOL r: of the whole tree, or (hard cases, some of which grow back below their root) of
+ * the root's branch within 3 r of the root. */
 static void check_base(const char *name, const xyl_skeleton *sk, void *ctx)
 {
     base_ctx *b = ctx;

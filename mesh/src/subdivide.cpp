@@ -1531,7 +1531,8 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit
                              "the direct path needs a closed oriented manifold whose vertices "
                              "are each in one fan of 3 to %d faces", kDirectMaxValence);
     }
-    const xyl_result checked = check_creases(control, static_cast<int>(in->vertex_count), creases, alloc, diag);
+    const xyl_result checked =
+        check_creases(control, static_cast<int>(in->vertex_count), creases, alloc, diag);
     if (checked) return checked;
     std::unique_ptr<Refiner> r = create_refiner(loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK,
                                                 static_cast<int>(in->vertex_count), control,

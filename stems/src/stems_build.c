@@ -280,7 +280,8 @@ static void tag_base_rings(const stems *s, const xyl__mesh_arrays *a, uint32_t *
         const uint32_t *fv = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
         for (int c = 0; c < n; ++c) {
             const uint32_t t = tag[fv[c]];
-            if (t == 0 || t & BASE_PENDING || (t - 1) % (2 * k) >= k) continue; /* not a vertex point */
+            if (t == 0 || t & BASE_PENDING || (t - 1) % (2 * k) >= k)
+                continue; /* not a vertex point */
             const uint32_t nb[2] = {fv[(c + 1) % n], fv[(c + n - 1) % n]};
             for (int i = 0; i < 2; ++i) {
                 uint32_t *w = &tag[nb[i]];
@@ -401,7 +402,9 @@ static xyl_result base_ring_normals(stems *s, xyl__mesh_arrays *a)
             const uint32_t *fv = arrays_face(a, f, &n);
             for (int c = 0; c < n; ++c) {
                 const uint32_t t = tag[fv[c]];
-                if (t && !(t & BASE_PENDING)) face[start[t - 1]++] = (uint32_t)f, vertex[t - 1] = fv[c];
+                if (!t || t & BASE_PENDING) continue;
+                face[start[t - 1]++] = (uint32_t)f;
+                vertex[t - 1] = fv[c];
             }
         }
         for (size_t i = slots; i > 0; --i) start[i] = start[i - 1];
@@ -409,8 +412,8 @@ static xyl_result base_ring_normals(stems *s, xyl__mesh_arrays *a)
         for (size_t i = 0; i < slots; ++i) {
             xyl__dvec3 band;
             const uint32_t u = vertex[i];
-            if (start[i + 1] == start[i] ||
-                !band_normal(s, a, tag, u, (uint32_t)i, face + start[i], (int)(start[i + 1] - start[i]), &band))
+            const int m = (int)(start[i + 1] - start[i]);
+            if (m == 0 || !band_normal(s, a, tag, u, (uint32_t)i, face + start[i], m, &band))
                 continue;
             a->normals[u] = xyl__to_f3(xyl__d3_normalize_or(band, xyl__from_f3(a->normals[u])));
         }
