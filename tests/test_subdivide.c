@@ -1157,6 +1157,227 @@ static void allocation_failures_fail_cleanly_and_leak_nothing(void **state)
     xyl_mesh_destroy(c);
 }
 
+/* ---- creases: edges kept infinitely sharp (xyl__subdivide_creased) ------------------------- */
+
+/* The prism's bottom ring as creases: (i, i + 1 mod k), the ring's own direction. With
+ * corner_and_dart, also the band edge (0, k) up from vertex 0, which makes vertex 0 a corner
+ * (three creases) and vertex k a dart (one). Returns the number of pairs. */
+static size_t prism_creases(int k, bool corner_and_dart, uint32_t *pairs)
+{
+    size_t n = 0;
+    for (int i = 0; i < k; ++i, ++n) {
+        pairs[2 * n] = (uint32_t)i;
+        pairs[2 * n + 1] = (uint32_t)((i + 1) % k);
+    }
+    if (corner_and_dart) {
+        pairs[2 * n] = (uint32_t)k; /* either order */
+        pairs[2 * n + 1] = 0;
+        ++n;
+    }
+    return n;
+}
+
+static void assert_same_bits(const void *a, const void *b, size_t bytes, const char *what,
+                             const char *array)
+{
+    if ((a == NULL) != (b == NULL)) fail_msg("%s: %s is NULL on one path only", what, array);
+    if (a && bytes && memcmp(a, b, bytes) != 0) fail_msg("%s: %s differ", what, array);
+}
+
+/* Every array of two refined meshes, bit for bit. */
+static void assert_same_refined(const xyl__mesh_arrays *a, const xyl__mesh_arrays *b,
+                                const char *what)
+{
+    assert_int_equal(a->vertex_count, b->vertex_count);
+    assert_int_equal(a->quad_count, b->quad_count);
+    assert_int_equal(a->triangle_count, b->triangle_count);
+    const size_t nv = a->vertex_count, nf = a->quad_count + a->triangle_count;
+    assert_same_bits(a->positions, b->positions, nv * sizeof *a->positions, what, "positions");
+    assert_same_bits(a->normals, b->normals, nv * sizeof *a->normals, what, "normals");
+    assert_same_bits(a->uvs, b->uvs, 2 * nv * sizeof *a->uvs, what, "uvs");
+    assert_same_bits(a->branch_ids, b->branch_ids, nv * sizeof *a->branch_ids, what, "branches");
+    assert_same_bits(a->quads, b->quads, 4 * a->quad_count * sizeof *a->quads, what, "quads");
+    assert_same_bits(a->triangles, b->triangles, 3 * a->triangle_count * sizeof *a->triangles,
+                     what, "triangles");
+    assert_same_bits(a->face_branches, b->face_branches, nf * sizeof *a->face_branches, what,
+                     "face branches");
+    assert_same_bits(a->uv_wraps, b->uv_wraps, nf * sizeof *a->uv_wraps, what, "uv wraps");
+}
+
+/* The direct path takes creases with Sdc's crease, corner and dart masks and gives Far's bits:
+ * a creased ring, and a ring with a corner and a dart, k = 3..8, both schemes, limit or not. */
+static void creased_direct_path_matches_far_bit_for_bit(void **state)
+{
+    (void)state;
+    for (int k = 3; k <= 8; ++k)
+        for (int extra = 0; extra <= 1; ++extra)
+            for (int scheme = XYL_SUBDIVIDE_CATMARK; scheme <= XYL_SUBDIVIDE_LOOP; ++scheme)
+                for (int limit = 0; limit <= 1; ++limit) {
+                    xyl_mesh *m = prism(k, 4, 1.0);
+                    uint32_t pairs[2 * (PRISM_MAX_K + 1)];
+                    const xyl__creases c = {pairs, prism_creases(k, extra, pairs)};
+                    char what[96];
+                    snprintf(what, sizeof what, "k=%d %s %s %s", k, extra ? "corner" : "ring",
+                             scheme == XYL_SUBDIVIDE_LOOP ? "loop" : "catmark",
+                             limit ? "limit" : "control points");
+                    const xyl__mesh_arrays *in = &((const xyl__mesh *)m)->a;
+                    xyl__mesh_arrays far, direct, plain;
+                    xyl_diag diag = fresh_diag();
+                    xyl_subdivision sch = (xyl_subdivision)scheme;
+                    assert_int_equal(xyl__subdivide_creased(in, &c, sch, limit, NULL,
+                                                            XYL__SUBDIVIDE_FAR, NULL, &far, &diag),
+                                     XYL_OK);
+                    assert_int_equal(xyl__subdivide_creased(in, &c, sch, limit, NULL,
+                                                            XYL__SUBDIVIDE_DIRECT, NULL, &direct,
+                                                            &diag),
+                                     XYL_OK);
+                    assert_same_refined(&far, &direct, what);
+                    /* the creases change the result: the check above compares something */
+                    assert_int_equal(xyl__subdivide_by(in, sch, limit, NULL, XYL__SUBDIVIDE_DIRECT,
+                                                       NULL, &plain, &diag),
+                                     XYL_OK);
+                    assert_true(memcmp(plain.positions, direct.positions,
+                                       plain.vertex_count * sizeof *plain.positions) != 0);
+                    xyl__mesh_arrays_free(&far, NULL);
+                    xyl__mesh_arrays_free(&direct, NULL);
+                    xyl__mesh_arrays_free(&plain, NULL);
+                    xyl_mesh_destroy(m);
+                }
+}
+
+/* A creased bottom ring stays in its plane (z = 0) and the cap inside it stays flat: every
+ * refined vertex born of the cap is at z = 0 exactly and none is below it, with or without the
+ * limit. Without the creases the smooth rules lift the ring off the plane. */
+static void a_creased_ring_and_its_cap_stay_in_their_plane(void **state)
+{
+    (void)state;
+    for (int k = 3; k <= 8; ++k)
+        for (int scheme = XYL_SUBDIVIDE_CATMARK; scheme <= XYL_SUBDIVIDE_LOOP; ++scheme)
+            for (int limit = 0; limit <= 1; ++limit) {
+                xyl_mesh *m = prism(k, 4, 1.0);
+                uint32_t pairs[2 * PRISM_MAX_K];
+                const xyl__creases c = {pairs, prism_creases(k, false, pairs)};
+                const xyl__mesh_arrays *in = &((const xyl__mesh *)m)->a;
+                const bool loop = scheme == XYL_SUBDIVIDE_LOOP;
+                for (int creased = 0; creased <= 1; ++creased) {
+                    xyl__mesh_arrays out;
+                    xyl_diag diag = fresh_diag();
+                    assert_int_equal(xyl__subdivide_creased(in, creased ? &c : NULL,
+                                                            (xyl_subdivision)scheme, limit, NULL,
+                                                            XYL__SUBDIVIDE_ANY, NULL, &out, &diag),
+                                     XYL_OK);
+                    size_t on_plane = 0;
+                    double lowest = INFINITY, ring_lowest = INFINITY;
+                    for (size_t v = 0; v < out.vertex_count; ++v) {
+                        lowest = fmin(lowest, out.positions[v].z);
+                        on_plane += out.positions[v].z == 0.0f;
+                        /* vertex points come first: the ring's are 0 .. k - 1 */
+                        if (v < (size_t)k) ring_lowest = fmin(ring_lowest, out.positions[v].z);
+                    }
+                    /* the ring's k vertex and k edge points, the fan's k - 3 inner edges'
+                     * points and (Catmull-Clark) its k - 2 face points */
+                    const size_t cap = (size_t)(2 * k + (k - 3) + (loop ? 0 : k - 2));
+                    if (creased) {
+                        assert_true(lowest == 0.0);
+                        assert_int_equal(on_plane, cap);
+                    } else {
+                        assert_true(lowest >= 0.0);
+                        assert_true(ring_lowest > 0.01);
+                        assert_true(on_plane < cap);
+                    }
+                    xyl__mesh_arrays_free(&out, NULL);
+                }
+                xyl_mesh_destroy(m);
+            }
+}
+
+/* Creases name two distinct vertices that are the ends of an edge (for Loop, of the triangles
+ * its quads are split into), on both paths; else XYL_ERR_INVALID_ARGUMENT, diag.index the
+ * pair, and the output zeroed. */
+static void creases_must_be_edges_of_the_mesh(void **state)
+{
+    (void)state;
+    const int k = 4;
+    xyl_mesh *m = prism(k, 3, 1.0);
+    const xyl__mesh_arrays *in = &((const xyl__mesh *)m)->a;
+    const uint32_t out_of_range[] = {0, 1, 1, 12}, same[] = {0, 1, 2, 2};
+    const uint32_t diagonal[] = {0, 1, 0, k + 1}; /* the band quad (0, 1, 5, 4)'s diagonal */
+    struct {
+        const uint32_t *pairs;
+        size_t count;
+        int64_t index;
+        bool loop_ok; /* Loop splits (0, 1, 5, 4) into (0, 1, 5), (0, 5, 4) */
+    } cases[] = {{NULL, 1, -1, false},
+                 {out_of_range, 2, 1, false},
+                 {same, 2, 1, false},
+                 {diagonal, 2, 1, true}};
+    xyl__mesh_arrays zero;
+    memset(&zero, 0, sizeof zero);
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; ++i)
+        for (int scheme = XYL_SUBDIVIDE_CATMARK; scheme <= XYL_SUBDIVIDE_LOOP; ++scheme)
+            for (int path = XYL__SUBDIVIDE_ANY; path <= XYL__SUBDIVIDE_DIRECT; ++path) {
+                const xyl__creases c = {cases[i].pairs, cases[i].count};
+                const bool ok = cases[i].loop_ok && scheme == XYL_SUBDIVIDE_LOOP;
+                xyl__mesh_arrays out;
+                memset(&out, 0xab, sizeof out);
+                xyl_diag diag = fresh_diag();
+                xyl_result r = xyl__subdivide_creased(in, &c, (xyl_subdivision)scheme, true, NULL,
+                                                      (xyl__subdivide_path)path, NULL, &out,
+                                                      &diag);
+                if (ok) {
+                    assert_int_equal(r, XYL_OK);
+                    xyl__mesh_arrays_free(&out, NULL);
+                    continue;
+                }
+                assert_int_equal(r, XYL_ERR_INVALID_ARGUMENT);
+                assert_int_equal(diag.index, cases[i].index);
+                assert_true(strstr(diag.message, "crease") != NULL);
+                assert_memory_equal(&out, &zero, sizeof out);
+            }
+    /* no creases: exactly xyl__subdivide_by */
+    xyl__mesh_arrays a, b;
+    const xyl__creases none = {NULL, 0};
+    assert_int_equal(xyl__subdivide_creased(in, &none, XYL_SUBDIVIDE_CATMARK, true, NULL,
+                                            XYL__SUBDIVIDE_ANY, NULL, &a, NULL),
+                     XYL_OK);
+    assert_int_equal(xyl__subdivide(in, XYL_SUBDIVIDE_CATMARK, true, NULL, NULL, &b, NULL), XYL_OK);
+    assert_same_refined(&a, &b, "no creases");
+    xyl__mesh_arrays_free(&a, NULL);
+    xyl__mesh_arrays_free(&b, NULL);
+    xyl_mesh_destroy(m);
+}
+
+/* The creased paths fail cleanly on every allocation failure, Far's and the direct one's. */
+static void creased_allocation_failures_fail_cleanly_and_leak_nothing(void **state)
+{
+    (void)state;
+    const int k = 5;
+    xyl_mesh *m = prism(k, 3, 1.0);
+    const xyl__mesh_arrays *in = &((const xyl__mesh *)m)->a;
+    uint32_t pairs[2 * PRISM_MAX_K];
+    const xyl__creases c = {pairs, prism_creases(k, false, pairs)};
+    for (int path = XYL__SUBDIVIDE_FAR; path <= XYL__SUBDIVIDE_DIRECT; ++path) {
+        size_t failures = 0;
+        for (size_t n = 1;; ++n) {
+            tu_counter cnt = {0, 0, 0, n};
+            xyl_allocator alloc = tu_counting(&cnt);
+            xyl__mesh_arrays out;
+            xyl_result r = xyl__subdivide_creased(in, &c, XYL_SUBDIVIDE_CATMARK, true, NULL,
+                                                  (xyl__subdivide_path)path, &alloc, &out, NULL);
+            if (r == XYL_OK) {
+                xyl__mesh_arrays_free(&out, &alloc);
+                assert_int_equal(cnt.allocs, cnt.frees);
+                break;
+            }
+            assert_int_equal(r, XYL_ERR_OUT_OF_MEMORY);
+            assert_int_equal(cnt.allocs, cnt.frees);
+            ++failures;
+        }
+        assert_true(failures > 3);
+    }
+    xyl_mesh_destroy(m);
+}
+
 static void internal_entry_leaves_normals_to_the_caller(void **state)
 {
     (void)state;
@@ -1213,6 +1434,10 @@ int main(void)
         cmocka_unit_test(refused_topology_fails_with_unsupported),
         cmocka_unit_test(allocation_failures_fail_cleanly_and_leak_nothing),
         cmocka_unit_test(internal_entry_leaves_normals_to_the_caller),
+        cmocka_unit_test(creased_direct_path_matches_far_bit_for_bit),
+        cmocka_unit_test(a_creased_ring_and_its_cap_stay_in_their_plane),
+        cmocka_unit_test(creases_must_be_edges_of_the_mesh),
+        cmocka_unit_test(creased_allocation_failures_fail_cleanly_and_leak_nothing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -55,6 +55,31 @@ xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme,
                              const xyl_mesh_limits *limits, xyl__subdivide_path path,
                              const xyl_allocator *alloc, xyl__mesh_arrays *out, xyl_diag *diag);
 
+/* Edges that subdivision keeps infinitely sharp (OpenSubdiv's semi-sharp creases with infinite
+ * sharpness): count vertex pairs, pairs[2 i] and pairs[2 i + 1], each the two ends of an edge of
+ * the mesh as refined (a side of a face; for Loop also the diagonal (a, c) each quad
+ * (a, b, c, d) is split along), in either order. An edge point of such an edge is its midpoint;
+ * a vertex with two of them follows the crease rule (1/8, 6/8, 1/8) and the crease limit mask
+ * (1/6, 4/6, 1/6) along them; one with three or more stays where it is (a corner); one with a
+ * single crease (a dart) is smooth. The stem mesher creases each root ring of a closed base,
+ * so the ring and the cap inside it stay in the root's plane (docs/stems.md, "The base"). */
+typedef struct xyl__creases {
+    const uint32_t *pairs;
+    size_t count;
+} xyl__creases;
+
+/* xyl__subdivide_by with creases (NULL or count 0: none, exactly as xyl__subdivide_by). Both
+ * paths take them, Far through its topology descriptor's creases, the direct one with Sdc's
+ * crease, corner and dart masks in the same order of sums, so their outputs stay bit-identical.
+ * Errors besides those of xyl__subdivide: XYL_ERR_INVALID_ARGUMENT for pairs NULL with a
+ * count, or a pair whose ends are out of range or equal (checked for XYL_SUBDIVIDE_NONE too),
+ * or that is not an edge (diag.index: the pair). */
+xyl_result xyl__subdivide_creased(const xyl__mesh_arrays *in, const xyl__creases *creases,
+                                  xyl_subdivision scheme, bool limit,
+                                  const xyl_mesh_limits *limits, xyl__subdivide_path path,
+                                  const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                                  xyl_diag *diag);
+
 /* Measures, with OpenSubdiv's own limit evaluation (Far::PrimvarRefiner::Limit after one
  * Catmark level), the limit radius of a mid-section ring vertex of a long capped prism whose
  * k-gon rings have radius 1, and writes it to *factor. The cubic B-spline limit rule predicts

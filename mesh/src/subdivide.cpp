@@ -228,13 +228,92 @@ void fill_control(const xyl__mesh_arrays *in, bool loop, Control *c)
     }
 }
 
-std::unique_ptr<Refiner> create_refiner(Sdc::SchemeType type, int vertices, const Control &c)
+/* The infinitely sharp edges asked for (xyl__creases), pairs of input vertex indices. */
+struct Creases {
+    const uint32_t *pairs;
+    size_t count;
+};
+
+/* Every crease joins two distinct vertices in range; else XYL_ERR_INVALID_ARGUMENT naming it. */
+xyl_result check_crease_ends(const xyl__mesh_arrays *in, const Creases &c, xyl_diag *diag)
+{
+    const size_t nv = in->vertex_count;
+    for (size_t i = 0; i < c.count; ++i) {
+        const uint32_t a = c.pairs[2 * i], b = c.pairs[2 * i + 1];
+        if (a >= nv || b >= nv || a == b)
+            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, static_cast<int64_t>(i),
+                             "crease %zu joins vertices %u and %u, not two distinct vertices "
+                             "of the %zu", i, a, b, nv);
+    }
+    return XYL_OK;
+}
+
+xyl_result not_an_edge(const Creases &c, size_t i, xyl_diag *diag)
+{
+    return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, static_cast<int64_t>(i),
+                     "crease %zu joins vertices %u and %u, which no face has as a side", i,
+                     c.pairs[2 * i], c.pairs[2 * i + 1]);
+}
+
+/* Every crease (its ends checked) is a side of a face of the control mesh as refined (Loop's
+ * quads split in two); else XYL_ERR_INVALID_ARGUMENT naming it. Each vertex's outgoing sides
+ * are gathered once, so the check costs one pass over the faces. The direct path finds the
+ * creases in its own half-edges instead (mark_creases). */
+xyl_result check_creases(const Control &control, int vertices, const Creases &c,
+                         const xyl_allocator *alloc, xyl_diag *diag)
+{
+    if (c.count == 0) return XYL_OK;
+    const size_t nv = size_t(vertices);
+    const int *count = control.counts.get(), *idx = control.indices.get();
+    size_t corners = 0;
+    for (int f = 0; f < control.faces; ++f) corners += size_t(count[f]);
+    Buffer<size_t> start(alloc, nv + 1);
+    Buffer<uint32_t> head(alloc);
+    if (!start.get() || !head.allocate_unset(corners))
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the creases");
+    size_t *st = start.get();
+    for (size_t i = 0; i < corners; ++i) ++st[idx[i] + 1];
+    for (size_t v = 0; v < nv; ++v) st[v + 1] += st[v];
+    for (int f = 0, s = 0; f < control.faces; s += count[f++]) /* st[v] ends at v's end ... */
+        for (int k = 0; k < count[f]; ++k)
+            head.get()[st[idx[s + k]]++] = uint32_t(idx[s + (k + 1 < count[f] ? k + 1 : 0)]);
+    for (size_t v = nv; v > 0; --v) st[v] = st[v - 1]; /* ... and shifts back to its start */
+    st[0] = 0;
+    auto side = [&](uint32_t from, uint32_t to) {
+        for (size_t i = st[from]; i < st[from + 1]; ++i)
+            if (head.get()[i] == to) return true;
+        return false;
+    };
+    for (size_t i = 0; i < c.count; ++i) {
+        const uint32_t a = c.pairs[2 * i], b = c.pairs[2 * i + 1];
+        if (!side(a, b) && !side(b, a)) return not_an_edge(c, i, diag);
+    }
+    return XYL_OK;
+}
+
+std::unique_ptr<Refiner> create_refiner(Sdc::SchemeType type, int vertices, const Control &c,
+                                        const Creases &creases, const xyl_allocator *alloc)
 {
     Far::TopologyDescriptor desc;
     desc.numVertices = vertices;
     desc.numFaces = c.faces;
     desc.numVertsPerFace = c.counts.get();
     desc.vertIndicesPerFace = c.indices.get();
+    /* checked by check_crease_ends: indices in range, so they fit Far's int */
+    Buffer<int> pairs(alloc);
+    Buffer<float> weights(alloc);
+    if (creases.count) {
+        if (!pairs.allocate_unset(2 * creases.count) || !weights.allocate_unset(creases.count))
+            throw std::bad_alloc();
+        for (size_t i = 0; i < creases.count; ++i) {
+            pairs.get()[2 * i] = static_cast<int>(creases.pairs[2 * i]);
+            pairs.get()[2 * i + 1] = static_cast<int>(creases.pairs[2 * i + 1]);
+            weights.get()[i] = Sdc::Crease::SHARPNESS_INFINITE;
+        }
+        desc.numCreases = static_cast<int>(creases.count);
+        desc.creaseVertexIndexPairs = pairs.get();
+        desc.creaseWeights = weights.get();
+    }
     Sdc::Options sdc;
     /* Boundaries (none on a closed stem mesh) stay put: sharp edges and corners. */
     sdc.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
@@ -696,6 +775,38 @@ struct SmoothVertex {
     }
 };
 
+/* A crease edge (infinitely sharp, its children too). */
+struct CreaseEdge {
+    int GetNumFaces() const { return 2; }
+    float GetSharpness() const { return Sdc::Crease::SHARPNESS_INFINITE; }
+    void GetChildSharpnesses(const Sdc::Crease &, float s[2]) const
+    {
+        s[0] = s[1] = Sdc::Crease::SHARPNESS_INFINITE;
+    }
+    void GetNumVerticesPerFace(int n[2]) const { n[0] = n[1] = 4; }
+};
+
+/* An interior vertex of n edges, some of them creases (sharp[i]: its i-th edge, counter-
+ * clockwise as Vtr orders them, is infinitely sharp). Infinite sharpness stays infinite, so
+ * its children's sharpness is its own. */
+struct CreasedVertex {
+    int n;
+    const float *sharp;
+    int GetNumEdges() const { return n; }
+    int GetNumFaces() const { return n; }
+    float GetSharpness() const { return 0.0f; }
+    float *GetSharpnessPerEdge(float s[]) const
+    {
+        for (int i = 0; i < n; ++i) s[i] = sharp[i];
+        return s;
+    }
+    float GetChildSharpness(const Sdc::Crease &) const { return 0.0f; }
+    float *GetChildSharpnessPerEdge(const Sdc::Crease &, float s[]) const
+    {
+        return GetSharpnessPerEdge(s);
+    }
+};
+
 /* One mask's weights: its vertices' (a face's corners, an edge's ends, or the vertex itself),
  * its edges' and its faces'. */
 struct Weights {
@@ -743,8 +854,27 @@ public:
             }
         }
         edge_.take(e);
+        Mask c = crease_edge_.mask();
+        const Sdc::Crease::Rule crease = Sdc::Crease::RULE_CREASE;
+        if (type_ == Sdc::SCHEME_LOOP)
+            Scheme<Sdc::SCHEME_LOOP>().ComputeEdgeVertexMask(CreaseEdge(), c, crease, crease);
+        else
+            Scheme<Sdc::SCHEME_CATMARK>().ComputeEdgeVertexMask(CreaseEdge(), c, crease, crease);
+        crease_edge_.take(c);
     }
     const Weights &edge() const { return edge_; }
+    const Weights &crease_edge() const { return crease_edge_; }
+
+    /* The vertex rule, or (limit) the limit position and tangent masks, of a vertex of n edges
+     * some of which are creases (sharp: n values), into m. Vtr's rule for it follows from
+     * the number of its crease edges; infinite creases leave its child the same rule. */
+    void creased(int n, const float *sharp, bool limit, ValenceMasks *m) const
+    {
+        if (type_ == Sdc::SCHEME_LOOP)
+            fill_creased<Sdc::SCHEME_LOOP>(n, sharp, limit, m);
+        else
+            fill_creased<Sdc::SCHEME_CATMARK>(n, sharp, limit, m);
+    }
     const Weights &face(int n) const { return face_[n]; }
     const ValenceMasks &valence(int n)
     {
@@ -771,6 +901,27 @@ private:
         m->tan1.take(t1);
         m->tan2.take(t2);
     }
+    template <Sdc::SchemeType T>
+    static void fill_creased(int n, const float *sharp, bool limit, ValenceMasks *m)
+    {
+        Sdc::Options options;
+        options.SetVtxBoundaryInterpolation(Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER);
+        const Scheme<T> scheme(options);
+        const CreasedVertex v{n, sharp};
+        const Sdc::Crease::Rule rule =
+            Sdc::Crease(options).DetermineVertexVertexRule(0.0f, n, sharp);
+        if (!limit) {
+            Mask r = m->rule.mask();
+            scheme.ComputeVertexVertexMask(v, r, rule, rule);
+            m->rule.take(r);
+            return;
+        }
+        Mask pos = m->pos.mask(), t1 = m->tan1.mask(), t2 = m->tan2.mask();
+        scheme.ComputeVertexLimitMask(v, pos, t1, t2, rule);
+        m->pos.take(pos);
+        m->tan1.take(t1);
+        m->tan2.take(t2);
+    }
     void make(int n, ValenceMasks *m) const
     {
         if (type_ == Sdc::SCHEME_LOOP)
@@ -781,7 +932,7 @@ private:
     }
 
     Buffer<ValenceMasks> by_valence_;
-    Weights edge_, face_[5];
+    Weights edge_, crease_edge_, face_[5];
     Sdc::SchemeType type_;
 };
 
@@ -797,13 +948,16 @@ struct Base {
     Buffer<int> edge_corner; /* 2 per edge: its half-edge in the face that made it, then the twin */
     Buffer<int> ring_start;  /* nv + 1 */
     Buffer<int> ring;        /* each vertex's outgoing half-edges, counter-clockwise */
+    Buffer<float> sharp;     /* ne: each edge's sharpness (a crease's infinite), or NULL */
+    Buffer<uint8_t> on_crease; /* nv: the vertex has a crease edge (with sharp) */
 
     explicit Base(const xyl_allocator *alloc)
         : nv(0), nf(0), ne(0), corners(0), size(nullptr), vert(nullptr), start(alloc),
           face_of(alloc), twin(alloc), edge(alloc), edge_corner(alloc), ring_start(alloc),
-          ring(alloc)
+          ring(alloc), sharp(alloc), on_crease(alloc)
     {
     }
+    bool creased() const { return sharp.get() != nullptr; }
     int next(int c) const
     {
         const int f = face_of.get()[c];
@@ -889,6 +1043,29 @@ Fit order_rings(Base *b)
     return Fit::YES;
 }
 
+/* Marks the creases' edges infinitely sharp. On the closed manifold the direct path takes, an
+ * edge (a, b) is a half-edge from a to b in a's ring; a crease without one is no edge, and its
+ * index goes to *bad. */
+Fit mark_creases(Base *b, const Creases &c, size_t *bad)
+{
+    if (c.count == 0) return Fit::YES;
+    if (!b->sharp.allocate(size_t(b->ne)) || !b->on_crease.allocate(size_t(b->nv)))
+        return Fit::NO_MEMORY;
+    const int *rs = b->ring_start.get(), *ring = b->ring.get();
+    for (size_t i = 0; i < c.count; ++i) {
+        const int from = int(c.pairs[2 * i]), to = int(c.pairs[2 * i + 1]);
+        int j = rs[from];
+        while (j < rs[from + 1] && b->head(ring[j]) != to) ++j;
+        if (j == rs[from + 1]) {
+            *bad = i;
+            return Fit::NO;
+        }
+        b->sharp.get()[b->edge.get()[ring[j]]] = Sdc::Crease::SHARPNESS_INFINITE;
+        b->on_crease.get()[from] = b->on_crease.get()[to] = 1;
+    }
+    return Fit::YES;
+}
+
 /* Builds b from the control mesh, or says why the direct path does not apply. */
 Fit build_base(int vertices, const Control &control, Base *b)
 {
@@ -941,6 +1118,29 @@ public:
         if (u < b_.nv) return vertex_ring(u, edge, opp, face);
         if (!loop_ && u < b_.nv + b_.nf) return face_ring(u - b_.nv, edge, opp, face);
         return edge_ring(u - b_.nv - (loop_ ? 0 : b_.nf), edge, opp, face);
+    }
+
+    /* The sharpness of level-1 vertex u's edges, in ring()'s order, into sharp; returns how
+     * many are creases. The children of a crease's edge are creases: the two halves of it
+     * (an edge point's first and opposite edges) and each end's edge along it. */
+    int sharpness(int u, float *sharp) const
+    {
+        if (!b_.creased() || (!loop_ && u >= b_.nv && u < b_.nv + b_.nf)) return 0;
+        const float *es = b_.sharp.get();
+        int count = 0;
+        if (u < b_.nv) {
+            if (!b_.on_crease.get()[u]) return 0;
+            const int s = b_.ring_start.get()[u], n = b_.valence(u);
+            for (int i = 0; i < n; ++i) {
+                sharp[i] = es[b_.edge.get()[b_.ring.get()[s + i]]];
+                count += sharp[i] > 0.0f;
+            }
+            return count;
+        }
+        const float e = es[u - b_.nv - (loop_ ? 0 : b_.nf)];
+        const int n = loop_ ? 6 : 4, half = n / 2;
+        for (int i = 0; i < n; ++i) sharp[i] = i % half == 0 ? e : 0.0f;
+        return e > 0.0f ? 2 : 0;
     }
 
     /* The child faces' corners, each face's winding kept. */
@@ -1035,9 +1235,10 @@ void direct_points(const Base &b, const Direct &d, bool loop, Masks &masks, cons
             dst.Clear();
             for (int j = 0; j < n; ++j) dst.AddWithWeight(p0[vert[s + j]], w[j]);
         }
-    const Weights &we = masks.edge();
     for (int e = 0; e < b.ne; ++e) {
         const int ca = b.edge_corner.get()[2 * e], cb = b.edge_corner.get()[2 * e + 1];
+        const Weights &we =
+            b.creased() && b.sharp.get()[e] > 0.0f ? masks.crease_edge() : masks.edge();
         Point3 &dst = p1[d.E(e)];
         dst.Clear();
         dst.AddWithWeight(p0[vert[ca]], we.v[0]);
@@ -1051,9 +1252,13 @@ void direct_points(const Base &b, const Direct &d, bool loop, Masks &masks, cons
             dst.AddWithWeight(p0[vert[b.prev(cb)]], we.f[1]);
         }
     }
+    float sharp[kDirectMaxValence];
+    ValenceMasks creased;
     for (int v = 0; v < b.nv; ++v) {
         const int s = b.ring_start.get()[v], n = b.valence(v);
-        const Weights &w = masks.valence(n).rule;
+        const bool crease = d.sharpness(d.V(v), sharp) > 0;
+        if (crease) masks.creased(n, sharp, false, &creased);
+        const Weights &w = crease ? creased.rule : masks.valence(n).rule;
         Point3 &dst = p1[d.V(v)];
         dst.Clear();
         for (int i = 0; i < w.nf; ++i) dst.AddWithWeight(p1[d.F(face_of[ring[s + i]])], w.f[i]);
@@ -1111,8 +1316,13 @@ void direct_limit(const Direct &d, Masks &masks, Point3 *p1, const uint32_t *fac
                   Point3 *tn, xyl_vec3 *positions, xyl_vec3 *normals)
 {
     int edge[kDirectMaxValence], opp[kDirectMaxValence], face[kDirectMaxValence];
+    float sharp[kDirectMaxValence];
+    ValenceMasks creased;
     for (int u = 0; u < d.vertices(); ++u) {
-        const ValenceMasks &m = masks.valence(d.ring(u, edge, opp, face));
+        const int n = d.ring(u, edge, opp, face);
+        const bool crease = d.sharpness(u, sharp) > 0;
+        if (crease) masks.creased(n, sharp, true, &creased);
+        const ValenceMasks &m = crease ? creased : masks.valence(n);
         Point3 sums[3]; /* position, tangents */
         limit_point(m, p1, u, edge, opp, sums);
         lim[u] = sums[0];
@@ -1287,8 +1497,8 @@ xyl_result refine_direct(const Base &b, bool loop, bool limit, const Limits &lim
 
 
 xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
-                  const Limits &lim, xyl__subdivide_path path, const xyl_allocator *alloc,
-                  xyl__mesh_arrays *out, xyl_diag *diag)
+                  const Limits &lim, xyl__subdivide_path path, const Creases &creases,
+                  const xyl_allocator *alloc, xyl__mesh_arrays *out, xyl_diag *diag)
 {
     const bool loop = scheme == XYL_SUBDIVIDE_LOOP;
     const uint64_t far_faces = loop ? 2u * uint64_t(in->quad_count) + in->triangle_count
@@ -1298,16 +1508,22 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit
     if (in->vertex_count > kIntMax || far_faces > kIntMax || corners > kIntMax)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "the mesh is too large for OpenSubdiv's int indices");
+    if (creases.count > kIntMax)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "%zu creases are too many for OpenSubdiv's int counts", creases.count);
     Control control(alloc, static_cast<size_t>(far_faces), static_cast<size_t>(corners));
     if (!control.ok())
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory for the topology");
     fill_control(in, loop, &control);
     if (path != XYL__SUBDIVIDE_FAR) {
         Base base(alloc);
-        const Fit fit = build_base(static_cast<int>(in->vertex_count), control, &base);
-        if (fit == Fit::NO_MEMORY)
+        Fit fit = build_base(static_cast<int>(in->vertex_count), control, &base);
+        size_t bad = 0;
+        const Fit marked = fit == Fit::YES ? mark_creases(&base, creases, &bad) : fit;
+        if (fit == Fit::NO_MEMORY || marked == Fit::NO_MEMORY)
             return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                              "out of memory for the topology");
+        if (fit == Fit::YES && marked == Fit::NO) return not_an_edge(creases, bad, diag);
         if (fit == Fit::YES)
             return refine_direct(base, loop, limit, lim, in, control, alloc, out, diag);
         if (path == XYL__SUBDIVIDE_DIRECT)
@@ -1315,8 +1531,12 @@ xyl_result refine(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit
                              "the direct path needs a closed oriented manifold whose vertices "
                              "are each in one fan of 3 to %d faces", kDirectMaxValence);
     }
+    const xyl_result checked =
+        check_creases(control, static_cast<int>(in->vertex_count), creases, alloc, diag);
+    if (checked) return checked;
     std::unique_ptr<Refiner> r = create_refiner(loop ? Sdc::SCHEME_LOOP : Sdc::SCHEME_CATMARK,
-                                                static_cast<int>(in->vertex_count), control);
+                                                static_cast<int>(in->vertex_count), control,
+                                                creases, alloc);
     if (!r)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                          "OpenSubdiv refused the topology (e.g. a vertex in more than 65535 "
@@ -1380,9 +1600,15 @@ xyl_result unknown_scheme(const xyl_subdivision *stored, xyl_diag *diag)
 
 xyl_result subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool limit,
                      const xyl_mesh_limits *limits, xyl__subdivide_path path,
-                     const xyl_allocator *alloc, xyl__mesh_arrays *out, xyl_diag *diag)
+                     const Creases &creases, const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                     xyl_diag *diag)
 {
     xyl_result r = validate_input(in, diag);
+    if (r) return r;
+    if (creases.count && !creases.pairs)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "%zu creases without their vertex pairs", creases.count);
+    r = check_crease_ends(in, creases, diag);
     if (r) return r;
     const Limits lim = effective_limits(limits);
     if (scheme == XYL_SUBDIVIDE_NONE || face_count(in) == 0) {
@@ -1390,7 +1616,7 @@ xyl_result subdivide(const xyl__mesh_arrays *in, xyl_subdivision scheme, bool li
         if (r) return r;
         return copy_mesh(in, scheme == XYL_SUBDIVIDE_NONE, alloc, out, diag);
     }
-    return refine(in, scheme, limit, lim, path, alloc, out, diag);
+    return refine(in, scheme, limit, lim, path, creases, alloc, out, diag);
 }
 
 /* A closed prism of kRings k-gon rings of radius 1 along z, one unit apart, capped at both
@@ -1582,8 +1808,9 @@ xyl_result mean_limit_radius(uint32_t k, bool loop, double *mean)
  * read_scheme reads its bytes. */
 static xyl_result subdivide_entry(const xyl__mesh_arrays *in, const xyl_subdivision *scheme,
                                   bool limit, const xyl_mesh_limits *limits,
-                                  xyl__subdivide_path path, const xyl_allocator *alloc,
-                                  xyl__mesh_arrays *out, xyl_diag *diag)
+                                  xyl__subdivide_path path, const xyl__creases *sharp,
+                                  const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                                  xyl_diag *diag)
 {
     if (!out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "out must not be NULL");
@@ -1594,7 +1821,8 @@ static xyl_result subdivide_entry(const xyl__mesh_arrays *in, const xyl_subdivis
     /* Every array is owned by a Buffer or by out until the end, so an exception frees them. */
     xyl_result r;
     try {
-        r = subdivide(in, known, limit, limits, path, alloc, out, diag);
+        const Creases creases = {sharp ? sharp->pairs : nullptr, sharp ? sharp->count : 0};
+        r = subdivide(in, known, limit, limits, path, creases, alloc, out, diag);
     } catch (const std::bad_alloc &) {
         r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory in OpenSubdiv");
     } catch (const std::length_error &) {
@@ -1617,7 +1845,8 @@ extern "C" xyl_result xyl__subdivide(const xyl__mesh_arrays *in, xyl_subdivision
                                      const xyl_allocator *alloc, xyl__mesh_arrays *out,
                                      xyl_diag *diag)
 {
-    return subdivide_entry(in, &scheme, limit, limits, XYL__SUBDIVIDE_ANY, alloc, out, diag);
+    return subdivide_entry(in, &scheme, limit, limits, XYL__SUBDIVIDE_ANY, nullptr, alloc, out,
+                           diag);
 }
 
 extern "C" xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme,
@@ -1625,7 +1854,18 @@ extern "C" xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivis
                                         xyl__subdivide_path path, const xyl_allocator *alloc,
                                         xyl__mesh_arrays *out, xyl_diag *diag)
 {
-    return subdivide_entry(in, &scheme, limit, limits, path, alloc, out, diag);
+    return subdivide_entry(in, &scheme, limit, limits, path, nullptr, alloc, out, diag);
+}
+
+extern "C" xyl_result xyl__subdivide_creased(const xyl__mesh_arrays *in,
+                                             const xyl__creases *creases,
+                                             xyl_subdivision scheme, bool limit,
+                                             const xyl_mesh_limits *limits,
+                                             xyl__subdivide_path path,
+                                             const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                                             xyl_diag *diag)
+{
+    return subdivide_entry(in, &scheme, limit, limits, path, creases, alloc, out, diag);
 }
 
 extern "C" xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor)

@@ -31,6 +31,16 @@ xyl_result xyl__subdivide_by(const xyl__mesh_arrays *in, xyl_subdivision scheme,
     return xyl__subdivide(in, scheme, limit, limits, alloc, out, diag);
 }
 
+xyl_result xyl__subdivide_creased(const xyl__mesh_arrays *in, const xyl__creases *creases,
+                                  xyl_subdivision scheme, bool limit,
+                                  const xyl_mesh_limits *limits, xyl__subdivide_path path,
+                                  const xyl_allocator *alloc, xyl__mesh_arrays *out,
+                                  xyl_diag *diag)
+{
+    (void)creases, (void)path;
+    return xyl__subdivide(in, scheme, limit, limits, alloc, out, diag);
+}
+
 xyl_result xyl__subdivide_limit_radius_factor(uint32_t k, double *factor)
 {
     if (!factor || k < 3 || k > 32) return XYL_ERR_INVALID_ARGUMENT;

@@ -241,8 +241,192 @@ static void free_state(stems *s)
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; ++i) xyl__free(&s->alloc, arrays[i]);
 }
 
+/* The edges of every capped root ring as vertex pairs (from s->alloc; NULL with *count 0 when
+ * there are none): subdivision keeps them infinitely sharp, so the ring and its cap stay in the
+ * root's plane instead of being rounded off and lifted (docs/stems.md, "The base"). */
+static xyl_result base_creases(stems *s, uint32_t **pairs, size_t *count)
+{
+    *pairs = NULL;
+    *count = s->nbase * s->k;
+    if (*count == 0) return XYL_OK;
+    *pairs = xyl__alloc_array(&s->alloc, *count, 2 * sizeof **pairs);
+    if (!*pairs) return xyl__stems_oom(s);
+    uint32_t *p = *pairs;
+    for (size_t b = 0; b < s->nbase; ++b)
+        for (uint32_t j = 0; j < s->k; ++j) {
+            *p++ = s->bases[b].first + j;
+            *p++ = s->bases[b].first + (j + 1 < s->k ? j + 1 : 0);
+        }
+    return XYL_OK;
+}
+
+/* A refined vertex's place on the creased root rings: 0 for none, else 1 + its slot (ring b's
+ * vertex point j at 2 k b + j, its edge point from j to j + 1 at 2 k b + k + j); PENDING marks a
+ * vertex next to one vertex point so far (1 + that slot below it). */
+#define BASE_PENDING 0x80000000u
+
+/* Tags the refined vertices of the creased root rings in tag (0 elsewhere): the vertex points
+ * keep their control vertices' indices (vertex points come first), and the edge point of ring
+ * edge (j, j + 1) is the one refined vertex that shares a face side with both of their vertex
+ * points (a vertex point's sides all lead to edge points of its own edges). */
+static void tag_base_rings(const stems *s, const xyl__mesh_arrays *a, uint32_t *tag)
+{
+    const uint32_t k = s->k;
+    for (size_t b = 0; b < s->nbase; ++b)
+        for (uint32_t j = 0; j < k; ++j) tag[s->bases[b].first + j] = (uint32_t)(2 * k * b + j) + 1;
+    for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
+        const bool quad = f < a->quad_count;
+        const int n = quad ? 4 : 3;
+        const uint32_t *fv = quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
+        for (int c = 0; c < n; ++c) {
+            const uint32_t t = tag[fv[c]];
+            if (t == 0 || t & BASE_PENDING || (t - 1) % (2 * k) >= k)
+                continue; /* not a vertex point */
+            const uint32_t nb[2] = {fv[(c + 1) % n], fv[(c + n - 1) % n]};
+            for (int i = 0; i < 2; ++i) {
+                uint32_t *w = &tag[nb[i]];
+                if (*w == 0) {
+                    *w = BASE_PENDING | t;
+                    continue;
+                }
+                if (!(*w & BASE_PENDING) || (*w & ~BASE_PENDING) == t) continue;
+                const uint32_t p = (*w & ~BASE_PENDING) - 1, q = t - 1; /* two vertex points */
+                if (p / (2 * k) != q / (2 * k)) continue;
+                const uint32_t jp = p % (2 * k), jq = q % (2 * k);
+                const uint32_t lo = (jp + 1) % k == jq ? jp : (jq + 1) % k == jp ? jq : k;
+                if (lo < k) *w = p - jp + k + lo + 1;
+            }
+        }
+    }
+}
+
+/* Face f of a: its corners and their number. */
+static const uint32_t *arrays_face(const xyl__mesh_arrays *a, size_t f, int *n)
+{
+    const bool quad = f < a->quad_count;
+    *n = quad ? 4 : 3;
+    return quad ? a->quads + 4 * f : a->triangles + 3 * (f - a->quad_count);
+}
+
+/* Whether refined ring points of slots p and q are neighbours along their ring's crease (a
+ * vertex point j and the edge point of (j - 1, j) or (j, j + 1)). */
+static bool along_crease(uint32_t k, uint32_t p, uint32_t q)
+{
+    if (p / (2 * k) != q / (2 * k)) return false;
+    uint32_t jp = p % (2 * k), jq = q % (2 * k);
+    if ((jp < k) == (jq < k)) return false;
+    uint32_t j = jp < k ? jp : jq, e = (jp < k ? jq : jp) - k;
+    return e == j || (e + 1) % k == j;
+}
+
+/* The band-side normal of ring point u (slot su) from its faces (face[0..m)): the faces split
+ * into fans where they meet across a side that is not the crease, the cap's fan is the one
+ * that faces furthest down the root's axis, and the others' area-weighted normals are summed.
+ * False where the faces do not split (the normal then stays as it is). */
+static bool band_normal(const stems *s, const xyl__mesh_arrays *a, const uint32_t *tag,
+                        uint32_t u, uint32_t su, const uint32_t *face, int m, xyl__dvec3 *out)
+{
+    int fan[64];
+    xyl__dvec3 fn[64], sum[64];
+    if (m > 64) return false;
+    for (int i = 0; i < m; ++i) {
+        int n;
+        const uint32_t *fv = arrays_face(a, face[i], &n);
+        fan[i] = i;
+        fn[i] = xyl__from_f3(n == 4 ? xyl__quad_normal(a->positions, fv)
+                                    : xyl__tri_normal(a->positions, fv));
+        sum[i] = xyl__d3(0, 0, 0);
+    }
+    for (int i = 0; i < m; ++i) /* faces that share a side u-w off the crease: one fan */
+        for (int j = i + 1; j < m; ++j) {
+            int ni, nj;
+            const uint32_t *fi = arrays_face(a, face[i], &ni), *fj = arrays_face(a, face[j], &nj);
+            int ci = 0, cj = 0;
+            while (fi[ci] != u) ++ci;
+            while (fj[cj] != u) ++cj;
+            const uint32_t wi[2] = {fi[(ci + 1) % ni], fi[(ci + ni - 1) % ni]};
+            const uint32_t wj[2] = {fj[(cj + 1) % nj], fj[(cj + nj - 1) % nj]};
+            for (int x = 0; x < 2; ++x) {
+                const uint32_t w = wi[x], tw = tag[w];
+                if (w != wj[1 - x]) continue;
+                if (tw && !(tw & BASE_PENDING) && along_crease(s->k, su, tw - 1)) continue;
+                const int from = fan[j], to = fan[i];
+                for (int z = 0; z < m; ++z)
+                    if (fan[z] == from) fan[z] = to;
+            }
+        }
+    for (int i = 0; i < m; ++i) sum[fan[i]] = xyl__d3_add(sum[fan[i]], fn[i]);
+    const xyl__dvec3 up = s->bases[su / (2 * s->k)].up;
+    int cap = -1, fans = 0;
+    double lowest = INFINITY;
+    for (int i = 0; i < m; ++i) {
+        if (fan[i] != i) continue;
+        ++fans;
+        const double l = xyl__d3_len(sum[i]), d = l > 0.0 ? xyl__d3_dot(sum[i], up) / l : 0.0;
+        if (d < lowest) lowest = d, cap = i;
+    }
+    if (fans < 2) return false;
+    *out = xyl__d3(0, 0, 0);
+    for (int i = 0; i < m; ++i)
+        if (fan[i] != cap) *out = xyl__d3_add(*out, fn[i]);
+    return true;
+}
+
+/* Subdivided, the points of a creased root ring take the normal of the band above it. On the
+ * limit surface OpenSubdiv's crease tangents span one side of the crease, the cap's at some
+ * points and the band's at others, and a face average would lean half-way to the cap; a
+ * shaded or PN-refined base wants the band's. */
+static xyl_result base_ring_normals(stems *s, xyl__mesh_arrays *a)
+{
+    const size_t slots = 2 * (size_t)s->k * s->nbase, nf = a->quad_count + a->triangle_count;
+    uint32_t *tag = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, sizeof *tag);
+    uint32_t *start = xyl__calloc(&s->alloc, slots + 1, sizeof *start);
+    uint32_t *vertex = xyl__calloc(&s->alloc, slots, sizeof *vertex);
+    uint32_t *face = NULL;
+    xyl_result r = tag && start && vertex ? XYL_OK : xyl__stems_oom(s);
+    if (!r) {
+        tag_base_rings(s, a, tag);
+        for (size_t f = 0; f < nf; ++f) { /* each ring point's faces, by slot */
+            int n;
+            const uint32_t *fv = arrays_face(a, f, &n);
+            for (int c = 0; c < n; ++c)
+                if (tag[fv[c]] && !(tag[fv[c]] & BASE_PENDING)) ++start[tag[fv[c]]];
+        }
+        for (size_t i = 0; i < slots; ++i) start[i + 1] += start[i];
+        face = xyl__alloc_array(&s->alloc, start[slots] ? start[slots] : 1, sizeof *face);
+        if (!face) r = xyl__stems_oom(s);
+    }
+    if (!r) {
+        for (size_t f = 0; f < nf; ++f) { /* start[t - 1] runs up to slot t - 1's end */
+            int n;
+            const uint32_t *fv = arrays_face(a, f, &n);
+            for (int c = 0; c < n; ++c) {
+                const uint32_t t = tag[fv[c]];
+                if (!t || t & BASE_PENDING) continue;
+                face[start[t - 1]++] = (uint32_t)f;
+                vertex[t - 1] = fv[c];
+            }
+        }
+        for (size_t i = slots; i > 0; --i) start[i] = start[i - 1];
+        start[0] = 0;
+        for (size_t i = 0; i < slots; ++i) {
+            xyl__dvec3 band;
+            const uint32_t u = vertex[i];
+            const int m = (int)(start[i + 1] - start[i]);
+            if (m == 0 || !band_normal(s, a, tag, u, (uint32_t)i, face + start[i], m, &band))
+                continue;
+            a->normals[u] = xyl__to_f3(xyl__d3_normalize_or(band, xyl__from_f3(a->normals[u])));
+        }
+    }
+    xyl__free(&s->alloc, tag);
+    xyl__free(&s->alloc, start);
+    xyl__free(&s->alloc, vertex);
+    xyl__free(&s->alloc, face);
+    return r;
+}
+
 static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a, uint32_t *tv,
-                         xyl_mesh **out)
+                         const xyl__creases *creases, xyl_mesh **out)
 {
     xyl_result r = XYL_OK;
     /* the mesh's positions are the skeleton's local coordinates */
@@ -250,8 +434,8 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
     if (a->normals) return xyl__mesh_adopt_view(a, tv, &s->alloc, out, s->diag);
     if (d->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl__mesh_arrays fine;
-        r = xyl__subdivide(a, d->subdivision, !d->keep_control_points, &d->limits, &s->alloc,
-                           &fine, s->diag);
+        r = xyl__subdivide_creased(a, creases, d->subdivision, !d->keep_control_points,
+                                   &d->limits, XYL__SUBDIVIDE_ANY, &s->alloc, &fine, s->diag);
         xyl__mesh_arrays_free(a, &s->alloc);
         if (r) return r;
         *a = fine;
@@ -267,6 +451,7 @@ static xyl_result finish(stems *s, const xyl_stems_desc *d, xyl__mesh_arrays *a,
             if (xyl__mesh_normals(a, fb, &s->alloc, a->normals) != XYL_OK) r = xyl__stems_oom(s);
         }
     }
+    if (!r && creases->count) r = base_ring_normals(s, a);
     if (r) {
         xyl__mesh_arrays_free(a, &s->alloc);
         return r;
@@ -348,9 +533,16 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
                       "the stem mesh needs more than %llu faces", (unsigned long long)s.max_faces);
     xyl__mesh_arrays a;
     uint32_t *tv = NULL;
+    xyl__creases creases = {NULL, 0};
+    uint32_t *pairs = NULL;
+    if (!r && desc->subdivision != XYL_SUBDIVIDE_NONE) r = base_creases(&s, &pairs, &creases.count);
+    creases.pairs = pairs;
     if (!r) r = hand_over(&s, &a, &tv);
     free_state(&s);
-    return r ? r : finish(&s, desc, &a, tv, out);
+    if (!r) r = finish(&s, desc, &a, tv, &creases, out);
+    xyl__free(&s.alloc, pairs);
+    xyl__free(&s.alloc, s.bases);
+    return r;
 }
 
 /* Judges the intersecting pairs of mesh m (stems_joints.c): *t counts them, and drop has the

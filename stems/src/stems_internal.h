@@ -30,6 +30,12 @@ typedef struct stems_ring {
     uint32_t band;      /* first quad of the band from this ring to the next */
 } stems_ring;
 
+/* A closed base: its ring's first vertex and the root's axis, into the tree. */
+typedef struct stems_base {
+    uint32_t first;
+    xyl__dvec3 up;
+} stems_base;
+
 /* A place along a branch where a ring goes: one or more coincident skeleton nodes. */
 typedef struct stems_station {
     xyl__dvec3 p;
@@ -82,6 +88,9 @@ typedef struct stems {
     uint32_t apex[2];   /* the domed caps' apexes of the branch being built (root, tip), or
                            UINT32_MAX (k < 5, no root cap) */
     bool open_base;     /* roots get no cap (XYL_STEMS_BASE_OPEN) */
+    stems_base *bases;  /* each capped root ring, whose k edges subdivision keeps as creases
+                           (docs/stems.md, "The base") */
+    size_t nbase, bcap;
     size_t nv, vcap;
     uint32_t *quads, *fbranch;
     uint8_t *qwrap; /* per quad: its uv_wraps bits, set as it is made */

@@ -417,6 +417,13 @@ static xyl_result put_cap(stems *s, size_t i, bool forward, uint32_t branch)
 {
     const stems_ring *ring = &s->rings[i];
     if (!forward && s->open_base) return XYL_OK;
+    if (!forward) { /* a closed base: its ring is a crease when subdivided */
+        if (!xyl__grow(&s->alloc, (void **)&s->bases, &s->bcap, s->nbase, s->nbase + 1,
+                       sizeof *s->bases))
+            return xyl__stems_oom(s);
+        s->bases[s->nbase].first = ring->first;
+        s->bases[s->nbase++].up = ring->tangent;
+    }
     if (s->k < 5) return put_flat_cap(s, ring->first, forward, branch);
     xyl_result r = put_dome_cap(s, ring, forward, branch);
     if (s->unit_per_branch) s->apex[forward] = (uint32_t)s->nv - 1;
