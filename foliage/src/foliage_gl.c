@@ -89,34 +89,6 @@ static xyl_result build_cut_program(xyl_foliage_gl *gl, xyl_diag *diag)
     return XYL_OK;
 }
 
-/* A 1 x 1 opaque white texture: untextured leaves show the frame's colour. */
-static GLuint make_texture(const uint8_t *rgba, uint32_t w, uint32_t h)
-{
-    GLsizei levels = 1;
-    for (uint32_t side = w > h ? w : h; side > 1; side >>= 1) ++levels;
-    GLuint t = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &t);
-    glTextureStorage2D(t, levels, GL_RGBA8, (GLsizei)w, (GLsizei)h);
-    GLint align = 4, row = 0;
-    glGetIntegerv(GL_UNPACK_ALIGNMENT, &align);
-    glGetIntegerv(GL_UNPACK_ROW_LENGTH, &row);
-    GLint unpack_buf = 0;
-    glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &unpack_buf);
-    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-    glTextureSubImage2D(t, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, align);
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, row);
-    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, (GLuint)unpack_buf);
-    glGenerateTextureMipmap(t);
-    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    return t;
-}
-
 static xyl_result build_objects(xyl_foliage_gl *gl, xyl_diag *diag)
 {
     glCreateVertexArrays(1, &gl->vao); /* core profile draws need one, even without attributes */
@@ -137,7 +109,7 @@ static xyl_result build_objects(xyl_foliage_gl *gl, xyl_diag *diag)
     glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &gl->max_ssbo_bytes);
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &gl->max_texture_side);
     const uint8_t white[4] = {255, 255, 255, 255};
-    gl->texture = make_texture(white, 1, 1);
+    gl->texture = xyl__fgl_leaf_texture(white, 1, 1);
     return xyl__fgl_check(diag, "creating the leaf renderer's objects");
 }
 
@@ -246,23 +218,8 @@ xyl_result xyl_foliage_gl_set_texture(xyl_foliage_gl *gl, const uint8_t *rgba, u
 {
     if (!gl || !rgba)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "gl and rgba are required");
-    uint32_t cap = XYL_FOLIAGE_GL_MAX_TEXTURE_SIDE;
-    if (gl->max_texture_side > 0 && (uint32_t)gl->max_texture_side < cap)
-        cap = (uint32_t)gl->max_texture_side;
-    if (width == 0 || height == 0 || width > cap || height > cap)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a leaf texture of %u x %u: each side from 1 to %u", width, height, cap);
-    xyl__fgl_drain_errors();
-    GLuint t = make_texture(rgba, width, height);
-    xyl_result r = xyl__fgl_check(diag, "uploading the leaf texture");
-    if (r != XYL_OK) {
-        glDeleteTextures(1, &t);
-        return r;
-    }
-    glDeleteTextures(1, &gl->texture);
-    gl->texture = t;
-    xyl__diag_ok(diag);
-    return XYL_OK;
+    return xyl__fgl_replace_leaf_texture(&gl->texture, gl->max_texture_side, rgba, width, height,
+                                         diag);
 }
 
 /* ---- draws -------------------------------------------------------------------------------- */

@@ -1,5 +1,5 @@
-/* GL helpers shared by foliage/'s GL renderers (foliage_gl.c, billboard_gl.c); built only with
- * the GL backend. */
+/* GL helpers shared by foliage/'s GL renderers (foliage_gl.c, billboard_gl.c, forest_gl.c);
+ * built only with the GL backend. */
 #ifndef XYL_FOLIAGE_GL_UTIL_H
 #define XYL_FOLIAGE_GL_UTIL_H
 
@@ -18,5 +18,15 @@ xyl_result xyl__fgl_need_context(xyl_diag *diag);
 
 /* A compiled shader of the stage, or 0 with the compiler's log in log. */
 GLuint xyl__fgl_compile(GLenum stage, const unsigned char *text, char *log, GLsizei log_size);
+
+/* The leaf texture of w x h RGBA8 texels (top row first), mipmapped, linear, clamped; the
+ * caller checks for GL errors. */
+GLuint xyl__fgl_leaf_texture(const uint8_t *rgba, uint32_t w, uint32_t h);
+
+/* Checks a leaf texture's size against XYL_FOLIAGE_GL_MAX_TEXTURE_SIDE and the driver's
+ * max_side, uploads it and swaps it in for *texture (deleted), as the leaf and forest
+ * renderers' set_texture do: XYL_ERR_INVALID_ARGUMENT, or GL's error with *texture kept. */
+xyl_result xyl__fgl_replace_leaf_texture(GLuint *texture, GLint max_side, const uint8_t *rgba,
+                                         uint32_t width, uint32_t height, xyl_diag *diag);
 
 #endif

@@ -90,32 +90,6 @@ static xyl_result link(const unsigned char *vs, const unsigned char *fs, const c
     return XYL_OK;
 }
 
-static GLuint make_texture(const uint8_t *rgba, uint32_t w, uint32_t h)
-{
-    GLsizei levels = 1;
-    for (uint32_t side = w > h ? w : h; side > 1; side >>= 1) ++levels;
-    GLuint t = 0;
-    glCreateTextures(GL_TEXTURE_2D, 1, &t);
-    glTextureStorage2D(t, levels, GL_RGBA8, (GLsizei)w, (GLsizei)h);
-    GLint align = 4, row = 0, unpack_buf = 0;
-    glGetIntegerv(GL_UNPACK_ALIGNMENT, &align);
-    glGetIntegerv(GL_UNPACK_ROW_LENGTH, &row);
-    glGetIntegerv(GL_PIXEL_UNPACK_BUFFER_BINDING, &unpack_buf);
-    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
-    glTextureSubImage2D(t, 0, 0, 0, (GLsizei)w, (GLsizei)h, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, align);
-    glPixelStorei(GL_UNPACK_ROW_LENGTH, row);
-    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, (GLuint)unpack_buf);
-    glGenerateTextureMipmap(t);
-    glTextureParameteri(t, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTextureParameteri(t, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(t, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(t, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    return t;
-}
-
 static xyl_result check_desc(const xyl_forest_gl_desc *d, xyl_diag *diag)
 {
     if (!isfinite(d->hysteresis))
@@ -162,7 +136,7 @@ xyl_result xyl_forest_gl_create(const xyl_forest_gl_desc *desc, xyl_forest_gl **
         glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &f->max_ssbo_bytes);
         glGetIntegerv(GL_MAX_TEXTURE_SIZE, &f->max_texture_side);
         const uint8_t white[4] = {255, 255, 255, 255};
-        f->texture = make_texture(white, 1, 1);
+        f->texture = xyl__fgl_leaf_texture(white, 1, 1);
         r = xyl__fgl_check(diag, "creating the forest renderer's objects");
     }
     if (r != XYL_OK) {
@@ -345,23 +319,8 @@ xyl_result xyl_forest_gl_set_texture(xyl_forest_gl *f, const uint8_t *rgba, uint
 {
     if (!f || !rgba)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "forest and rgba are required");
-    uint32_t cap = XYL_FOLIAGE_GL_MAX_TEXTURE_SIDE;
-    if (f->max_texture_side > 0 && (uint32_t)f->max_texture_side < cap)
-        cap = (uint32_t)f->max_texture_side;
-    if (width == 0 || height == 0 || width > cap || height > cap)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a leaf texture of %u x %u: each side from 1 to %u", width, height, cap);
-    xyl__fgl_drain_errors();
-    GLuint t = make_texture(rgba, width, height);
-    xyl_result r = xyl__fgl_check(diag, "uploading the leaf texture");
-    if (r != XYL_OK) {
-        glDeleteTextures(1, &t);
-        return r;
-    }
-    glDeleteTextures(1, &f->texture);
-    f->texture = t;
-    xyl__diag_ok(diag);
-    return XYL_OK;
+    return xyl__fgl_replace_leaf_texture(&f->texture, f->max_texture_side, rgba, width, height,
+                                         diag);
 }
 
 xyl_result xyl_forest_gl_species(const xyl_forest_gl *f, uint32_t sp,
