@@ -8,6 +8,7 @@
 #include <math.h>
 
 #include "test_util.h"
+#include "foliage_tree.h"
 #include "foliage_gl_debug.h"
 #include "foliage_internal.h"
 #include "foliage_cut_check.h"
@@ -73,23 +74,7 @@ static void expect(xyl_result got, xyl_result want, const xyl_diag *d)
 
 static xyl_foliage *tree_foliage(const char *preset, uint32_t sectors)
 {
-    xyl_skeleton *sk = tu_grow(xyl_lsystem_preset_source(preset), NULL);
-    size_t n = 0;
-    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, NULL, 0, &n, NULL), XYL_OK);
-    assert_true(n > 0);
-    xyl_leaf *leaves = malloc(n * sizeof *leaves);
-    assert_non_null(leaves);
-    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, leaves, n, &n, NULL), XYL_OK);
-    xyl_foliage_desc fd = {0};
-    fd.leaves = leaves;
-    fd.leaf_count = n;
-    fd.sectors = sectors;
-    xyl_foliage *f = NULL;
-    xyl_diag d = {0};
-    expect(xyl_foliage_build(&fd, &f, &d), XYL_OK, &d);
-    free(leaves);
-    xyl_skeleton_destroy(sk);
-    return f;
+    return ft_tree_foliage(preset, sectors);
 }
 
 /* A perspective camera framing the foliage's sphere from (azimuth, elevation). */

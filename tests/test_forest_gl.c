@@ -8,6 +8,7 @@
 #include <math.h>
 
 #include "test_util.h"
+#include "foliage_tree.h"
 #include <xylem/xyl_billboard_gl.h>
 #include <xylem/xyl_foliage_gl.h>
 #include <xylem/xyl_forest_gl.h>
@@ -37,22 +38,7 @@ static void expect(xyl_result got, xyl_result want, const xyl_diag *d)
 
 static xyl_foliage *tree_foliage(const char *preset)
 {
-    xyl_skeleton *sk = tu_grow(xyl_lsystem_preset_source(preset), NULL);
-    size_t n = 0;
-    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, NULL, 0, &n, NULL), XYL_OK);
-    xyl_leaf *leaves = malloc(n * sizeof *leaves);
-    assert_non_null(leaves);
-    assert_int_equal(xyl_foliage_leaves_from_skeleton(sk, NULL, leaves, n, &n, NULL), XYL_OK);
-    xyl_foliage_desc fd = {0};
-    fd.leaves = leaves;
-    fd.leaf_count = n;
-    fd.sectors = 1;
-    xyl_foliage *f = NULL;
-    xyl_diag d = {0};
-    expect(xyl_foliage_build(&fd, &f, &d), XYL_OK, &d);
-    free(leaves);
-    xyl_skeleton_destroy(sk);
-    return f;
+    return ft_tree_foliage(preset, 1);
 }
 
 static int setup(void **state)

@@ -9,6 +9,7 @@
 #include <math.h>
 
 #include "test_util.h"
+#include "foliage_tree.h"
 #include "../shaders/xyl_dither.h"
 #include <xylem/xyl_billboard_gl.h>
 #include <xylem/xyl_foliage_gl.h>
@@ -228,16 +229,8 @@ static int setup(void **state)
         xyl_tess_gl_set_patches(s->stems, s->patches, &d) ||
         xyl_foliage_gl_create(NULL, &s->leaves, &d))
         return fprintf(stderr, "setup: %s\n", d.message), -1;
-    size_t n = 0;
-    if (xyl_foliage_leaves_from_skeleton(s->sk, NULL, NULL, 0, &n, &d)) return -1;
-    xyl_leaf *leaves = malloc(n * sizeof *leaves);
-    if (!leaves || xyl_foliage_leaves_from_skeleton(s->sk, NULL, leaves, n, &n, &d)) return -1;
-    xyl_foliage_desc fd = {0};
-    fd.leaves = leaves;
-    fd.leaf_count = n;
-    xyl_result r = xyl_foliage_build(&fd, &s->tree, &d);
-    free(leaves);
-    if (r || xyl_foliage_gl_set_foliage(s->leaves, s->tree, &d)) return -1;
+    s->tree = ft_foliage_of(s->sk, 1);
+    if (xyl_foliage_gl_set_foliage(s->leaves, s->tree, &d)) return -1;
     /* the box of stems and leaves */
     xyl_foliage_bounds(s->tree, s->lo, s->hi);
     for (size_t v = 0; v < s->mesh->vertex_count; ++v) {
