@@ -317,7 +317,7 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
         else return usage_error("--billboard takes spherical, cylindrical, cross or octahedral, "
                                 "not '%s'", val);
     } else if (strcmp(opt, "--grid") == 0) {
-        if (!parse_u64(val, XYL_BILLBOARD_MAX_GRID, &u) || u < XYL_BILLBOARD_MIN_GRID)
+        if (!parse_u64(val, 32, &u) || u < 2)
             return usage_error("--grid takes a whole number from 2 to 32, not '%s'", val);
         r->grid = (uint32_t)u;
     } else if (strcmp(opt, "--planes") == 0) {
