@@ -94,8 +94,8 @@ xyl_result xyl__foliage_dither_check(const float dither[2], xyl_diag *diag)
     return XYL_OK;
 }
 
-static xyl_result resolve_frame(const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
-                                xyl_diag *diag)
+xyl_result xyl__foliage_frame_resolve(const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
+                                      xyl_diag *diag)
 {
     const float *view_proj = in->view_proj, *light_dir = in->light_dir, *color = in->color;
     float alpha_cutoff = in->alpha_cutoff, translucency = in->translucency;
@@ -143,7 +143,7 @@ xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t,
     if (t->leaf_count == 0)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "no foliage uploaded (set_foliage first)");
-    return resolve_frame(in, out, diag);
+    return xyl__foliage_frame_resolve(in, out, diag);
 }
 
 xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t *lods,
@@ -162,7 +162,7 @@ xyl_result xyl__foliage_draw_check(const xyl__foliage_tables *t, const uint32_t 
             return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)s,
                              "sector %u has LODs 0 to %u, not %u", s,
                              t->sectors[s].lod_count - 1, lods[s]);
-    return resolve_frame(in, out, diag);
+    return xyl__foliage_frame_resolve(in, out, diag);
 }
 
 _Static_assert(sizeof(xyl__foliage_cut_node) == 32, "std430 stride of xyl_cut_node");

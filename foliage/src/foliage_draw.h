@@ -61,6 +61,10 @@ xyl_result xyl__foliage_frame_check(const xyl__foliage_tables *t,
                                     const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
                                     xyl_diag *diag);
 
+/* The frame checks alone, for a renderer without a leaf table of its own (the forest). */
+xyl_result xyl__foliage_frame_resolve(const xyl__foliage_frame_in *in, xyl__foliage_frame *out,
+                                      xyl_diag *diag);
+
 /* The checks of a dither keep range: (0, 0), or finite with 0 <= lo < hi <= 1. */
 xyl_result xyl__foliage_dither_check(const float dither[2], xyl_diag *diag);
 

@@ -239,12 +239,7 @@ static void bind_program(const xyl_foliage_gl *gl, const xyl__foliage_frame *rf)
 {
     GLuint p = gl->program;
     glUseProgram(p);
-    glProgramUniformMatrix4fv(p, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE, rf->view_proj);
-    glProgramUniform3fv(p, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rf->light);
-    glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rf->color);
-    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rf->cutoff);
-    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rf->translucency);
-    glProgramUniform2fv(p, XYL_FOLIAGE_GL_UNIFORM_DITHER, 1, rf->dither);
+    xyl__fgl_leaf_uniforms(p, rf);
     glProgramUniform1ui(p, XYL_FOLIAGE_GL_UNIFORM_LIST, 0);
     glBindVertexArray(gl->vao);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LEAVES, gl->leaf_buf);

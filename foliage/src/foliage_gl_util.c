@@ -93,3 +93,13 @@ xyl_result xyl__fgl_replace_leaf_texture(GLuint *texture, GLint max_side, const 
     xyl__diag_ok(diag);
     return XYL_OK;
 }
+
+void xyl__fgl_leaf_uniforms(GLuint p, const xyl__foliage_frame *rf)
+{
+    glProgramUniformMatrix4fv(p, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE, rf->view_proj);
+    glProgramUniform3fv(p, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rf->light);
+    glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rf->color);
+    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rf->cutoff);
+    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rf->translucency);
+    glProgramUniform2fv(p, XYL_FOLIAGE_GL_UNIFORM_DITHER, 1, rf->dither);
+}

@@ -5,6 +5,7 @@
 
 #include <epoxy/gl.h>
 
+#include "foliage_draw.h"
 #include "xylem/xyl_core.h"
 
 /* Clears errors left by the caller's own GL code, which would otherwise be reported as ours. */
@@ -18,6 +19,10 @@ xyl_result xyl__fgl_need_context(xyl_diag *diag);
 
 /* A compiled shader of the stage, or 0 with the compiler's log in log. */
 GLuint xyl__fgl_compile(GLenum stage, const unsigned char *text, char *log, GLsizei log_size);
+
+/* The leaf fragment and vertex uniforms of a resolved frame (foliage_leaf.vert / .frag's
+ * locations) on program p, which the leaf and forest renderers both draw with. */
+void xyl__fgl_leaf_uniforms(GLuint p, const xyl__foliage_frame *rf);
 
 /* The leaf texture of w x h RGBA8 texels (top row first), mipmapped, linear, clamped; the
  * caller checks for GL errors. */

@@ -10,6 +10,7 @@
 #include "billboard_gl_internal.h"
 #include "foliage_draw.h"
 #include "foliage_gl_util.h"
+#include "foliage_internal.h"
 #include "forest_internal.h"
 #include "xylem/xyl_foliage_gl.h"
 #include "xylem/xyl_forest_gl.h"
@@ -427,36 +428,32 @@ static xyl_result check_frame(const xyl_forest_gl *f, const xyl_forest_gl_frame 
     if (f->count == 0)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "no instances (set_instances first)");
-    if (!isfinite(fr->eye[0]) || !isfinite(fr->eye[1]) || !isfinite(fr->eye[2]) ||
-        !isfinite(fr->fovy) || !isfinite(fr->error_px))
-        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "the eye, fovy or budget is not finite");
+    /* the eye, fovy, viewport and budget as xyl_foliage_pick takes them, but a budget of 0 is
+     * refused rather than defaulted */
+    const xyl_foliage_view view = {{fr->eye[0], fr->eye[1], fr->eye[2]}, fr->fovy,
+                                   fr->viewport_height, fr->error_px};
+    double eye[3];
+    xyl_result r = xyl__foliage_view_resolve(&view, eye, &out->per_distance, diag);
+    if (r != XYL_OK) return r;
     for (int k = 0; k < 4; ++k)
         if (!isfinite(fr->stem_color[k]))
             return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "stem_color is not finite");
     if (!(fr->error_px > 0.0f))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a pixel budget of %g: error_px must be > 0", (double)fr->error_px);
-    if (fr->fovy < 0.0f || fr->fovy >= 3.14159265f)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "fovy %g must be in (0, pi) (0: 0.8)", (double)fr->fovy);
     if (fr->mode != XYL_FOREST_LOD && fr->mode != XYL_FOREST_LEAF_LEVELS &&
         fr->mode != XYL_FOREST_FULL)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "unknown forest mode %d (lod 0, leaf levels 1, full 2)", (int)fr->mode);
-    xyl__foliage_tables any = {0};
-    any.leaf_count = 1; /* the leaf frame's checks without a table */
     const float no_dither[2] = {0.0f, 0.0f}; /* every fragment */
     const xyl__foliage_frame_in in = {fr->view_proj, fr->light_dir, fr->leaf_color, no_dither,
                                       fr->alpha_cutoff, 0.0f};
-    xyl_result r = xyl__foliage_frame_check(&any, &in, &out->leaf, diag);
+    r = xyl__foliage_frame_resolve(&in, &out->leaf, diag);
     if (r != XYL_OK) return r;
     const float bark[4] = {0.47f, 0.35f, 0.24f, 1.0f};
     bool none = fr->stem_color[0] == 0.0f && fr->stem_color[1] == 0.0f &&
                 fr->stem_color[2] == 0.0f && fr->stem_color[3] == 0.0f;
     memcpy(out->stem_color, none ? bark : fr->stem_color, sizeof out->stem_color);
-    double fovy = fr->fovy > 0.0f ? fr->fovy : 0.8;
-    double height = fr->viewport_height ? fr->viewport_height : 1080;
-    out->per_distance = fr->error_px * 2.0 * tan(0.5 * fovy) / height;
     return XYL_OK;
 }
 
@@ -589,12 +586,7 @@ static uint64_t draw_leaves(const xyl_forest_gl *f, const resolved *rs, const ui
 {
     GLuint p = f->leaf_program;
     glUseProgram(p);
-    glProgramUniformMatrix4fv(p, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE, rs->leaf.view_proj);
-    glProgramUniform3fv(p, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rs->leaf.light);
-    glProgramUniform4fv(p, XYL_FOLIAGE_GL_UNIFORM_COLOR, 1, rs->leaf.color);
-    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_CUTOFF, rs->leaf.cutoff);
-    glProgramUniform1f(p, XYL_FOLIAGE_GL_UNIFORM_TRANSLUCENCY, rs->leaf.translucency);
-    glProgramUniform2fv(p, XYL_FOLIAGE_GL_UNIFORM_DITHER, 1, rs->leaf.dither);
+    xyl__fgl_leaf_uniforms(p, &rs->leaf);
     glBindVertexArray(f->vao);
     glBindTextureUnit(XYL_FOLIAGE_GL_BINDING_TEXTURE, f->texture);
     uint64_t draws = 0;
