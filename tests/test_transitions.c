@@ -193,17 +193,13 @@ static xyl_result draw_tree(suite *s, const float view_proj[16], const float lig
     return r;
 }
 
-typedef struct bake_ctx {
-    suite *s;
-} bake_ctx;
-
 /* The bake's callback: the tree seen from the bake camera (an orthographic matrix; the eye for
  * the level choice far off along its line of sight does not matter at a fine budget, so the
  * centre of the box stands for it at a tree's size away). */
 static xyl_result bake_draw(void *user, const float view_proj[16], const float light[3],
                             xyl_diag *d)
 {
-    suite *s = ((bake_ctx *)user)->s;
+    suite *s = user;
     float eye[3];
     for (int k = 0; k < 3; ++k)
         eye[k] = 0.5f * (s->lo[k] + s->hi[k]) + light[k] * (s->hi[1] - s->lo[1]);
@@ -248,8 +244,7 @@ static int setup(void **state)
     memcpy(bd.light_dir, scene_light, sizeof bd.light_dir); /* baked under the scene's light */
     memcpy(bd.lo, s->lo, sizeof bd.lo);
     memcpy(bd.hi, s->hi, sizeof bd.hi);
-    bake_ctx bc = {s};
-    if (xyl_billboard_gl_bake(&bd, bake_draw, &bc, &s->billboard, &d))
+    if (xyl_billboard_gl_bake(&bd, bake_draw, s, &s->billboard, &d))
         return fprintf(stderr, "bake: %s\n", d.message), -1;
     glCreateRenderbuffers(2, s->rb);
     glNamedRenderbufferStorage(s->rb[0], GL_RGBA8, SIDE, SIDE);
