@@ -33,8 +33,8 @@ bool xyl_side_point(vec3 tc, out uint e, out float t)
 void main()
 {
     uvec4 inst = tc_instance;
-    vec3 c[4], n[4];
-    xyl_load_patch(inst.x, c, n);
+    vec3 c[4], n[4], a[4];
+    xyl_load_patch(inst.x, c, n, a);
     vec3 tc = gl_TessCoord;
     vec3 pos, nrm;
     uint e;
@@ -43,12 +43,12 @@ void main()
         uint le = (inst.y >> (XYL_TESS_EDGE_LEVEL_BITS * e)) & 0xffu;
         uint k = uint(round(t * float(le)));
         uint e1 = (e + 1u == inst.w) ? 0u : e + 1u;
-        xyl_eval_edge(c[e], n[e], c[e1], n[e1], k, le, xyl_frame.variant, pos, nrm);
+        xyl_eval_edge(c[e], n[e], a[e], c[e1], n[e1], a[e1], k, le, xyl_frame.variant, pos, nrm);
     } else {
 #ifdef XYL_TRIANGLES
-        xyl_eval_triangle(c, n, tc.x, tc.y, tc.z, xyl_frame.variant, pos, nrm);
+        xyl_eval_triangle(c, n, a, tc.x, tc.y, tc.z, xyl_frame.variant, pos, nrm);
 #else
-        xyl_eval_quad(c, n, tc.x, tc.y, xyl_frame.variant, pos, nrm);
+        xyl_eval_quad(c, n, a, tc.x, tc.y, xyl_frame.variant, pos, nrm);
 #endif
     }
     v_position = pos;

@@ -9,12 +9,12 @@ layout(location = 1) out vec3 v_normal;
 
 void main()
 {
-    vec3 c[4], n[4];
-    xyl_load_patch(in_instance.x, c, n);
+    vec3 c[4], n[4], a[4];
+    xyl_load_patch(in_instance.x, c, n, a);
     uint i = in_lattice & 0xffu;
     uint j = (in_lattice >> XYL_TESS_PATTERN_SHIFT_J) & 0xffu;
     vec3 pos, nrm;
-    xyl_eval_lattice(c, n, in_instance.w, in_instance.z, in_instance.y, i, j, xyl_frame.variant,
+    xyl_eval_lattice(c, n, a, in_instance.w, in_instance.z, in_instance.y, i, j, xyl_frame.variant,
                      pos, nrm);
 #ifdef XYL_CAPTURE
     uint slot = xyl_capture_offsets[in_instance.x] + (in_lattice >> XYL_TESS_PATTERN_SHIFT_LOCAL);

@@ -24,11 +24,25 @@ bool xyl_precedes(vec3 pa, vec3 na, vec3 pb, vec3 nb)
     return na.z < nb.z;
 }
 
+// The arc variant's handle direction at a corner with axis a (or none, a = 0): along the axis,
+// signed towards the edge, where the edge leaves within 30 degrees of it; else the edge's
+// tangent-plane direction t (|t|^2 = tt > 0). The flag says which.
+vec3 xyl_arc_dir(vec3 t, float tt, vec3 a, out bool on_axis)
+{
+    float ta = dot(t, a);
+    on_axis = dot(a, a) > 0.0 && abs(ta) >= 0.8660254 * sqrt(tt);
+    if (on_axis) return ta >= 0.0 ? a : -a;
+    return t / sqrt(tt);
+}
+
 // The inner control point of edge (pi, pj) next to pi. All variants start from the edge vector
 // projected into pi's tangent plane; the circle-exact length (4/3) tan(phi/4) r, with the chord
 // c = 2 r sin(phi/2), simplifies to 2c / (3 (1 + cos(phi/2))), which needs no trigonometry and
-// tends to c/3 (the PN rule) as phi -> 0.
-vec3 xyl_handle(vec3 pi, vec3 ni, vec3 pj, vec3 nj, uint variant)
+// tends to c/3 (the PN rule) as phi -> 0. The arc variant turns the handle onto the corner's
+// axis (ai, aj: the curve along the branch; 0 where none) where the edge runs along it, and
+// takes phi from the two handle directions: on a bent tube the line along the branch is a
+// circle whose turn the normals cannot see.
+vec3 xyl_handle(vec3 pi, vec3 ni, vec3 ai, vec3 pj, vec3 nj, vec3 aj, uint variant)
 {
     vec3 d = pj - pi;
     vec3 t = d - dot(d, ni) * ni;
@@ -37,6 +51,18 @@ vec3 xyl_handle(vec3 pi, vec3 ni, vec3 pj, vec3 nj, uint variant)
     float dd = dot(d, d);
     float tt = dot(t, t);
     if (!(tt > dd * 1e-12)) return pi; // the edge leaves along the normal: no tangent direction
+    if (variant == uint(XYL_TESS_VARIANT_ARC)) {
+        vec3 s = dot(d, nj) * nj - d; // the edge from pj, in pj's tangent plane
+        float ss = dot(s, s);
+        bool on_i, on_j = false;
+        vec3 ui = xyl_arc_dir(t, tt, ai, on_i);
+        vec3 uj = ss > dd * 1e-12 ? xyl_arc_dir(s, ss, aj, on_j) : vec3(0.0);
+        if (on_i || on_j) {
+            float chalf = sqrt(max(0.5 - 0.5 * clamp(dot(ui, uj), -1.0, 1.0), 0.0));
+            float len = (2.0 * sqrt(dd)) / (3.0 * (1.0 + chalf));
+            return pi + ui * len;
+        }
+    }
     float chalf = sqrt(max(0.5 + 0.5 * clamp(dot(ni, nj), -1.0, 1.0), 0.0));
     float len = (2.0 * sqrt(dd)) / (3.0 * (1.0 + chalf));
     return pi + t * (len / sqrt(tt));
@@ -63,17 +89,18 @@ vec3 xyl_bezier3(vec3 a, vec3 b, vec3 c, vec3 d, float t)
 
 // Point k of le on the edge between corners a and b. The edge is walked in canonical order,
 // so both patches sharing it produce bit-identical results.
-void xyl_eval_edge(vec3 pa, vec3 na, vec3 pb, vec3 nb, uint k, uint le, uint variant,
-                   out vec3 pos, out vec3 nrm)
+void xyl_eval_edge(vec3 pa, vec3 na, vec3 aa, vec3 pb, vec3 nb, vec3 ab, uint k, uint le,
+                   uint variant, out vec3 pos, out vec3 nrm)
 {
     if (!xyl_precedes(pa, na, pb, nb)) {
         vec3 tp = pa; pa = pb; pb = tp;
         vec3 tn = na; na = nb; nb = tn;
+        vec3 ta = aa; aa = ab; ab = ta;
         k = le - k;
     }
     float t = float(k) / float(le);
-    vec3 ha = xyl_handle(pa, na, pb, nb, variant);
-    vec3 hb = xyl_handle(pb, nb, pa, na, variant);
+    vec3 ha = xyl_handle(pa, na, aa, pb, nb, ab, variant);
+    vec3 hb = xyl_handle(pb, nb, ab, pa, na, aa, variant);
     pos = xyl_bezier3(pa, ha, hb, pb, t);
     vec3 ne = xyl_edge_normal(pa, na, pb, nb);
     float s = 1.0 - t;
@@ -84,19 +111,19 @@ void xyl_eval_edge(vec3 pa, vec3 na, vec3 pb, vec3 nb, uint k, uint le, uint var
 
 // PN-quad at (u, v): bicubic Bezier with PN edge points and Coons interior points, biquadratic
 // normals with a Coons centre normal. Corners 0..3 sit at (0,0), (1,0), (1,1), (0,1).
-void xyl_eval_quad(vec3 c[4], vec3 n[4], float u, float v, uint variant,
+void xyl_eval_quad(vec3 c[4], vec3 n[4], vec3 a[4], float u, float v, uint variant,
                    out vec3 pos, out vec3 nrm)
 {
     vec3 b[16]; // b[i + 4 j], i along u, j along v
     b[0] = c[0]; b[3] = c[1]; b[15] = c[2]; b[12] = c[3];
-    b[1] = xyl_handle(c[0], n[0], c[1], n[1], variant);
-    b[2] = xyl_handle(c[1], n[1], c[0], n[0], variant);
-    b[7] = xyl_handle(c[1], n[1], c[2], n[2], variant);
-    b[11] = xyl_handle(c[2], n[2], c[1], n[1], variant);
-    b[14] = xyl_handle(c[2], n[2], c[3], n[3], variant);
-    b[13] = xyl_handle(c[3], n[3], c[2], n[2], variant);
-    b[8] = xyl_handle(c[3], n[3], c[0], n[0], variant);
-    b[4] = xyl_handle(c[0], n[0], c[3], n[3], variant);
+    b[1] = xyl_handle(c[0], n[0], a[0], c[1], n[1], a[1], variant);
+    b[2] = xyl_handle(c[1], n[1], a[1], c[0], n[0], a[0], variant);
+    b[7] = xyl_handle(c[1], n[1], a[1], c[2], n[2], a[2], variant);
+    b[11] = xyl_handle(c[2], n[2], a[2], c[1], n[1], a[1], variant);
+    b[14] = xyl_handle(c[2], n[2], a[2], c[3], n[3], a[3], variant);
+    b[13] = xyl_handle(c[3], n[3], a[3], c[2], n[2], a[2], variant);
+    b[8] = xyl_handle(c[3], n[3], a[3], c[0], n[0], a[0], variant);
+    b[4] = xyl_handle(c[0], n[0], a[0], c[3], n[3], a[3], variant);
     b[5] = (-4.0 * b[0] + 6.0 * (b[4] + b[1]) - 2.0 * (b[12] + b[3]) + 3.0 * (b[7] + b[13]) - b[15]) / 9.0;
     b[6] = (-4.0 * b[3] + 6.0 * (b[7] + b[2]) - 2.0 * (b[15] + b[0]) + 3.0 * (b[4] + b[14]) - b[12]) / 9.0;
     b[9] = (-4.0 * b[12] + 6.0 * (b[8] + b[13]) - 2.0 * (b[0] + b[15]) + 3.0 * (b[11] + b[1]) - b[3]) / 9.0;
@@ -129,15 +156,15 @@ void xyl_eval_quad(vec3 c[4], vec3 n[4], float u, float v, uint variant,
 }
 
 // PN-triangle with weights (w0, w1, w2) of corners 0, 1, 2 (Vlachos et al. 2001).
-void xyl_eval_triangle(vec3 c[4], vec3 n[4], float w0, float w1, float w2, uint variant,
+void xyl_eval_triangle(vec3 c[4], vec3 n[4], vec3 a[4], float w0, float w1, float w2, uint variant,
                        out vec3 pos, out vec3 nrm)
 {
-    vec3 b210 = xyl_handle(c[0], n[0], c[1], n[1], variant);
-    vec3 b120 = xyl_handle(c[1], n[1], c[0], n[0], variant);
-    vec3 b021 = xyl_handle(c[1], n[1], c[2], n[2], variant);
-    vec3 b012 = xyl_handle(c[2], n[2], c[1], n[1], variant);
-    vec3 b102 = xyl_handle(c[2], n[2], c[0], n[0], variant);
-    vec3 b201 = xyl_handle(c[0], n[0], c[2], n[2], variant);
+    vec3 b210 = xyl_handle(c[0], n[0], a[0], c[1], n[1], a[1], variant);
+    vec3 b120 = xyl_handle(c[1], n[1], a[1], c[0], n[0], a[0], variant);
+    vec3 b021 = xyl_handle(c[1], n[1], a[1], c[2], n[2], a[2], variant);
+    vec3 b012 = xyl_handle(c[2], n[2], a[2], c[1], n[1], a[1], variant);
+    vec3 b102 = xyl_handle(c[2], n[2], a[2], c[0], n[0], a[0], variant);
+    vec3 b201 = xyl_handle(c[0], n[0], a[0], c[2], n[2], a[2], variant);
     vec3 e = (b210 + b120 + b021 + b012 + b102 + b201) / 6.0;
     vec3 vc = (c[0] + c[1] + c[2]) / 3.0;
     vec3 b111 = e + (e - vc) * 0.5;
@@ -181,20 +208,21 @@ uint xyl_snap(uint idx, uint l, uint le)
     return (2u * idx * le + l) / (2u * l);
 }
 
-void xyl_eval_lattice(vec3 c[4], vec3 n[4], uint kind, uint l, uint edge_levels, uint i, uint j,
+void xyl_eval_lattice(vec3 c[4], vec3 n[4], vec3 a[4], uint kind, uint l, uint edge_levels, uint i, uint j,
                       uint variant, out vec3 pos, out vec3 nrm)
 {
     uint e, idx;
     if (xyl_lattice_edge(kind, l, i, j, e, idx)) {
         uint le = (edge_levels >> (XYL_TESS_EDGE_LEVEL_BITS * e)) & 0xffu;
         uint e1 = (e + 1u == kind) ? 0u : e + 1u;
-        xyl_eval_edge(c[e], n[e], c[e1], n[e1], xyl_snap(idx, l, le), le, variant, pos, nrm);
+        xyl_eval_edge(c[e], n[e], a[e], c[e1], n[e1], a[e1], xyl_snap(idx, l, le), le, variant,
+                      pos, nrm);
         return;
     }
     float fl = float(l);
     if (kind == uint(XYL_TESS_KIND_QUAD)) {
-        xyl_eval_quad(c, n, float(i) / fl, float(j) / fl, variant, pos, nrm);
+        xyl_eval_quad(c, n, a, float(i) / fl, float(j) / fl, variant, pos, nrm);
     } else {
-        xyl_eval_triangle(c, n, float(l - i - j) / fl, float(i) / fl, float(j) / fl, variant, pos, nrm);
+        xyl_eval_triangle(c, n, a, float(l - i - j) / fl, float(i) / fl, float(j) / fl, variant, pos, nrm);
     }
 }

@@ -19,10 +19,12 @@ layout(std430, binding = XYL_TESS_BINDING_OFFSETS) readonly buffer xyl_offset_bu
 };
 #endif
 
-void xyl_load_patch(uint index, out vec3 c[4], out vec3 n[4])
+void xyl_load_patch(uint index, out vec3 c[4], out vec3 n[4], out vec3 a[4])
 {
     for (int k = 0; k < 4; ++k) {
         c[k] = xyl_patches[index].p[k].xyz;
-        n[k] = xyl_patches[index].n[k].xyz;
+        vec4 nk = xyl_patches[index].n[k];
+        n[k] = nk.xyz;
+        a[k] = xyl_tess_axis(nk.xyz, nk.w);
     }
 }

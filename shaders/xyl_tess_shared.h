@@ -21,7 +21,14 @@
 #define XYL_TESS_VARIANT_PN 0       /* 1/3 of the tangent-projected edge (Vlachos 2001) */
 #define XYL_TESS_VARIANT_ROUNDED 1  /* 1/2 of it (Skjermo 2008) */
 #define XYL_TESS_VARIANT_CIRCLE 2   /* (4/3) tan(phi/4) r: exact on a circular arc */
-#define XYL_TESS_VARIANT_COUNT 3
+#define XYL_TESS_VARIANT_ARC 3      /* circle, and along a vertex's curve (its axis) the handle
+                                       follows that curve: exact on bent tubes too */
+#define XYL_TESS_VARIANT_COUNT 4
+
+/* The arc variant's vertex axis: the unit tangent of the curve through a regular vertex and its
+ * two opposite neighbours along the branch, stored as an angle in the vertex's tangent plane
+ * (xyl_tess_axis_frame of its normal), n[c].w = angle + XYL_TESS_AXIS_BIAS; 0 means none. */
+#define XYL_TESS_AXIS_BIAS 4.0
 
 /* A pattern vertex is one uint: lattice index i in bits 0..7, j in bits 8..15, and the vertex's
  * index within its pattern in bits 16..31 (capture buffers use it; no base-vertex builtin is
@@ -47,7 +54,8 @@
 #ifdef XYL_GLSL
 
 /* One patch: corner positions (w = kind, 3.0 or 4.0, on corner 0 only) and unit corner normals
- * (w = 0). Triangles leave corner 3 zero. std430: 128 bytes. */
+ * (w = the corner's axis for the arc variant, else 0). Triangles leave corner 3 zero. std430:
+ * 128 bytes. */
 struct xyl_tess_patch {
     vec4 p[4];
     vec4 n[4];
@@ -67,6 +75,26 @@ struct xyl_tess_frame {
     uint base_instance; /* hardware path: first instance record of the draw */
     uint dither;     /* keep range of the screen-door dither (xyl_tess_dither); 0: all */
 };
+
+/* Two unit vectors spanning the plane normal to the unit n (Duff et al. 2017, branchless). */
+void xyl_tess_axis_frame(vec3 n, out vec3 e1, out vec3 e2)
+{
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float b = n.x * n.y * a;
+    e1 = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    e2 = vec3(b, s + n.y * n.y * a, -n.y);
+}
+
+/* The axis of a corner from its stored w and its normal; (0, 0, 0) where it has none. */
+vec3 xyl_tess_axis(vec3 n, float w)
+{
+    if (w == 0.0) return vec3(0.0);
+    vec3 e1, e2;
+    xyl_tess_axis_frame(n, e1, e2);
+    float ang = w - XYL_TESS_AXIS_BIAS;
+    return e1 * cos(ang) + e2 * sin(ang);
+}
 
 /* The keep range [lo, hi) packed in xyl_tess_frame.dither: lo in bits 0..15, hi in 16..31. */
 vec2 xyl_tess_keep(uint dither)

@@ -21,8 +21,9 @@
 #define MAX_LEVEL 16u /* adaptive views stay under it; keeps llvmpipe captures small */
 #define SIDE 256u
 
-static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE};
-static const char *const variant_names[] = {"pn", "rounded", "circle"};
+static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE,
+                                             XYL_TESS_ARC};
+static const char *const variant_names[] = {"pn", "rounded", "circle", "arc"};
 
 typedef struct suite {
     xyl_gl_context *ctx;
@@ -83,6 +84,17 @@ static xyl_tess_patches *patches_of(const xyl_mesh *m)
 {
     xyl_tess_patches *tp = NULL;
     assert_int_equal(xyl_tess_patches_create(m, NULL, &tp, NULL), XYL_OK);
+    return tp;
+}
+
+/* Records that carry the arc variant's axes: every variant evaluates them (the others ignore
+ * the axes), so one upload serves the four. */
+static xyl_tess_patches *arc_patches_of(const xyl_mesh *m)
+{
+    xyl_tess_patches_desc pd = {0};
+    pd.variant = XYL_TESS_ARC;
+    xyl_tess_patches *tp = NULL;
+    assert_int_equal(xyl_tess_patches_create(m, &pd, &tp, NULL), XYL_OK);
     return tp;
 }
 
@@ -272,7 +284,7 @@ static void gpu_vertices_match_the_cpu_reference_on_both_paths(void **state)
     xyl_tess_batches *b = tu_batches_create();
     for (size_t mi = 0; mi < 3; ++mi) {
         xyl_mesh *m = tu_tree_mesh(0, meshes[mi].sides, meshes[mi].sub);
-        xyl_tess_patches *tp = patches_of(m);
+        xyl_tess_patches *tp = arc_patches_of(m);
         if (mi == 0) assert_true(tp->quad_count > 0 && tp->quad_count < tp->count); /* mixed */
         assert_int_equal(xyl_tess_gl_set_patches(s->gl, tp, NULL), XYL_OK);
         /* 0: adaptive. The Catmull-Clark mesh has 4x the patches; at level 8 its capture would
@@ -289,7 +301,7 @@ static void gpu_vertices_match_the_cpu_reference_on_both_paths(void **state)
             view.max_level = adaptive_max;
             assert_int_equal(xyl_tess_select(tp, s->pat, &view, b, NULL), XYL_OK);
             if (!fixed[li]) assert_true(b->cmd_count >= 3);
-            for (size_t vi = 0; vi < 3; ++vi)
+            for (size_t vi = 0; vi < XYL_TESS_VARIANT_COUNT; ++vi)
                 for (int path = 0; path < 2; ++path) {
                     bool hw_sampled = path == 0 || !SANITIZED || (mi == 0 && vi == 0);
                     if (hw_sampled)
@@ -410,7 +422,8 @@ static void bad_draw_arguments_get_result_codes(suite *s, const xyl_tess_batches
            XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl__tess_gl_capture(s->gl, b, XYL_TESS_PN, XYL_TESS_PATH_INSTANCED, NULL, 5, &n, d),
            XYL_ERR_INVALID_ARGUMENT, d);
-    expect(xyl__tess_gl_capture(s->gl, b, (xyl_tess_variant)3, XYL_TESS_PATH_HARDWARE, &one, 1, &n, d),
+    expect(xyl__tess_gl_capture(s->gl, b, (xyl_tess_variant)XYL_TESS_VARIANT_COUNT,
+                                XYL_TESS_PATH_HARDWARE, &one, 1, &n, d),
            XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl_tess_gl_set_patches(s->gl, NULL, d), XYL_ERR_INVALID_ARGUMENT, d);
     expect(xyl_tess_gl_set_patches(NULL, NULL, d), XYL_ERR_INVALID_ARGUMENT, d);

@@ -10,8 +10,9 @@
 #include "vk_internal.h" /* the device handle, to provoke the layer directly; capture */
 #include <xylem/xyl_tess_vk.h>
 
-static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE};
-static const char *const variant_names[] = {"pn", "rounded", "circle"};
+static const xyl_tess_variant variants[] = {XYL_TESS_PN, XYL_TESS_ROUNDED, XYL_TESS_CIRCLE,
+                                             XYL_TESS_ARC};
+static const char *const variant_names[] = {"pn", "rounded", "circle", "arc"};
 
 static xyl_tess_vk *open_vk(const xyl_tess_patterns *pat)
 {
@@ -141,7 +142,7 @@ static void capture_matches_cpu_reference(void **state)
         xyl_mesh *m = tu_tree_mesh(0, sides[si], XYL_SUBDIVIDE_NONE);
         float lo[3], hi[3];
         xyl_mesh_bounds(m, lo, hi);
-        for (size_t vi = 0; vi < 3; ++vi) {
+        for (size_t vi = 0; vi < XYL_TESS_VARIANT_COUNT; ++vi) {
             xyl_tess_patches_desc pd = {0};
             pd.variant = variants[vi];
             xyl_tess_patches *tp = NULL;

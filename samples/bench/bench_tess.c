@@ -45,7 +45,7 @@ typedef struct row {
 } row;
 
 static const char *subdiv_name[] = {"none", "catmark", "loop"};
-static const char *variant_name[] = {"pn", "rounded", "circle"};
+static const char *variant_name[] = {"pn", "rounded", "circle", "arc"};
 static const char *path_name[] = {"gl-instanced", "gl-hardware", "vk-instanced"};
 
 static void die(const char *what, xyl_result r, const xyl_diag *d)
@@ -488,7 +488,7 @@ int main(int argc, char **argv)
     arc_centreline(arc);
     gpu g = {0};
     if (o.gpu) gpu_open(&g, pat, &o);
-    size_t cap = 4 * 3 * 3 * 10, n = 0;
+    size_t cap = 4 * 3 * XYL_TESS_VARIANT_COUNT * 10, n = 0;
     row *rows = calloc(cap, sizeof *rows);
     printf("| k | subdivision | variant | level | triangles (tree) | max radial error %% | RMS %% "
            "| max normal error deg | %s ms | %s ms | %s ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
@@ -508,7 +508,7 @@ int main(int argc, char **argv)
             xyl_mesh_bounds(tm, lo, hi);
             xyl_tess_camera cam;
             xyl_tess_camera_frame(lo, hi, 0.5f, 0.2f, 0.8f, 1.0f, &cam);
-            for (uint32_t var = 0; var < 3; ++var)
+            for (uint32_t var = 0; var < XYL_TESS_VARIANT_COUNT; ++var)
                 for (size_t li = 0; li < 10; ++li) {
                     if (o.quick && levels[li] != 1 && levels[li] != 4) continue;
                     row *rw = &rows[n++];

@@ -59,7 +59,7 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
     case GLFW_KEY_H:
         v->path = v->path == XYL_TESS_PATH_HARDWARE ? XYL_TESS_PATH_INSTANCED : XYL_TESS_PATH_HARDWARE;
         break;
-    case GLFW_KEY_V: v->variant = (xyl_tess_variant)((v->variant + 1) % 3); v->dirty_patches = true; break;
+    case GLFW_KEY_V: v->variant = (xyl_tess_variant)((v->variant + 1) % XYL_TESS_VARIANT_COUNT); v->dirty_patches = true; break;
     case GLFW_KEY_W: v->wireframe = !v->wireframe; break;
     case GLFW_KEY_L: {
         size_t i = 0;
@@ -157,7 +157,7 @@ static void show_status(viewer *v)
         lo = l < lo ? l : lo;
         hi = l > hi ? l : hi;
     }
-    static const char *variants[] = {"pn", "rounded", "circle"};
+    static const char *variants[] = {"pn", "rounded", "circle", "arc"};
     char level[48], title[256];
     if (v->fixed_level) snprintf(level, sizeof level, "level %u", v->fixed_level);
     else snprintf(level, sizeof level, "%.3g px budget, levels %u..%u", v->error_px, lo, hi);

@@ -449,7 +449,7 @@ static int set_tree(view_params *p, const char *name, const char *v, char *err, 
 
 static int set_view(view_params *p, const char *name, const char *v, char *err, size_t cap)
 {
-    static const char *const variants[] = {"pn", "rounded", "circle", NULL};
+    static const char *const variants[] = {"pn", "rounded", "circle", "arc", NULL};
     static const char *const tess[] = {"instanced", "hardware", NULL};
     static const char *const cameras[] = {"default", "front", "side", "top", "low", NULL};
     static const float presets[][2] = {{30, 10}, {0, 0}, {90, 0}, {0, 89}, {30, -20}};
@@ -457,7 +457,7 @@ static int set_view(view_params *p, const char *name, const char *v, char *err, 
     uint64_t u;
     int c;
     if (!strcmp(name, "variant")) {
-        if ((c = choice(v, variants)) < 0) return bad(err, cap, "variant takes pn, rounded or circle, not '%s'", v);
+        if ((c = choice(v, variants)) < 0) return bad(err, cap, "variant takes pn, rounded, circle or arc, not '%s'", v);
         p->variant = (xyl_tess_variant)c;
     } else if (!strcmp(name, "tess")) {
         if ((c = choice(v, tess)) < 0) return bad(err, cap, "tess takes instanced or hardware, not '%s'", v);

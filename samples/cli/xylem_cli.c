@@ -137,7 +137,7 @@ static const char usage_text[] =
     "                               .glb of them; --table: the LOD table\n"
     "  render   [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--backend gl|vulkan]\n"
-    "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle]\n"
+    "           [--tess instanced|hardware|cpu] [--variant pn|rounded|circle|arc]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION[,DISTANCE]]\n"
     "           [--size WxH] [--wireframe] [--samples N]\n"
     "           [--foliage full|lod|adaptive|none|billboard|impostor]\n"
@@ -158,7 +158,7 @@ static const char usage_text[] =
     "                               billboard, billboards far away; full: every leaf), framed\n"
     "                               as a whole or by --camera\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
-    "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
+    "           [--tess instanced|hardware] [--variant pn|rounded|circle|arc]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
     "           [--wireframe] [--samples N] [--frames N] [--screenshot FILE.png]\n"
     "           [--set NAME=VALUE ...]\n"
@@ -283,7 +283,8 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
         if (strcmp(val, "pn") == 0) r->variant = XYL_TESS_PN;
         else if (strcmp(val, "rounded") == 0) r->variant = XYL_TESS_ROUNDED;
         else if (strcmp(val, "circle") == 0) r->variant = XYL_TESS_CIRCLE;
-        else return usage_error("--variant takes pn, rounded or circle, not '%s'", val);
+        else if (strcmp(val, "arc") == 0) r->variant = XYL_TESS_ARC;
+        else return usage_error("--variant takes pn, rounded, circle or arc, not '%s'", val);
     } else if (strcmp(opt, "--level") == 0) {
         if (!parse_u64(val, XYL_TESS_MAX_LEVEL, &u) || u < 1)
             return usage_error("--level takes a whole number from 1 to 64, not '%s'", val);

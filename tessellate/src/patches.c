@@ -9,23 +9,170 @@
 
 /* ---- records ------------------------------------------------------------------------------ */
 
+static bool unit_normal(const xyl_mesh *mesh, uint32_t v, float out[3]);
+
+/* axes: the arc variant's per-vertex axes, else NULL (the records' n[c].w stay 0). */
 static bool fill_record(const xyl_mesh *mesh, const uint32_t *face, uint32_t kind,
-                        xyl_tess_patch *rec)
+                        const float *axes, xyl_tess_patch *rec)
 {
     memset(rec, 0, sizeof *rec);
     for (uint32_t c = 0; c < kind; ++c) {
         xyl_vec3 p = mesh->positions[face[c]];
-        xyl_vec3 n = mesh->normals[face[c]];
-        double l2 = (double)n.x * n.x + (double)n.y * n.y + (double)n.z * n.z;
-        if (!(l2 > 1e-12)) return false; /* no direction: the PN rules need one */
-        double inv = 1.0 / sqrt(l2);
+        if (!unit_normal(mesh, face[c], rec->n[c])) return false; /* the PN rules need one */
         rec->p[c][0] = p.x; rec->p[c][1] = p.y; rec->p[c][2] = p.z;
-        rec->n[c][0] = (float)(n.x * inv);
-        rec->n[c][1] = (float)(n.y * inv);
-        rec->n[c][2] = (float)(n.z * inv);
+        if (axes) rec->n[c][3] = axes[face[c]];
     }
     rec->p[0][3] = (float)kind;
     return true;
+}
+
+/* ---- the arc variant's vertex axes (docs/tessellation.md, "The arc rule") ------------------- */
+
+#define AXIS_MAX_VALENCE 8
+
+/* The unit normal a record stores for vertex v (fill_record's arithmetic). */
+static bool unit_normal(const xyl_mesh *mesh, uint32_t v, float out[3])
+{
+    xyl_vec3 n = mesh->normals[v];
+    double l2 = (double)n.x * n.x + (double)n.y * n.y + (double)n.z * n.z;
+    if (!(l2 > 1e-12)) return false;
+    double inv = 1.0 / sqrt(l2);
+    out[0] = (float)(n.x * inv);
+    out[1] = (float)(n.y * inv);
+    out[2] = (float)(n.z * inv);
+    return true;
+}
+
+typedef struct fan {
+    uint32_t nb[AXIS_MAX_VALENCE]; /* distinct neighbours */
+    uint8_t adj[AXIS_MAX_VALENCE]; /* bit b: neighbours k and b follow each other in a face */
+    uint8_t count, faces, bad; /* bad: more neighbours than fit, or a triangle among its faces */
+} fan;
+
+static int fan_slot(fan *f, uint32_t w)
+{
+    for (int k = 0; k < f->count; ++k)
+        if (f->nb[k] == w) return k;
+    if (f->count == AXIS_MAX_VALENCE) return -1;
+    f->nb[f->count] = w;
+    return f->count++;
+}
+
+/* How straight the curve a -> v -> b runs through v: the cosine of its turn. */
+static double straightness(const xyl_mesh *mesh, uint32_t v, uint32_t a, uint32_t b)
+{
+    xyl_vec3 pa = mesh->positions[a], pv = mesh->positions[v], pb = mesh->positions[b];
+    double u[3] = {(double)pv.x - pa.x, (double)pv.y - pa.y, (double)pv.z - pa.z};
+    double w[3] = {(double)pb.x - pv.x, (double)pb.y - pv.y, (double)pb.z - pv.z};
+    double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    double lw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (!(lu > 0.0) || !(lw > 0.0)) return -2.0;
+    return (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (lu * lw);
+}
+
+/* The axis of a vertex whose faces, all quads, close a fan of even valence: of the pairs of
+ * opposite neighbours, the one along the branch (the larger step in v where the mesh has UVs, else the
+ * straighter), if it turns by less than 60 degrees; its tangent is that of the circle through
+ * the three points (exact for unequal steps to first order), encoded in the tangent plane. */
+/* Only quads: around a vertex of a triangulated tube a diagonal edge can leave within the
+ * handle rule's 30 degrees of the axis, and would be bent onto it. */
+static float vertex_axis(const xyl_mesh *mesh, uint32_t v, const fan *f)
+{
+    int m = f->count;
+    if (f->bad || m < 4 || (m & 1) || f->faces != m) return 0.0f;
+    for (int k = 0; k < m; ++k) { /* a closed fan: every neighbour follows exactly two others */
+        int bits = 0;
+        for (int b = 0; b < m; ++b) bits += f->adj[k] >> b & 1u;
+        if (bits != 2) return 0.0f;
+    }
+    int order[AXIS_MAX_VALENCE];
+    uint32_t seen = 1u;
+    order[0] = 0;
+    int prev = -1, cur = 0;
+    for (int s = 1; s < m; ++s) {
+        int next = -1;
+        for (int b = 0; b < m && next < 0; ++b)
+            if ((f->adj[cur] >> b & 1u) && b != prev) next = b;
+        if (next < 0 || (seen >> next & 1u)) return 0.0f; /* two cycles: not one fan */
+        seen |= 1u << next;
+        order[s] = next;
+        prev = cur;
+        cur = next;
+    }
+    int best = -1;
+    double best_cos = -2.0;
+    bool by_uv = false;
+    if (mesh->uvs) {
+        double dv[AXIS_MAX_VALENCE / 2], hi = -1.0, lo = INFINITY;
+        for (int k = 0; k < m / 2; ++k) {
+            dv[k] = fabs((double)mesh->uvs[2 * f->nb[order[k]] + 1] -
+                         (double)mesh->uvs[2 * f->nb[order[k + m / 2]] + 1]);
+            if (dv[k] > hi) hi = dv[k], best = k;
+        }
+        for (int k = 0; k < m / 2; ++k)
+            if (k != best) lo = fmin(lo, dv[k]);
+        by_uv = hi > 0.0 && hi > 4.0 * lo;
+    }
+    if (!by_uv) {
+        best = -1;
+        for (int k = 0; k < m / 2; ++k) {
+            double c = straightness(mesh, v, f->nb[order[k]], f->nb[order[k + m / 2]]);
+            if (c > best_cos) best_cos = c, best = k;
+        }
+    }
+    if (best < 0) return 0.0f;
+    uint32_t a = f->nb[order[best]], b = f->nb[order[best + m / 2]];
+    if (straightness(mesh, v, a, b) < 0.5) return 0.0f;
+    float n[3];
+    if (!unit_normal(mesh, v, n)) return 0.0f;
+    xyl_vec3 pa = mesh->positions[a], pv = mesh->positions[v], pb = mesh->positions[b];
+    double u[3] = {(double)pv.x - pa.x, (double)pv.y - pa.y, (double)pv.z - pa.z};
+    double w[3] = {(double)pb.x - pv.x, (double)pb.y - pv.y, (double)pb.z - pv.z};
+    double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    double lw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    double t[3];
+    for (int k = 0; k < 3; ++k) t[k] = u[k] * (lw / lu) + w[k] * (lu / lw);
+    double tn = t[0] * n[0] + t[1] * n[1] + t[2] * n[2];
+    for (int k = 0; k < 3; ++k) t[k] -= tn * n[k];
+    double tl = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    if (!(tl > 0.0) || !isfinite(tl)) return 0.0f;
+    for (int k = 0; k < 3; ++k) t[k] /= tl;
+    return xyl__tess_encode_axis(n, t);
+}
+
+/* Every vertex's stored axis (0: none); NULL when out of memory. */
+static float *vertex_axes(const xyl_mesh *mesh, const xyl_allocator *a)
+{
+    size_t nv = mesh->vertex_count;
+    fan *fans = xyl__calloc(a, nv ? nv : 1, sizeof *fans);
+    float *axes = xyl__calloc(a, nv ? nv : 1, sizeof *axes);
+    if (!fans || !axes) {
+        xyl__free(a, fans);
+        xyl__free(a, axes);
+        return NULL;
+    }
+    size_t nf = mesh->quad_count + mesh->triangle_count;
+    for (size_t f = 0; f < nf; ++f) {
+        bool quad = f < mesh->quad_count;
+        uint32_t kind = quad ? 4u : 3u;
+        const uint32_t *face = quad ? mesh->quads + 4 * f : mesh->triangles + 3 * (f - mesh->quad_count);
+        for (uint32_t c = 0; c < kind; ++c) {
+            fan *fv = &fans[face[c]];
+            if (!quad) fv->bad = 1; /* see vertex_axis */
+            int p = fan_slot(fv, face[(c + kind - 1) % kind]);
+            int q = fan_slot(fv, face[(c + 1) % kind]);
+            if (p < 0 || q < 0) {
+                fv->bad = 1;
+                continue;
+            }
+            fv->adj[p] |= (uint8_t)(1u << q);
+            fv->adj[q] |= (uint8_t)(1u << p);
+            if (fv->faces < 255) fv->faces++;
+        }
+    }
+    for (size_t v = 0; v < nv; ++v) axes[v] = vertex_axis(mesh, (uint32_t)v, &fans[v]);
+    xyl__free(a, fans);
+    return axes;
 }
 
 /* ---- unique edges: open addressing on (min, max) vertex index ------------------------------ */
@@ -145,7 +292,8 @@ void xyl_tess_patches_destroy(xyl_tess_patches *patches)
 }
 
 static xyl_result fill_all(const xyl_mesh *mesh, xyl__tess_patches *t, edge_map *map,
-                           xyl_tess_patch *recs, uint32_t *pedges, xyl_diag *diag)
+                           const float *axes, xyl_tess_patch *recs, uint32_t *pedges,
+                           xyl_diag *diag)
 {
     xyl_tess_variant variant = t->pub.variant;
     size_t nq = mesh->quad_count;
@@ -153,7 +301,7 @@ static xyl_result fill_all(const xyl_mesh *mesh, xyl__tess_patches *t, edge_map 
     for (size_t f = 0; f < t->pub.count; ++f) {
         uint32_t kind = f < nq ? XYL_TESS_KIND_QUAD : XYL_TESS_KIND_TRIANGLE;
         const uint32_t *face = f < nq ? mesh->quads + 4 * f : mesh->triangles + 3 * (f - nq);
-        if (!fill_record(mesh, face, kind, &recs[f]))
+        if (!fill_record(mesh, face, kind, axes, &recs[f]))
             return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, (int64_t)f,
                              "face %zu has a vertex with a zero normal", f);
         tv3 net[16];
@@ -229,8 +377,17 @@ xyl_result xyl_tess_patches_create(const xyl_mesh *mesh, const xyl_tess_patches_
                          count);
     }
     memset(map.keys, 0xff, slots * sizeof(uint64_t));
-    r = fill_all(mesh, t, &map, (xyl_tess_patch *)t->pub.records,
-                            (uint32_t *)t->pub.patch_edges, diag);
+    float *axes = NULL;
+    if (d.variant == XYL_TESS_ARC && !(axes = vertex_axes(mesh, a))) {
+        patches_free(t);
+        xyl__free(a, map.keys);
+        xyl__free(a, map.ids);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
+                         "out of memory for the axes of %zu vertices", mesh->vertex_count);
+    }
+    r = fill_all(mesh, t, &map, axes, (xyl_tess_patch *)t->pub.records,
+                 (uint32_t *)t->pub.patch_edges, diag);
+    xyl__free(a, axes);
     t->pub.edge_count = map.count;
     xyl__free(a, map.keys);
     xyl__free(a, map.ids);

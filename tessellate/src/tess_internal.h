@@ -36,6 +36,9 @@ typedef struct xyl__tess_patches {
 
 /* Control net of a patch for a variant: quads 16 points b[i + 4j], triangles 10 points in the
  * order b300 b030 b003 b210 b120 b021 b012 b102 b201 b111. Returns the point count. */
+/* The arc variant's stored axis (n[c].w) of a corner with unit normal n: the angle of axis
+ * (projected into n's tangent plane) plus XYL_TESS_AXIS_BIAS; 0 when it has no direction there. */
+float xyl__tess_encode_axis(const float n[3], const double axis[3]);
 int xyl__tess_control_net(const xyl_tess_patch *patch, xyl_tess_variant variant, tv3 out[16]);
 /* The two inner control points of edge e, in canonical order (first, second) as the edge
  * evaluation uses them, with the canonical end points. */

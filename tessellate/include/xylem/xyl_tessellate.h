@@ -48,7 +48,10 @@ _Static_assert(offsetof(xyl_tess_frame, variant) == 112, "scalars follow mat4 + 
 typedef enum xyl_tess_variant {
     XYL_TESS_PN = XYL_TESS_VARIANT_PN,           /* handles 1/3: Vlachos' PN rule (default) */
     XYL_TESS_ROUNDED = XYL_TESS_VARIANT_ROUNDED, /* handles 1/2: Skjermo's rounded rule */
-    XYL_TESS_CIRCLE = XYL_TESS_VARIANT_CIRCLE    /* (4/3) tan(phi/4) r: exact on circular arcs */
+    XYL_TESS_CIRCLE = XYL_TESS_VARIANT_CIRCLE,   /* (4/3) tan(phi/4) r: exact on circular arcs */
+    XYL_TESS_ARC = XYL_TESS_VARIANT_ARC          /* circle, with handles along each regular
+                                                    vertex's branch curve: exact on bent tubes
+                                                    (docs/tessellation.md, "The arc rule") */
 } xyl_tess_variant;
 
 /* ---- CPU reference evaluator (the shader's formulas, in float, same operation order) ------- */
