@@ -1426,6 +1426,52 @@ static double parent_normal_error(const xyl_mesh *m, uint32_t parent_branch, dou
     return worst;
 }
 
+/* On a bend the normals stay radial: a tube of radius 0.25 whose nodes lie on a circle, a unit
+ * apart, turning `deg` degrees each; the worst angle (degrees) between a ring vertex's normal and
+ * the torus's, away from both caps. Area-weighted sums alone lean towards the outer side's wider
+ * faces (0.5 degrees at k = 4, 4 degrees). */
+static double bent_normal_error(uint32_t k, double deg)
+{
+    enum { NODES = 16 };
+    const double step = deg * 3.14159265358979323846 / 180.0, big = 1.0 / (2.0 * sin(step / 2.0));
+    xyl_skel_node n[NODES];
+    memset(n, 0, sizeof n);
+    for (int i = 0; i < NODES; ++i) {
+        n[i].pos = (xyl_vec3){(float)(big * cos(step * i)), (float)(big * sin(step * i)), 0.0f};
+        n[i].radius = 0.25f;
+        n[i].parent = i - 1;
+    }
+    xyl_skeleton *sk = skeleton_of(n, NODES);
+    xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    double worst = 0.0;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        xyl_vec3 p = m->positions[v], nv = m->normals[v];
+        double h = hypot(p.x, p.y), a = atan2(p.y, p.x);
+        if (a < 1.5 * step || a > (NODES - 2.5) * step) continue;
+        double r[3] = {p.x - p.x / h * big, p.y - p.y / h * big, p.z};
+        double rl = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        double c = (nv.x * r[0] + nv.y * r[1] + nv.z * r[2]) / rl;
+        worst = fmax(worst, acos(fmin(1.0, fmax(-1.0, c))) * 180.0 / 3.14159265358979323846);
+    }
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(sk);
+    return worst;
+}
+
+static void branch_normals_stay_radial_on_a_bend(void **state)
+{
+    (void)state;
+    double worst = 0.0;
+    for (uint32_t k = 3; k <= 8; ++k)
+        for (double deg = 4.0; deg <= 16.0; deg *= 2.0) {
+            double e = bent_normal_error(k, deg);
+            print_message("bent tube k = %u, %4.1f deg per segment: normals within %.5f deg of "
+                          "the torus's\n", k, deg, e);
+            worst = fmax(worst, e);
+        }
+    assert_true(worst < 0.05);
+}
+
 static void branch_normals_keep_the_parent_cylindrical_at_a_joint(void **state)
 {
     (void)state;
@@ -2111,6 +2157,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(very_long_thin_segments_keep_uvs_finite),
         cmocka_unit_test(thin_spokes_stay_separate_branches),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
+        cmocka_unit_test(branch_normals_stay_radial_on_a_bend),
         cmocka_unit_test(subdivision_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(subdivided_vertices_sit_on_the_limit_surface),
         cmocka_unit_test(subdivision_limit_follows_a_bent_branch),

@@ -213,7 +213,7 @@ static void arc_rule_follows_a_bent_tube(void **state)
             ok = ok && arc < circle;
             if (ks[i] == 4 && deg == 4.0) {
                 ok = ok && circle > 0.01; /* the sag this rule removes is there to see */
-                ok = ok && arc <= 0.003; /* 0.262 %: the rest is the mesh normals' tilt */
+                ok = ok && arc <= 0.0005; /* 0.034 %; 0.027 % is the cubic's on a circle */
             }
         }
     assert_true(ok);

@@ -335,6 +335,9 @@ XYL__STEMS_SHARED xyl_result xyl__stems_add_elbow(stems *s, const stems_ring *br
 /* Makes the normals summed for the branch just built (its rings and cap apexes) unit;
  * k even, while they are still in cache. */
 XYL__STEMS_SHARED void xyl__stems_unit_branch_normals(stems *s);
+/* Takes from each ring vertex's normal sum its component around the ring (all rings of the
+ * branch just built but a lateral's bridge ring). */
+XYL__STEMS_SHARED void xyl__stems_flatten_ring_normals(stems *s, bool lateral);
 
 /* The vertex normals of the mesh as it stood before bridges replaced their patches, finished
  * from the sums in s->nrm, which it hands over as *out. */

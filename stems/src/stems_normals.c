@@ -55,6 +55,29 @@ void xyl__stems_unit_branch_normals(stems *s)
     }
 }
 
+/* A tube's true normal at a ring vertex has no component around the ring: it lies in the plane
+ * of the radial direction and the branch's tangent (the taper tilts it along the tangent). The
+ * face sums of a ring vertex on a bend have one: the faces on the outer side of the bend are
+ * wider, and area weights lean the sum towards them (0.5 degrees on a k = 4 tube bent 4 degrees
+ * per segment, which the tessellation's handles then follow: docs/tessellation.md, "The arc
+ * rule"). Each ring's sums lose that component before they are normalised; a lateral's bridge
+ * ring (its first), which is no tube's, keeps its sums. */
+void xyl__stems_flatten_ring_normals(stems *s, bool lateral)
+{
+    for (size_t i = lateral ? 1 : 0; i < s->nrings; ++i) {
+        const stems_ring *rg = &s->rings[i];
+        for (uint32_t j = 0; j < s->k; ++j) {
+            xyl_vec3 *n = s->nrm + rg->first + j;
+            xyl__dvec3 around = xyl__d3_cross(
+                rg->tangent, xyl__d3_sub(xyl__from_f3(s->pos[rg->first + j]), rg->centre));
+            double aa = xyl__d3_dot(around, around);
+            if (!(aa > 0.0) || !(aa <= DBL_MAX)) continue;
+            xyl__dvec3 v = xyl__from_f3(*n);
+            *n = xyl__to_f3(xyl__d3_sub(v, xyl__d3_scale(around, xyl__d3_dot(v, around) / aa)));
+        }
+    }
+}
+
 /* Normals of the mesh before the patches were dropped: a parent vertex on a joint still sees its
  * branch's full tube, so its normal is the parent's own (Skjermo 2008). The quads' share is in
  * s->nrm already; triangles come after all quads, as in xyl__mesh_normals. */

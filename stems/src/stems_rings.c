@@ -522,6 +522,7 @@ xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *f
     s->apex[0] = s->apex[1] = UINT32_MAX;
     if (!r && !from) r = put_cap(s, 0, false, branch);
     if (!r) r = put_cap(s, s->nrings - 1, true, branch);
+    if (!r && s->sum_normals) xyl__stems_flatten_ring_normals(s, from != NULL);
     if (!r && s->unit_per_branch) xyl__stems_unit_branch_normals(s);
     for (size_t f = 0; f < nspans && !r; ++f)
         r = xyl__stems_attach_laterals(s, spans[f].station, spans[f].lo, spans[f].hi);
