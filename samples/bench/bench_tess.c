@@ -35,6 +35,8 @@ typedef struct bench_opts {
     int frames;
     uint32_t size;
     const char *dat;
+    uint32_t sides[8], nsides;  /* --sides: ring sides to run; default 3, 4, 6, 8 */
+    double max_triangles;       /* --max-triangles: configurations above it are skipped */
 } bench_opts;
 
 typedef struct row {
@@ -457,10 +459,30 @@ static void parse(int argc, char **argv, bench_opts *o)
         else if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) o->frames = atoi(argv[++i]);
         else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) o->size = (uint32_t)atoi(argv[++i]);
         else if (strcmp(argv[i], "--dat") == 0 && i + 1 < argc) o->dat = argv[++i];
-        else {
+        else if (strcmp(argv[i], "--max-triangles") == 0 && i + 1 < argc) {
+            o->max_triangles = atof(argv[++i]);
+            if (!(o->max_triangles >= 1.0)) {
+                fprintf(stderr, "bench_tess: --max-triangles takes a positive count\n");
+                exit(64);
+            }
+        } else if (strcmp(argv[i], "--sides") == 0 && i + 1 < argc) {
+            char *list = argv[++i], *end = list;
+            o->nsides = 0;
+            while (*end) {
+                long k = strtol(list, &end, 10);
+                if (end == list || k < 3 || k > 32 || o->nsides == 8 || (*end && *end != ',')) {
+                    fprintf(stderr, "bench_tess: --sides takes up to 8 ring sides 3..32, "
+                                    "comma-separated\n");
+                    exit(64);
+                }
+                o->sides[o->nsides++] = (uint32_t)k;
+                list = *end ? end + 1 : end;
+            }
+        } else {
             bool help = strcmp(argv[i], "--help") == 0;
             fprintf(help ? stdout : stderr,
-                    "usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]\n");
+                    "usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]"
+                    " [--sides K,K,...] [--max-triangles N]\n");
             exit(help ? 0 : 64);
         }
     }
@@ -479,7 +501,12 @@ int main(int argc, char **argv)
 {
     bench_opts o = {0};
     parse(argc, argv, &o);
-    static const uint32_t ks[] = {3, 4, 6, 8}, levels[] = {1, 2, 3, 4, 6, 8, 12, 16, 24, 32};
+    static const uint32_t default_ks[] = {3, 4, 6, 8}, levels[] = {1, 2, 3, 4, 6, 8, 12, 16, 24, 32};
+    if (!o.nsides) {
+        memcpy(o.sides, default_ks, sizeof default_ks);
+        o.nsides = 4;
+    }
+    const uint32_t *ks = o.sides;
     xyl_tess_patterns *pat = NULL;
     xyl_diag d = {0};
     xyl_result r = xyl_tess_patterns_create(0, NULL, &pat, &d);
@@ -488,12 +515,12 @@ int main(int argc, char **argv)
     arc_centreline(arc);
     gpu g = {0};
     if (o.gpu) gpu_open(&g, pat, &o);
-    size_t cap = 4 * 3 * XYL_TESS_VARIANT_COUNT * 10, n = 0;
+    size_t cap = o.nsides * 3 * XYL_TESS_VARIANT_COUNT * 10, n = 0;
     row *rows = calloc(cap, sizeof *rows);
     printf("| k | subdivision | variant | level | triangles (tree) | max radial error %% | RMS %% "
            "| max normal error deg | %s ms | %s ms | %s ms |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
            path_name[0], path_name[1], path_name[2]);
-    for (size_t ki = 0; ki < 4; ++ki) {
+    for (size_t ki = 0; ki < o.nsides; ++ki) {
         if (o.quick && ks[ki] != 4) continue;
         for (uint32_t sdv = 0; sdv < 3; ++sdv) {
             xyl_mesh *am = mesh_of(arc, ks[ki], sdv), *tm = mesh_of(tree, ks[ki], sdv);
@@ -511,6 +538,11 @@ int main(int argc, char **argv)
             for (uint32_t var = 0; var < XYL_TESS_VARIANT_COUNT; ++var)
                 for (size_t li = 0; li < 10; ++li) {
                     if (o.quick && levels[li] != 1 && levels[li] != 4) continue;
+                    double l2 = (double)levels[li] * levels[li];
+                    if (o.max_triangles > 0.0 &&
+                        (2.0 * (double)tm->quad_count + (double)tm->triangle_count) * l2 >
+                            o.max_triangles)
+                        continue;
                     row *rw = &rows[n++];
                     rw->k = ks[ki]; rw->subdiv = sdv; rw->variant = var; rw->level = levels[li];
                     run_config(rw, arc, am, tm, pat, o.gpu ? &g : NULL, &cam, &o);

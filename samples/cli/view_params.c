@@ -17,6 +17,7 @@ void view_params_init(view_params *p)
 {
     memset(p, 0, sizeof *p);
     p->error_px = 0.5f;
+    p->variant = XYL_TESS_ARC;
     p->panel = true;
     p->leaves = true; /* a leafy grammar opens leafy; leaves=0 skips the foliage stage */
     p->azimuth = (float)(30.0 * DEG);

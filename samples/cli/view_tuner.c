@@ -80,7 +80,7 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
     case GLFW_KEY_H:
         p->path = p->path == XYL_TESS_PATH_HARDWARE ? XYL_TESS_PATH_INSTANCED : XYL_TESS_PATH_HARDWARE;
         break;
-    case GLFW_KEY_V: p->variant = (xyl_tess_variant)((p->variant + 1) % 3); regrow(t); break;
+    case GLFW_KEY_V: p->variant = (xyl_tess_variant)((p->variant + 1) % XYL_TESS_VARIANT_COUNT); regrow(t); break;
     case GLFW_KEY_W: p->wireframe = !p->wireframe; break;
     case GLFW_KEY_P: p->panel = !p->panel; break;
     case GLFW_KEY_F: /* the leaf draw: lod, full, none; drawing them builds them */

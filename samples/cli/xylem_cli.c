@@ -1936,6 +1936,7 @@ int main(int argc, char **argv)
     if (strcmp(cmd, "preset") == 0) return cmd_preset(argc, argv);
     options o;
     memset(&o, 0, sizeof o);
+    o.render.variant = XYL_TESS_ARC; /* the handle rule that follows bent branches */
     bool derive = strcmp(cmd, "derive") == 0, skeleton = strcmp(cmd, "skeleton") == 0;
     bool mesh = strcmp(cmd, "mesh") == 0, render = strcmp(cmd, "render") == 0;
     bool view = strcmp(cmd, "view") == 0, foliage = strcmp(cmd, "foliage") == 0;
