@@ -16,6 +16,7 @@ layout(location = XYL_FOREST_GL_UNIFORM_INSTANCE) uniform uint u_instance;
 
 layout(location = 0) out vec3 v_normal;
 layout(location = 1) out vec2 v_uv;
+layout(location = 2) flat out vec2 v_keep; // the copy's cross-fade share
 
 void main()
 {
@@ -28,4 +29,5 @@ void main()
     gl_Position = u_view_proj * vec4(p, 1.0);
     v_normal = xyl_forest_turn(xyl_foliage_normal(l), cs);
     v_uv = xyl_foliage_corner_uv(l, st);
+    v_keep = xyl_forest_keep(inst.bits);
 }

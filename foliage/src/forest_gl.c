@@ -16,11 +16,11 @@
 #include "xylem/xyl_forest_gl.h"
 
 extern const unsigned char xyl__shader_gl_forest_leaf_vert[];
-extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
+extern const unsigned char xyl__shader_gl_forest_leaf_frag[];
 extern const unsigned char xyl__shader_gl_forest_stem_vert[];
 extern const unsigned char xyl__shader_gl_forest_stem_frag[];
 extern const unsigned char xyl__shader_gl_forest_billboard_vert[];
-extern const unsigned char xyl__shader_gl_billboard_frag[];
+extern const unsigned char xyl__shader_gl_forest_billboard_frag[];
 
 #define BB_UNIFORM_LIGHT 6  /* billboard.frag's */
 #define BB_UNIFORM_CUTOFF 7
@@ -41,8 +41,9 @@ struct xyl_forest_gl {
     GLsizeiptr instance_capacity; /* bytes */
     species species[XYL_FOREST_MAX_SPECIES];
     uint32_t species_count;
-    xyl_forest_instance *instances, *sorted;
-    uint16_t *bucket;
+    xyl_forest_instance *instances, *sorted; /* sorted: room for every instance twice */
+    uint16_t *bucket, *fine_bucket;         /* per instance, per frame */
+    uint8_t *share;                         /* per instance, per frame: its fade */
     size_t count;
     uint64_t max_instances;
     uint32_t max_levels;
@@ -123,13 +124,13 @@ xyl_result xyl_forest_gl_create(const xyl_forest_gl_desc *desc, xyl_forest_gl **
     f->max_levels = d.max_levels ? d.max_levels : XYL_FOREST_MAX_LEVELS;
     f->hysteresis = d.hysteresis > 0.0f ? d.hysteresis : d.hysteresis < 0.0f ? 0.0f : 0.1f;
     xyl__fgl_drain_errors();
-    r = link(xyl__shader_gl_forest_leaf_vert, xyl__shader_gl_foliage_leaf_frag, "forest_leaf",
+    r = link(xyl__shader_gl_forest_leaf_vert, xyl__shader_gl_forest_leaf_frag, "forest_leaf",
              &f->leaf_program, diag);
     if (r == XYL_OK)
         r = link(xyl__shader_gl_forest_stem_vert, xyl__shader_gl_forest_stem_frag, "forest_stem",
                  &f->stem_program, diag);
     if (r == XYL_OK)
-        r = link(xyl__shader_gl_forest_billboard_vert, xyl__shader_gl_billboard_frag,
+        r = link(xyl__shader_gl_forest_billboard_vert, xyl__shader_gl_forest_billboard_frag,
                  "forest_billboard", &f->bb_program, diag);
     if (r == XYL_OK) {
         glCreateVertexArrays(1, &f->vao);
@@ -176,6 +177,8 @@ void xyl_forest_gl_destroy(xyl_forest_gl *f)
     xyl__free(&a, f->instances);
     xyl__free(&a, f->sorted);
     xyl__free(&a, f->bucket);
+    xyl__free(&a, f->fine_bucket);
+    xyl__free(&a, f->share);
     xyl__free(&a, f);
 }
 
@@ -389,19 +392,26 @@ xyl_result xyl_forest_gl_set_instances(xyl_forest_gl *f, const xyl_forest_instan
     xyl_result r = check_instances(f, in, n, diag);
     if (r != XYL_OK) return r;
     xyl_forest_instance *copy = xyl__alloc_array(&f->alloc, n, sizeof *copy);
-    xyl_forest_instance *sorted = xyl__alloc_array(&f->alloc, n, sizeof *sorted);
+    xyl_forest_instance *sorted = xyl__alloc_array(&f->alloc, 2 * n, sizeof *sorted);
     uint16_t *bucket = xyl__alloc_array(&f->alloc, n, sizeof *bucket);
-    if (!copy || !sorted || !bucket) {
+    uint16_t *fine_bucket = xyl__alloc_array(&f->alloc, n, sizeof *fine_bucket);
+    uint8_t *share = xyl__alloc_array(&f->alloc, n, sizeof *share);
+    if (!copy || !sorted || !bucket || !fine_bucket || !share) {
         xyl__free(&f->alloc, copy);
         xyl__free(&f->alloc, sorted);
         xyl__free(&f->alloc, bucket);
+        xyl__free(&f->alloc, fine_bucket);
+        xyl__free(&f->alloc, share);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     }
     memcpy(copy, in, n * sizeof *copy);
     xyl__free(&f->alloc, f->instances);
     xyl__free(&f->alloc, f->sorted);
     xyl__free(&f->alloc, f->bucket);
+    xyl__free(&f->alloc, f->fine_bucket);
+    xyl__free(&f->alloc, f->share);
     f->instances = copy, f->sorted = sorted, f->bucket = bucket, f->count = n;
+    f->fine_bucket = fine_bucket, f->share = share;
     xyl__diag_ok(diag);
     return XYL_OK;
 }
@@ -441,6 +451,12 @@ static xyl_result check_frame(const xyl_forest_gl *f, const xyl_forest_gl_frame 
     if (!(fr->error_px > 0.0f))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a pixel budget of %g: error_px must be > 0", (double)fr->error_px);
+    if (!isfinite(fr->fade))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "fade is not finite");
+    if (fr->fade < 0.0f || fr->fade > XYL_FOREST_MAX_FADE)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a fade band of %g: from 0 (none) to %g times the switch distance",
+                         (double)fr->fade, (double)XYL_FOREST_MAX_FADE);
     if (fr->mode != XYL_FOREST_LOD && fr->mode != XYL_FOREST_LEAF_LEVELS &&
         fr->mode != XYL_FOREST_FULL)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -455,6 +471,29 @@ static xyl_result check_frame(const xyl_forest_gl *f, const xyl_forest_gl_frame 
                 fr->stem_color[2] == 0.0f && fr->stem_color[3] == 0.0f;
     memcpy(out->stem_color, none ? bark : fr->stem_color, sizeof out->stem_color);
     return XYL_OK;
+}
+
+/* Level k's band: from its threshold t_k to t_k (1 + fade), cut at the next larger threshold
+ * so that bands never overlap and the share reaches 1 where the next band starts. */
+static void fade_bands(xyl__forest_choice_species *c, double r, float fade)
+{
+    double t[XYL__FOREST_BUCKETS_PER_SPECIES + 1];
+    for (uint32_t k = 0; k <= c->top; ++k) t[k] = k ? sqrt((double)c->refine2[k]) - r : 0.0;
+    for (uint32_t k = 1; k <= c->top; ++k) {
+        uint32_t fine = k - 1;
+        while (fine > 0 && !(t[fine] < t[k])) --fine;
+        double end = t[k] * (1.0 + fade);
+        for (uint32_t j = k + 1; j <= c->top; ++j)
+            if (t[j] > t[k]) {
+                end = fmin(end, t[j]);
+                break;
+            }
+        c->fine[k] = (uint8_t)fine;
+        if (!(end > t[k]) || !isfinite(end)) continue;
+        c->band_lo[k] = (float)(t[k] + r);
+        c->band_inv[k] = (float)(1.0 / (end - t[k]));
+        c->band_end2[k] = (float)((end + r) * (end + r));
+    }
 }
 
 static void choice_species(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
@@ -476,10 +515,12 @@ static void choice_species(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr
             c->coarsen2[k] = (float)((t * grow + r) * (t * grow + r));
         }
         c->top = bb ? c->level_count : c->level_count - 1;
+        if (fr->fade > 0.0f) fade_bands(c, r, fr->fade);
     }
 }
 
-static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, xyl_forest_gl_stats *st)
+static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, size_t twice,
+                        xyl_forest_gl_stats *st)
 {
     for (uint32_t s = 0; s < f->species_count; ++s) {
         const species *sp = &f->species[s];
@@ -500,6 +541,8 @@ static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, xyl_fore
             st->triangles += 2ull * nb * xyl_billboard_gl_view_count(sp->billboard);
     }
     st->triangles += 2 * st->leaves;
+    st->faded = twice;
+    st->visible -= twice;
 }
 
 /* The choice and the sort; counts and offsets per bucket. */
@@ -516,14 +559,17 @@ static void choose_sort(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, const r
     memcpy(c.eye, fr->eye, sizeof c.eye);
     c.cull = !fr->no_cull && xyl__forest_cone(rs->leaf.view_proj, c.axis, &c.inv_sin, &c.cos2);
     c.full = fr->mode == XYL_FOREST_FULL;
-    xyl__forest_choose(&c, f->instances, f->count, f->bucket, counts);
+    c.fade = !c.full && fr->fade > 0.0f;
+    size_t twice = xyl__forest_choose(&c, f->instances, f->count, f->bucket, f->fine_bucket,
+                                      f->share, counts);
     uint32_t total = f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;
-    xyl__forest_sort(f->instances, f->count, f->bucket, counts, total, offsets, f->sorted);
+    xyl__forest_sort(f->instances, f->count, f->bucket, f->fine_bucket, c.fade ? f->share : NULL,
+                     counts, total, offsets, f->sorted);
     memset(st, 0, sizeof *st);
     st->choose_ms = now_ms() - t0;
     st->instances = f->count;
     st->bytes_per_instance = XYL_FOREST_INSTANCE_SIZE;
-    count_stats(f, counts, st);
+    count_stats(f, counts, twice, st);
 }
 
 xyl_result xyl_forest_gl_choose(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,

@@ -50,6 +50,19 @@
  * species' stem_width (where the thickest stem is still wider than the budget), one instanced
  * draw per species; billboards one instanced draw per species.
  *
+ * Cross-fades (frame.fade > 0): the level is then a function of the distance alone, with no
+ * hysteresis, and within a band past each threshold (the billboard's included) the instance is
+ * drawn at both levels, the coarser one's share t rising from 0 to 1 across the band in the
+ * 64 steps of the 8 x 8 dither (shaders/xyl_dither.h): the finer copy keeps the pixels whose
+ * threshold is >= t, the coarser one those below, so every pixel shows exactly one of them.
+ * A still camera draws the same pixels every frame; a moving one changes 1/64 of an
+ * instance's pixels per 1/64 of the band it crosses, never a whole tree at once. The stored
+ * instance stays 16 bytes and keeps its level (the coarser one inside a band). The per-frame
+ * cost: 3 bytes of scratch per instance (the second bucket and the share), and the sorted
+ * copy that is uploaded holds a faded instance twice (16 more bytes each), its LOD byte
+ * replaced by the copy's share (the shaders read the keep range from it). Stems follow the
+ * leaf level they are drawn with.
+ *
  * Every call checks its input before its first GL call, and must come from the thread where
  * the context is current.
  *
@@ -114,7 +127,16 @@ typedef struct xyl_forest_gl_frame {
     float leaf_color[4];      /* default (all 0): 0.42, 0.62, 0.25, 1 */
     float stem_color[4];      /* default (all 0): 0.47, 0.35, 0.24, 1 */
     float alpha_cutoff;       /* (0, 1]; default (0): 0.5 */
+    float fade;               /* the cross-fade band, a fraction of each switch distance:
+                                 an instance between level k's threshold d_k and
+                                 (1 + fade) d_k (cut at the next threshold) is drawn at
+                                 level k and the finer one before it with complementary
+                                 screen-door dither (see "Cross-fades" above); [0,
+                                 XYL_FOREST_MAX_FADE]; default (0): hard switches with
+                                 the desc's hysteresis. Not in XYL_FOREST_FULL */
 } xyl_forest_gl_frame;
+
+#define XYL_FOREST_MAX_FADE 4.0f
 
 typedef struct xyl_forest_gl_stats {
     uint64_t draws;           /* GL draw calls */
@@ -123,7 +145,9 @@ typedef struct xyl_forest_gl_stats {
     uint64_t instances;       /* all */
     uint64_t visible;         /* past the frustum test */
     uint64_t per_level[XYL_FOREST_MAX_LEVELS + 1]; /* visible instances per leaf level; the
-                                                       last entry: billboards */
+                                                       last entry: billboards. An instance
+                                                       in a fade counts at both levels */
+    uint64_t faded;           /* visible instances inside a fade band, drawn twice */
     uint64_t with_stems;      /* visible instances drawn with stems */
     uint32_t bytes_per_instance; /* XYL_FOREST_INSTANCE_SIZE */
     double choose_ms;         /* CPU: the LOD choice, frustum test and bucketing */
@@ -188,7 +212,7 @@ XYL_API xyl_result xyl_forest_gl_choose(xyl_forest_gl *forest, const xyl_forest_
  * current viewport: depth test (GL_LESS) and writes on, no face culling (restored), no
  * blending. stats may be NULL. Errors: XYL_ERR_INVALID_ARGUMENT (NULL forest or frame, no
  * instances, an all-zero matrix, a budget <= 0, fovy outside (0, pi) when given, an unknown
- * mode, a cutoff outside [0, 1]), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY (GL). Uses storage
+ * mode, a cutoff outside [0, 1], a fade outside [0, XYL_FOREST_MAX_FADE]), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY (GL). Uses storage
  * buffer bindings 0 and 4 and texture units 0 and 1. */
 XYL_API xyl_result xyl_forest_gl_draw(xyl_forest_gl *forest, const xyl_forest_gl_frame *frame,
                                       xyl_forest_gl_stats *stats, xyl_diag *diag);
