@@ -78,6 +78,7 @@
 #define XYL_FOREST_GL_UNIFORM_BB_KIND 22
 #define XYL_FOREST_GL_UNIFORM_BB_PLANES 23
 #define XYL_FOREST_GL_UNIFORM_EYE 24
+#define XYL_FOREST_GL_UNIFORM_LIGHT 25    /* the world's light (impostors relight per instance) */
 
 /* A forest instance in 16 bytes (the same in C and std430):
  *   bytes 0..11  the tree's base point, 3 floats, world units;

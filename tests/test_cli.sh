@@ -392,7 +392,12 @@ contains "--forest takes" "a bad forest size is named"
 expect 64 "--forest of absurd size" -- "$XYLEM" render --forest 100000000000 --out "$tmp/x.png"
 expect 64 "--forest on Vulkan" -- "$XYLEM" render --backend vulkan --forest 4 --out "$tmp/x.png"
 expect 64 "--forest with --foliage none" -- "$XYLEM" render --foliage none --forest 4 --out "$tmp/x.png"
-expect 64 "--forest with an impostor" -- "$XYLEM" render --foliage impostor --forest 4 --out "$tmp/x.png"
+expect 0 "render --forest 4 --foliage impostor" -- "$XYLEM" render --forest 4 --foliage impostor --billboard-size 32 --grid 4 --size 64x48 --camera 10,20,40 --error-px 4 --out "$tmp/forest4i.png"
+contains "impostor " "a far forest draws octahedral impostors"
+contains " cross-fading" "--forest prints the instances cross-fading"
+expect 64 "--fade out of range" -- "$XYLEM" render --forest 4 --fade 5 --out "$tmp/x.png"
+contains "--fade takes" "a bad fade is named"
+expect 64 "--fade without a forest" -- "$XYLEM" render --fade 0.5 --out "$tmp/x.png"
 [ ! -e "$tmp/x.png" ] && ok || bad "a refused forest render left x.png"
 expect 64 "render --foliage without a value" -- "$XYLEM" render --out "$tmp/x.png" --foliage
 expect 64 "--foliage is not view's" -- "$XYLEM" view --foliage

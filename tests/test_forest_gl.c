@@ -504,8 +504,9 @@ static xyl_result bake_leaves(void *user, const float view_proj[16], const float
 
 /* A 3 x 3 forest drawn by xyl_forest_gl against each instance drawn alone with a model matrix
  * (xyl_foliage_gl_draw at the instance's chosen level, xyl_billboard_gl_draw for a billboard):
- * at full detail, at the levels a 6 px budget picks (several levels in one picture), and as
- * cross billboards from far away. At most MAX_DIFFERING_SHARE of the pixels differ (measured
+ * at full detail, at the levels a 6 px budget picks (several levels in one picture), as
+ * cross billboards from far away, and as octahedral impostors (one quad each, relit and
+ * parallax-corrected in the instance's frame). At most MAX_DIFFERING_SHARE of the pixels differ (measured
  * on llvmpipe: printed), and the forest covers a real share of the picture. */
 static void forest_picture_matches_instances_drawn_alone(void **state)
 {
@@ -525,30 +526,28 @@ static void forest_picture_matches_instances_drawn_alone(void **state)
     xyl_forest_gl *f = make_forest(s, 0.0f, bb);
     xyl_forest_gl_species_info info;
     expect(xyl_forest_gl_species(f, 0, &info, &d), XYL_OK, &d);
-    /* an octahedral impostor is not one of the kinds the forest draws */
+    /* a second forest with an octahedral impostor as its far kind */
     xyl_billboard_gl_desc od = bd;
-    od.kind = XYL_BILLBOARD_OCTAHEDRAL, od.planes = 0, od.grid = 2, od.resolution = 32;
+    od.kind = XYL_BILLBOARD_OCTAHEDRAL, od.planes = 0, od.grid = 8, od.resolution = 512;
     xyl_billboard_gl *oct = NULL;
     expect(xyl_billboard_gl_bake(&od, bake_leaves, leaves, &oct, &d), XYL_OK, &d);
-    xyl_forest_gl_species_desc sd = {0};
-    sd.foliage = s->tree;
-    sd.billboard = oct;
-    uint32_t index = 0;
-    expect(xyl_forest_gl_add_species(f, &sd, &index, &d), XYL_ERR_UNSUPPORTED, &d);
-    xyl_billboard_gl_destroy(oct);
+    xyl_forest_gl *fo = make_forest(s, 0.0f, oct);
     xyl_forest_instance in[9];
     xyl_forest_grid_desc gd = {0};
     gd.count = 9, gd.spacing = 1.1f * (s->hi[0] - s->lo[0]), gd.jitter = 0.5f, gd.seed = 5;
     gd.scale_min = 0.7f, gd.scale_max = 1.3f;
     expect(xyl_forest_grid(&gd, in, 9, &d), XYL_OK, &d);
     expect(xyl_forest_gl_set_instances(f, in, 9, &d), XYL_OK, &d);
-    const struct { xyl_forest_mode mode; float error_px, distance; } cases[3] = {
+    expect(xyl_forest_gl_set_instances(fo, in, 9, &d), XYL_OK, &d);
+    const struct { xyl_forest_mode mode; float error_px, distance; } cases[4] = {
         {XYL_FOREST_FULL, 1.0f, 3.0f}, {XYL_FOREST_LEAF_LEVELS, 6.0f, 3.0f},
-        {XYL_FOREST_LOD, 2000.0f, 2.0f}};
+        {XYL_FOREST_LOD, 2000.0f, 2.0f}, {XYL_FOREST_LOD, 2000.0f, 1.2f}};
     uint8_t *a = malloc(4 * SIDE * SIDE), *b = malloc(4 * SIDE * SIDE);
     assert_true(a && b);
     const float light[3] = {0.42f, 0.78f, 0.46f};
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < 4; ++c) {
+        xyl_forest_gl *forest = c == 3 ? fo : f;
+        xyl_billboard_gl *far = c == 3 ? oct : bb;
         float ext = gd.spacing * 3.0f * cases[c].distance;
         const float eye[3] = {0.6f * ext, 0.45f * ext, 0.8f * ext};
         const float tgt[3] = {0.0f, 0.5f * (s->lo[1] + s->hi[1]), 0.0f};
@@ -560,10 +559,10 @@ static void forest_picture_matches_instances_drawn_alone(void **state)
         target t;
         target_begin(&t);
         xyl_forest_gl_stats st;
-        expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_OK, &d);
+        expect(xyl_forest_gl_draw(forest, &fr, &st, &d), XYL_OK, &d);
         target_end(&t, a);
         size_t n = 0;
-        const xyl_forest_instance *got = xyl_forest_gl_instances(f, &n);
+        const xyl_forest_instance *got = xyl_forest_gl_instances(forest, &n);
         uint32_t levels = 0;
         target_begin(&t);
         for (size_t i = 0; i < n; ++i) {
@@ -579,7 +578,7 @@ static void forest_picture_matches_instances_drawn_alone(void **state)
                 memcpy(bf.view_proj, vp, sizeof vp);
                 memcpy(bf.eye, me, sizeof me);
                 memcpy(bf.light_dir, ml, sizeof ml);
-                expect(xyl_billboard_gl_draw(bb, &bf, &d), XYL_OK, &d);
+                expect(xyl_billboard_gl_draw(far, &bf, &d), XYL_OK, &d);
             } else {
                 xyl_foliage_gl_frame lf = {0};
                 memcpy(lf.view_proj, vp, sizeof vp);
@@ -596,12 +595,15 @@ static void forest_picture_matches_instances_drawn_alone(void **state)
         assert_true(share <= MAX_DIFFERING_SHARE);
         assert_true(covered > (size_t)SIDE * SIDE / 50);
         if (c == 1) assert_true(__builtin_popcount(levels) >= 2);
-        if (c == 2) assert_int_equal(levels, 1u << 31);
+        if (c >= 2) assert_int_equal(levels, 1u << 31);
+        if (c == 3) assert_int_equal(st.triangles, 2 * 9);
     }
     free(a);
     free(b);
     xyl_forest_gl_destroy(f);
+    xyl_forest_gl_destroy(fo);
     xyl_billboard_gl_destroy(bb);
+    xyl_billboard_gl_destroy(oct);
     xyl_foliage_gl_destroy(leaves);
 }
 

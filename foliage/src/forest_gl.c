@@ -21,12 +21,17 @@ extern const unsigned char xyl__shader_gl_forest_stem_vert[];
 extern const unsigned char xyl__shader_gl_forest_stem_frag[];
 extern const unsigned char xyl__shader_gl_forest_billboard_vert[];
 extern const unsigned char xyl__shader_gl_forest_billboard_frag[];
+extern const unsigned char xyl__shader_gl_forest_impostor_vert[];
+extern const unsigned char xyl__shader_gl_forest_impostor_frag[];
 
 #define BB_UNIFORM_LIGHT 6  /* billboard.frag's */
 #define BB_UNIFORM_CUTOFF 7
 #define BB_UNIFORM_BAKE_LIGHT 8
 #define BB_UNIFORM_TO_COVERAGE 9
 #define BB_UNIFORM_DITHER 10
+#define IMP_UNIFORM_CENTER 2 /* impostor.vert's and .frag's */
+#define IMP_UNIFORM_RADIUS 3
+#define IMP_UNIFORM_GRID 4
 
 typedef struct species {
     GLuint leaf_buf, stem_vao, stem_vbo, stem_ibo;
@@ -37,7 +42,7 @@ typedef struct species {
 } species;
 
 struct xyl_forest_gl {
-    GLuint leaf_program, stem_program, bb_program, vao, instance_buf, texture;
+    GLuint leaf_program, stem_program, bb_program, imp_program, vao, instance_buf, texture;
     GLsizeiptr instance_capacity; /* bytes */
     species species[XYL_FOREST_MAX_SPECIES];
     uint32_t species_count;
@@ -132,6 +137,9 @@ xyl_result xyl_forest_gl_create(const xyl_forest_gl_desc *desc, xyl_forest_gl **
     if (r == XYL_OK)
         r = link(xyl__shader_gl_forest_billboard_vert, xyl__shader_gl_forest_billboard_frag,
                  "forest_billboard", &f->bb_program, diag);
+    if (r == XYL_OK)
+        r = link(xyl__shader_gl_forest_impostor_vert, xyl__shader_gl_forest_impostor_frag,
+                 "forest_impostor", &f->imp_program, diag);
     if (r == XYL_OK) {
         glCreateVertexArrays(1, &f->vao);
         glCreateBuffers(1, &f->instance_buf);
@@ -168,6 +176,7 @@ void xyl_forest_gl_destroy(xyl_forest_gl *f)
         glDeleteProgram(f->leaf_program);
         glDeleteProgram(f->stem_program);
         glDeleteProgram(f->bb_program);
+        glDeleteProgram(f->imp_program);
         glDeleteVertexArrays(1, &f->vao);
         glDeleteBuffers(1, &f->instance_buf);
         glDeleteTextures(1, &f->texture);
@@ -198,15 +207,6 @@ static xyl_result check_species(const xyl_forest_gl *f, const xyl_forest_gl_spec
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "billboard_error %g and stem_width %g must not be negative",
                          (double)d->billboard_error, (double)d->stem_width);
-    if (d->billboard) {
-        xyl__billboard_parts bp;
-        xyl__billboard_gl_parts(d->billboard, &bp);
-        if (bp.kind != XYL_BILLBOARD_SPHERICAL && bp.kind != XYL_BILLBOARD_CYLINDRICAL &&
-            bp.kind != XYL_BILLBOARD_CROSS)
-            return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
-                             "a forest draws spherical, cylindrical and cross billboards, not "
-                             "kind %d", bp.kind);
-    }
     const xyl_mesh *m = d->stems;
     if (m && (m->tri_view_count == 0 || !m->tri_view || !m->positions || !m->normals ||
               m->vertex_count > UINT32_MAX || m->tri_view_count > UINT32_MAX / 3))
@@ -519,6 +519,14 @@ static void choice_species(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr
     }
 }
 
+/* Quads an instance's billboard draws: one per plane, one for an impostor. */
+static uint32_t quads_of(xyl_billboard_gl *bb)
+{
+    xyl__billboard_parts bp;
+    xyl__billboard_gl_parts(bb, &bp);
+    return bp.kind == XYL_BILLBOARD_OCTAHEDRAL ? 1 : bp.views;
+}
+
 static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, size_t twice,
                         xyl_forest_gl_stats *st)
 {
@@ -537,8 +545,7 @@ static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, size_t t
         uint32_t nb = c[sp->plan.level_count];
         st->per_level[XYL_FOREST_MAX_LEVELS] += nb;
         st->visible += nb;
-        if (nb && sp->billboard)
-            st->triangles += 2ull * nb * xyl_billboard_gl_view_count(sp->billboard);
+        if (nb && sp->billboard) st->triangles += 2ull * nb * quads_of(sp->billboard);
     }
     st->triangles += 2 * st->leaves;
     st->faded = twice;
@@ -690,6 +697,7 @@ static uint64_t draw_billboards(const xyl_forest_gl *f, const xyl_forest_gl_fram
         if (!sp->billboard || !counts[b]) continue;
         xyl__billboard_parts bp;
         xyl__billboard_gl_parts(sp->billboard, &bp);
+        if (bp.kind == XYL_BILLBOARD_OCTAHEDRAL) continue; /* draw_impostors' */
         glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, offsets[b]);
         glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_BB_CENTER, 1, bp.center);
         glProgramUniform2fv(p, XYL_FOREST_GL_UNIFORM_BB_HALF, 1, bp.half);
@@ -700,6 +708,41 @@ static uint64_t draw_billboards(const xyl_forest_gl *f, const xyl_forest_gl_fram
         glBindTextureUnit(0, bp.color_tex);
         glBindTextureUnit(1, bp.normal_tex);
         glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)(counts[b] * bp.views));
+        ++draws;
+    }
+    return draws;
+}
+
+/* Octahedral impostors: impostor.vert/.frag's uniforms, the eye and light per instance. */
+static uint64_t draw_impostors(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                               const resolved *rs, const uint32_t *counts,
+                               const uint32_t *offsets)
+{
+    GLuint p = f->imp_program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, 0, 1, GL_FALSE, rs->leaf.view_proj);
+    glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_EYE, 1, fr->eye);
+    glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_LIGHT, 1, rs->leaf.light);
+    glProgramUniform1f(p, BB_UNIFORM_CUTOFF, rs->leaf.cutoff);
+    glProgramUniform2fv(p, BB_UNIFORM_DITHER, 1, rs->leaf.dither);
+    glProgramUniform1i(p, BB_UNIFORM_TO_COVERAGE, 0); /* alpha-tested at the cutoff */
+    glBindVertexArray(f->vao);
+    uint64_t draws = 0;
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        uint32_t b = s * XYL__FOREST_BUCKETS_PER_SPECIES + sp->plan.level_count;
+        if (!sp->billboard || !counts[b]) continue;
+        xyl__billboard_parts bp;
+        xyl__billboard_gl_parts(sp->billboard, &bp);
+        if (bp.kind != XYL_BILLBOARD_OCTAHEDRAL) continue;
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, offsets[b]);
+        glProgramUniform3fv(p, IMP_UNIFORM_CENTER, 1, bp.center);
+        glProgramUniform1f(p, IMP_UNIFORM_RADIUS, bp.half[0]);
+        glProgramUniform1i(p, IMP_UNIFORM_GRID, (GLint)bp.grid);
+        glProgramUniform3fv(p, BB_UNIFORM_BAKE_LIGHT, 1, bp.bake_light);
+        glBindTextureUnit(0, bp.color_tex);
+        glBindTextureUnit(1, bp.normal_tex);
+        glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)counts[b]);
         ++draws;
     }
     return draws;
@@ -729,6 +772,7 @@ xyl_result xyl_forest_gl_draw(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
     st.draws = draw_stems(f, &rs, counts, offsets);
     st.draws += draw_leaves(f, &rs, counts, offsets);
     st.draws += draw_billboards(f, fr, &rs, counts, offsets);
+    st.draws += draw_impostors(f, fr, &rs, counts, offsets);
     glBindVertexArray(0);
     if (cull) glEnable(GL_CULL_FACE);
     r = xyl__fgl_check(diag, "drawing the forest");

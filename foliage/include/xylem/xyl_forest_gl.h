@@ -48,7 +48,8 @@
  * leaf (id % range length) and the instance (id / range length). Stems (the base mesh,
  * per-vertex normals) are drawn for the instances at the levels whose error is under the
  * species' stem_width (where the thickest stem is still wider than the budget), one instanced
- * draw per species; billboards one instanced draw per species.
+ * draw per species; billboards one instanced draw per species (a quad per plane and instance;
+ * an octahedral impostor one quad per instance, its three nearest views blended).
  *
  * Cross-fades (frame.fade > 0): the level is then a function of the distance alone, with no
  * hysteresis, and within a band past each threshold (the billboard's included) the instance is
@@ -95,8 +96,9 @@ typedef struct xyl_forest_gl_species_desc {
                                      with its per-vertex normals; copied. Its positions are
                                      taken in the species' own coordinates, like the leaves'
                                      (its origin is not used: instances place the tree) */
-    xyl_billboard_gl *billboard;  /* optional, borrowed: must outlive the forest; spherical,
-                                     cylindrical or cross (an octahedral one is refused) */
+    xyl_billboard_gl *billboard;  /* optional, borrowed: must outlive the forest; any kind
+                                     (an octahedral impostor is relit and parallax-corrected
+                                     per instance in the instance's own frame) */
     float billboard_error;        /* world units the billboard may be off the tree; default
                                      (0): the radius of the tree about its axis (flattening the
                                      crown onto planes through the axis moves no point
@@ -178,7 +180,7 @@ XYL_API void xyl_forest_gl_destroy(xyl_forest_gl *forest);
 /* Adds a species; *index receives its number (0, 1, ...). Errors: XYL_ERR_INVALID_ARGUMENT
  * (NULL forest, desc, foliage or index; a foliage with no leaves, a malformed table, a stem
  * mesh without triangles or normals, a negative billboard_error or stem_width, 64 species
- * already), XYL_ERR_UNSUPPORTED (an octahedral billboard), XYL_ERR_NON_FINITE, those of
+ * already), XYL_ERR_NON_FINITE, those of
  * xyl_foliage_pack_gpu, XYL_ERR_LIMIT_EXCEEDED (a leaf
  * array over the driver's storage block), XYL_ERR_OUT_OF_MEMORY. On failure nothing changes. */
 XYL_API xyl_result xyl_forest_gl_add_species(xyl_forest_gl *forest,
