@@ -666,6 +666,93 @@ static void stems_are_drawn_where_the_trunk_is_wide_enough(void **state)
     xyl_mesh_destroy(stems);
 }
 
+/* ---- per-leaf instances ------------------------------------------------------------------- */
+
+
+/* Every instance of a 3 x 3 forest with its own cut (per_leaf 9) draws the picture of each
+ * instance drawn alone by xyl_foliage_gl_draw_adaptive with its model matrix and the eye in
+ * its frame, and the stats count the cuts' leaves as xyl_foliage_gl_last_cut reads them; with
+ * per_leaf 4 the four instances nearest the eye get cuts and the others keep their levels. */
+static void per_leaf_instances_draw_their_own_cut(void **state)
+{
+    suite *s = need_gl(state);
+    xyl_diag d = {0};
+    xyl_foliage_gl *leaves = NULL;
+    expect(xyl_foliage_gl_create(NULL, &leaves, &d), XYL_OK, &d);
+    expect(xyl_foliage_gl_set_foliage(leaves, s->tree, &d), XYL_OK, &d);
+    xyl_forest_gl *f = make_forest(s, 0.0f, NULL);
+    xyl_forest_instance in[9];
+    xyl_forest_grid_desc gd = {0};
+    gd.count = 9, gd.spacing = 1.1f * (s->hi[0] - s->lo[0]), gd.jitter = 0.5f, gd.seed = 5;
+    gd.scale_min = 0.7f, gd.scale_max = 1.3f;
+    expect(xyl_forest_grid(&gd, in, 9, &d), XYL_OK, &d);
+    expect(xyl_forest_gl_set_instances(f, in, 9, &d), XYL_OK, &d);
+    float ext = gd.spacing * 3.0f * 1.5f;
+    const float eye[3] = {0.6f * ext, 0.45f * ext, 0.8f * ext};
+    const float tgt[3] = {0.0f, 0.5f * (s->lo[1] + s->hi[1]), 0.0f};
+    const float light[3] = {0.42f, 0.78f, 0.46f};
+    xyl_forest_gl_frame fr = {0};
+    camera_frame(eye, tgt, &fr);
+    fr.error_px = 3.0f;
+    fr.mode = XYL_FOREST_LEAF_LEVELS;
+    fr.per_leaf = 9;
+    memcpy(fr.light_dir, light, sizeof light);
+    uint8_t *a = malloc(4 * SIDE * SIDE), *b = malloc(4 * SIDE * SIDE);
+    assert_true(a && b);
+    target t;
+    target_begin(&t);
+    xyl_forest_gl_stats st;
+    expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_OK, &d);
+    target_end(&t, a);
+    assert_int_equal(st.per_leaf, 9);
+    assert_int_equal(st.visible, 9);
+    uint64_t level_sum = 0;
+    for (int k = 0; k <= XYL_FOREST_MAX_LEVELS; ++k) level_sum += st.per_level[k];
+    assert_int_equal(level_sum, 0);
+    uint64_t cut_leaves = 0;
+    target_begin(&t);
+    for (int i = 0; i < 9; ++i) {
+        xyl_forest_instance_values v;
+        xyl_forest_instance_unpack(&in[i], &v);
+        float m[16], vp[16], ml[3], me[3];
+        model_of(&v, m);
+        mul(fr.view_proj, m, vp);
+        to_model(&v, light, eye, ml, me);
+        xyl_foliage_gl_frame lf = {0};
+        memcpy(lf.view_proj, vp, sizeof vp);
+        memcpy(lf.light_dir, ml, sizeof ml);
+        xyl_foliage_view view = {{me[0], me[1], me[2]}, fr.fovy, fr.viewport_height, fr.error_px};
+        expect(xyl_foliage_gl_draw_adaptive(leaves, &lf, &view, &d), XYL_OK, &d);
+        size_t n = 0;
+        expect(xyl_foliage_gl_last_cut(leaves, NULL, 0, &n, &d), XYL_OK, &d);
+        cut_leaves += n;
+    }
+    target_end(&t, b);
+    size_t covered = 0;
+    double share = differing_share(a, b, &covered);
+    print_message("9 per-leaf instances: %llu leaves (the cuts drawn alone: %llu), %.5f of the "
+                  "pixels differ, %zu covered\n", (unsigned long long)st.leaves,
+                  (unsigned long long)cut_leaves, share, covered);
+    assert_true(st.leaves == cut_leaves);
+    assert_true(share <= MAX_DIFFERING_SHARE);
+    assert_true(covered > (size_t)SIDE * SIDE / 50);
+    /* four of them: the rest at their levels */
+    fr.per_leaf = 4;
+    target_begin(&t);
+    expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_OK, &d);
+    target_end(&t, b);
+    level_sum = 0;
+    for (int k = 0; k <= XYL_FOREST_MAX_LEVELS; ++k) level_sum += st.per_level[k];
+    assert_int_equal(st.per_leaf, 4);
+    assert_int_equal(level_sum, 5);
+    fr.per_leaf = XYL_FOREST_MAX_PER_LEAF + 1;
+    expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_ERR_INVALID_ARGUMENT, &d);
+    free(a);
+    free(b);
+    xyl_forest_gl_destroy(f);
+    xyl_foliage_gl_destroy(leaves);
+}
+
 /* ---- cross-fades ----------------------------------------------------------------------------- */
 
 static double rmse(const uint8_t *a, const uint8_t *b)
@@ -991,6 +1078,7 @@ int main(void)
         cmocka_unit_test(culling_keeps_every_instance_in_view),
         cmocka_unit_test(forest_picture_matches_instances_drawn_alone),
         cmocka_unit_test(stems_are_drawn_where_the_trunk_is_wide_enough),
+        cmocka_unit_test(per_leaf_instances_draw_their_own_cut),
         cmocka_unit_test(a_forest_dolly_cross_fades_without_popping),
         cmocka_unit_test(a_still_camera_in_a_forest_fade_never_flickers),
         cmocka_unit_test(bad_input_gets_result_codes),

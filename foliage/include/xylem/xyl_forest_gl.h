@@ -64,6 +64,15 @@
  * replaced by the copy's share (the shaders read the keep range from it). Stems follow the
  * leaf level they are drawn with.
  *
+ * Per-leaf instances (frame.per_leaf = M > 0): the M visible instances nearest the eye that
+ * are at a leaf level leave their buckets and each gets the per-leaf cut of
+ * xyl_foliage_gl_draw_adaptive (foliage_cut.comp: per cluster of the collapse forest, the
+ * coarsest leaf within the budget), computed on the GPU from the eye turned and scaled into
+ * the instance's frame, then one indirect draw of its list and their stems. Per frame: M
+ * compute dispatches and M draws; a max-heap picks them in the choice's loop (O(n log M)).
+ * They are drawn without a fade: an instance entering or leaving the nearest M switches
+ * between its cut and its level, both within the budget.
+ *
  * Every call checks its input before its first GL call, and must come from the thread where
  * the context is current.
  *
@@ -129,6 +138,11 @@ typedef struct xyl_forest_gl_frame {
     float leaf_color[4];      /* default (all 0): 0.42, 0.62, 0.25, 1 */
     float stem_color[4];      /* default (all 0): 0.47, 0.35, 0.24, 1 */
     float alpha_cutoff;       /* (0, 1]; default (0): 0.5 */
+    uint32_t per_leaf;        /* the per_leaf visible instances nearest the eye (at a leaf
+                                 level, not a billboard) get a per-leaf cut of their own
+                                 instead of a level (see "Per-leaf instances" above); at
+                                 most XYL_FOREST_MAX_PER_LEAF; default (0): none. Not in
+                                 XYL_FOREST_FULL */
     float fade;               /* the cross-fade band, a fraction of each switch distance:
                                  an instance between level k's threshold d_k and
                                  (1 + fade) d_k (cut at the next threshold) is drawn at
@@ -139,6 +153,7 @@ typedef struct xyl_forest_gl_frame {
 } xyl_forest_gl_frame;
 
 #define XYL_FOREST_MAX_FADE 4.0f
+#define XYL_FOREST_MAX_PER_LEAF 64
 
 typedef struct xyl_forest_gl_stats {
     uint64_t draws;           /* GL draw calls */
@@ -150,6 +165,11 @@ typedef struct xyl_forest_gl_stats {
                                                        last entry: billboards. An instance
                                                        in a fade counts at both levels */
     uint64_t faded;           /* visible instances inside a fade band, drawn twice */
+    uint64_t per_leaf;        /* visible instances drawn with a cut of their own (not in
+                                 per_level); xyl_forest_gl_draw reads their cuts' sizes
+                                 back from the GPU into leaves and triangles (a wait for
+                                 the GPU; pass stats NULL to avoid it), xyl_forest_gl_choose
+                                 does not count their leaves */
     uint64_t with_stems;      /* visible instances drawn with stems */
     uint32_t bytes_per_instance; /* XYL_FOREST_INSTANCE_SIZE */
     double choose_ms;         /* CPU: the LOD choice, frustum test and bucketing */
@@ -214,8 +234,11 @@ XYL_API xyl_result xyl_forest_gl_choose(xyl_forest_gl *forest, const xyl_forest_
  * current viewport: depth test (GL_LESS) and writes on, no face culling (restored), no
  * blending. stats may be NULL. Errors: XYL_ERR_INVALID_ARGUMENT (NULL forest or frame, no
  * instances, an all-zero matrix, a budget <= 0, fovy outside (0, pi) when given, an unknown
- * mode, a cutoff outside [0, 1], a fade outside [0, XYL_FOREST_MAX_FADE]), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY (GL). Uses storage
- * buffer bindings 0 and 4 and texture units 0 and 1. */
+ * mode, a cutoff outside [0, 1], a fade outside [0, XYL_FOREST_MAX_FADE], per_leaf over
+ * XYL_FOREST_MAX_PER_LEAF), XYL_ERR_NON_FINITE, XYL_ERR_LIMIT_EXCEEDED (more visible
+ * instances, or per-leaf lists, than the driver's storage block holds), XYL_ERR_OUT_OF_MEMORY
+ * (GL). Uses storage buffer bindings 0 and 4 (with per_leaf also 1 to 3; the draw-indirect
+ * buffer binding is restored) and texture units 0 and 1. */
 XYL_API xyl_result xyl_forest_gl_draw(xyl_forest_gl *forest, const xyl_forest_gl_frame *frame,
                                       xyl_forest_gl_stats *stats, xyl_diag *diag);
 
