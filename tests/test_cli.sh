@@ -395,6 +395,8 @@ expect 64 "--forest with --foliage none" -- "$XYLEM" render --foliage none --for
 expect 0 "render --forest 4 --foliage impostor" -- "$XYLEM" render --forest 4 --foliage impostor --billboard-size 32 --grid 4 --size 64x48 --camera 10,20,40 --error-px 4 --out "$tmp/forest4i.png"
 contains "impostor " "a far forest draws octahedral impostors"
 contains " cross-fading" "--forest prints the instances cross-fading"
+expect 0 "render --forest 4 --foliage adaptive" -- "$XYLEM" render --forest 4 --foliage adaptive --size 64x48 --out "$tmp/forest4a.png"
+contains "4 with a per-leaf cut" "--foliage adaptive gives the nearest trees a cut of their own"
 expect 64 "--fade out of range" -- "$XYLEM" render --forest 4 --fade 5 --out "$tmp/x.png"
 contains "--fade takes" "a bad fade is named"
 expect 64 "--fade without a forest" -- "$XYLEM" render --fade 0.5 --out "$tmp/x.png"

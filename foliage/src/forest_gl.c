@@ -624,10 +624,10 @@ static size_t pick_near(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, bool fa
         if (b == UINT16_MAX) continue;
         const species *sp = &f->species[b / XYL__FOREST_BUCKETS_PER_SPECIES];
         if (b % XYL__FOREST_BUCKETS_PER_SPECIES >= sp->plan.level_count) continue;
-        xyl_forest_instance_values v;
-        xyl_forest_instance_unpack(&f->instances[i], &v);
-        float dx = fr->eye[0] - v.position[0], dz = fr->eye[2] - v.position[2];
-        float dy = fr->eye[1] - (v.position[1] + sp->center_y * v.scale);
+        const xyl_forest_instance *x = &f->instances[i];
+        float scale = (float)((x->bits >> 24) + 1u) * (1.0f / 64.0f);
+        float dx = fr->eye[0] - x->position[0], dz = fr->eye[2] - x->position[2];
+        float dy = fr->eye[1] - (x->position[1] + sp->center_y * scale);
         float d2 = dx * dx + dy * dy + dz * dz;
         if (n == m && !(d2 < key[0])) continue;
         uint32_t at = n < m ? n++ : 0; /* push, or replace the farthest (the root) */

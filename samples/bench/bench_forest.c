@@ -6,7 +6,7 @@
  * get a per-leaf cut of their own on the GPU; their leaves are read back from the draws, so
  * a per-leaf row that is not drawn leaves them out), billboards (the same, and a cross billboard of 4 planes baked from the tree past the leaf
  * levels) and impostors (the same with an octahedral impostor of 8 x 8 views instead). The
- * LOD modes cross-fade over --fade F of each switch distance (default 0.25; 0: hard
+ * LOD modes cross-fade over --fade F of each switch distance (default 0.1; 0: hard
  * switches); "twice" counts the instances inside a band, drawn at two levels. Per size and
  * mode, each the mean over the path's views: leaves and triangles drawn, the share of
  * the visible instances' full-detail leaves that is drawn, draws, the frame time (median of N
@@ -364,7 +364,7 @@ static int parse(int argc, char **argv, bench_options *o)
 
 int main(int argc, char **argv)
 {
-    bench_options o = {5, 3, 320, 240, 1.0f, 0.25f, 16, 40e6, 60e6, false};
+    bench_options o = {5, 3, 320, 240, 1.0f, 0.1f, 16, 40e6, 60e6, false};
     int rc = parse(argc, argv, &o);
     if (rc) return rc;
     xyl_diag d = {0};

@@ -75,7 +75,7 @@ typedef struct render_options {
     uint32_t billboard_size; /* --billboard-size: texels per baked view, 0: 512 */
     bool billboard_error;    /* --billboard-error: the 20-view image error table */
     uint64_t forest;         /* --forest N: N instances of the tree on a grid (0: one tree) */
-    double fade;             /* --fade F: the forest's cross-fade band (has_fade false: 0.25) */
+    double fade;             /* --fade F: the forest's cross-fade band (has_fade false: 0.1) */
     bool has_fade;
 } render_options;
 
@@ -158,10 +158,11 @@ static const char usage_text[] =
     "                               billboard (--grid views per side, 2..32, default 8);\n"
     "                               --forest N: N instances of the tree on a jittered grid,\n"
     "                               each at the leaf level its distance allows (lod; with\n"
-    "                               billboard or impostor, those far away; full: every leaf),\n"
+    "                               billboard or impostor, those far away; adaptive: the 16\n"
+    "                               nearest with a per-leaf cut each; full: every leaf),\n"
     "                               framed as a whole or by --camera; --fade F cross-fades\n"
     "                               two levels over F times each switch distance, 0..4,\n"
-    "                               default 0.25 (0: hard switches)\n"
+    "                               default 0.1 (0: hard switches)\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -1436,6 +1437,8 @@ static xyl_result billboard_error(const options *o, tree_gl *t, xyl_billboard_gl
     return r;
 }
 
+#define FOREST_PER_LEAF 16 /* --forest with --foliage adaptive: the trees with a cut of their own */
+
 /* --forest N: the tree as a species of xyl_forest_gl, N instances on a jittered grid
  * (spacing 1.1 times the tree's width, scales 0.8 to 1.2, seed 1), the camera framing the
  * whole grid (or --camera); one frame to warm up, the second timed to glFinish. */
@@ -1450,7 +1453,8 @@ static xyl_result forest_frame(const options *o, render_job *j, xyl_forest_gl *f
     fr.error_px = o->render.error_px > 0.0 ? (float)o->render.error_px : 0.5f;
     fr.mode = o->render.leaves == LEAVES_FULL ? XYL_FOREST_FULL :
               o->render.leaves == LEAVES_BILLBOARD ? XYL_FOREST_LOD : XYL_FOREST_LEAF_LEVELS;
-    fr.fade = o->render.has_fade ? (float)o->render.fade : 0.25f;
+    fr.fade = o->render.has_fade ? (float)o->render.fade : 0.1f;
+    fr.per_leaf = o->render.leaves == LEAVES_ADAPTIVE ? FOREST_PER_LEAF : 0;
     memcpy(fr.light_dir, j->frame.light_dir, sizeof fr.light_dir);
     fr.leaf_color[0] = fr.leaf_color[1] = fr.leaf_color[2] = fr.leaf_color[3] = 1.0f;
     memcpy(fr.stem_color, j->frame.color, sizeof fr.stem_color);
@@ -1542,9 +1546,10 @@ static xyl_result render_forest(const options *o, render_job *j, xyl_billboard_g
                info.has_billboard ? " and billboards" : "");
         printf("forest frame: %.3f ms (wall, to glFinish), LOD choice %.3f ms CPU, upload "
                "%.3f ms; %llu draws, %llu leaves, %llu triangles, %llu with stems, %llu "
-               "cross-fading\n", ms, st.choose_ms, st.upload_ms, (unsigned long long)st.draws,
-               (unsigned long long)st.leaves, (unsigned long long)st.triangles,
-               (unsigned long long)st.with_stems, (unsigned long long)st.faded);
+               "cross-fading, %llu with a per-leaf cut\n", ms, st.choose_ms, st.upload_ms,
+               (unsigned long long)st.draws, (unsigned long long)st.leaves,
+               (unsigned long long)st.triangles, (unsigned long long)st.with_stems,
+               (unsigned long long)st.faded, (unsigned long long)st.per_leaf);
         printf("level leaves (error):");
         for (uint32_t k = 0; k < info.level_count; ++k)
             printf(" %u (%.3g)", info.level_leaves[k], (double)info.level_error[k]);
@@ -1775,10 +1780,10 @@ static int cmd_render(const options *o)
         return usage_error("%s", "--planes is the cross billboard's");
     if (ro->grid && ro->billboard_kind != 4 && !ro->impostor)
         return usage_error("%s", "--grid is the octahedral billboard's (--foliage impostor)");
-    if (ro->forest && (ro->vulkan || ro->leaves == LEAVES_NONE || ro->leaves == LEAVES_ADAPTIVE ||
-                       ro->billboard_error))
-        return usage_error("%s", "--forest draws with the GL backend, with --foliage lod, full, "
-                                 "billboard or impostor, without --billboard-error");
+    if (ro->forest && (ro->vulkan || ro->leaves == LEAVES_NONE || ro->billboard_error))
+        return usage_error("%s", "--forest draws with the GL backend, with --foliage lod, "
+                                 "adaptive, full, billboard or impostor, without "
+                                 "--billboard-error");
     if (ro->has_fade && !ro->forest) return usage_error("%s", "--fade goes with --forest");
     render_job j;
     memset(&j, 0, sizeof j);

@@ -24,6 +24,8 @@
  *     memcpy(fr.view_proj, view_proj, sizeof fr.view_proj);
  *     memcpy(fr.eye, eye, sizeof fr.eye);
  *     fr.viewport_height = 1080; fr.error_px = 1.0f;
+ *     fr.fade = 0.25f;          // optional: cross-fade levels over 25% past each switch
+ *     fr.per_leaf = 16;         // optional: the 16 nearest trees get a per-leaf cut each
  *     xyl_forest_gl_stats st;
  *     xyl_forest_gl_draw(forest, &fr, &st, &diag);
  *     xyl_forest_gl_destroy(forest);
