@@ -745,6 +745,21 @@ static void per_leaf_instances_draw_their_own_cut(void **state)
     for (int k = 0; k <= XYL_FOREST_MAX_LEVELS; ++k) level_sum += st.per_level[k];
     assert_int_equal(st.per_leaf, 4);
     assert_int_equal(level_sum, 5);
+    /* with a fade, a per-leaf instance leaves both of its buckets: the levels hold the others,
+     * the fading ones twice */
+    fr.fade = 2.0f;
+    fr.per_leaf = 2;
+    target_begin(&t);
+    expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_OK, &d);
+    target_end(&t, b);
+    level_sum = 0;
+    for (int k = 0; k <= XYL_FOREST_MAX_LEVELS; ++k) level_sum += st.per_level[k];
+    print_message("fade 2, 2 per-leaf: %llu fading, levels hold %llu\n",
+                  (unsigned long long)st.faded, (unsigned long long)level_sum);
+    assert_int_equal(st.visible, 9);
+    assert_int_equal(st.per_leaf, 2);
+    assert_int_equal(level_sum, 7 + st.faded);
+    fr.fade = 0.0f;
     fr.per_leaf = XYL_FOREST_MAX_PER_LEAF + 1;
     expect(xyl_forest_gl_draw(f, &fr, &st, &d), XYL_ERR_INVALID_ARGUMENT, &d);
     free(a);
