@@ -18,6 +18,9 @@ layout(location = 1) flat in vec3 v_right;
 layout(location = 2) flat in vec3 v_up;
 layout(location = 3) flat in vec3 v_facing;
 layout(location = 4) flat in int v_layer;
+#ifdef XYL_FOREST
+layout(location = 5) flat in vec2 v_keep; // forest_billboard.vert: the instance's fade share
+#endif
 layout(location = 0) out vec4 out_color;
 
 float shade(vec3 n, vec3 l)
@@ -31,6 +34,9 @@ void main()
     // seen from behind, a cross plane shows its view mirrored: u runs the other way in the
     // quad's frame, and the normals' z points away from this side
     if (!xyl_dither_keeps(gl_FragCoord.xy, u_dither)) discard;
+#ifdef XYL_FOREST
+    if (!xyl_dither_keeps(gl_FragCoord.xy, v_keep)) discard;
+#endif
     vec4 texel = texture(u_color_map, vec3(v_uv, float(v_layer)));
     if (texel.a < (u_to_coverage != 0 ? 1.0 / 255.0 : u_cutoff)) discard;
     vec3 q = texture(u_normal_map, vec3(v_uv, float(v_layer))).xyz * 2.0 - 1.0;

@@ -22,11 +22,17 @@ layout(location = XYL_FOLIAGE_GL_UNIFORM_DITHER) uniform vec2 u_dither;
 
 layout(location = 0) in vec3 v_normal;
 layout(location = 1) in vec2 v_uv;
+#ifdef XYL_FOREST
+layout(location = 2) flat in vec2 v_keep; // forest_leaf.vert: the instance's fade share
+#endif
 layout(location = 0) out vec4 out_color;
 
 void main()
 {
     if (!xyl_dither_keeps(gl_FragCoord.xy, u_dither)) discard; // a cross-fade's share
+#ifdef XYL_FOREST
+    if (!xyl_dither_keeps(gl_FragCoord.xy, v_keep)) discard;
+#endif
     // The image is stored top row first, as image files are, with the tip end (v = 1) at the
     // top; t = 0 is the first row stored, in GL and in Vulkan alike.
     vec4 texel = texture(u_texture, vec2(v_uv.x, 1.0 - v_uv.y));

@@ -19,6 +19,7 @@ layout(location = 1) flat out vec3 v_right;
 layout(location = 2) flat out vec3 v_up;
 layout(location = 3) flat out vec3 v_facing;
 layout(location = 4) flat out int v_layer;
+layout(location = 5) flat out vec2 v_keep; // the copy's cross-fade share
 
 void main()
 {
@@ -50,4 +51,5 @@ void main()
     v_right = right;
     v_up = up;
     v_facing = d;
+    v_keep = xyl_forest_keep(inst.bits);
 }

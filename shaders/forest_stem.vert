@@ -10,6 +10,7 @@ layout(location = XYL_FOREST_GL_UNIFORM_INSTANCE) uniform uint u_instance;
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 0) out vec3 v_normal;
+layout(location = 1) flat out vec2 v_keep; // the copy's cross-fade share
 
 void main()
 {
@@ -17,4 +18,5 @@ void main()
     vec3 cs = xyl_forest_rotation_scale(inst.bits);
     gl_Position = u_view_proj * vec4(xyl_forest_place(a_position, cs, inst.position), 1.0);
     v_normal = xyl_forest_turn(a_normal, cs);
+    v_keep = xyl_forest_keep(inst.bits);
 }

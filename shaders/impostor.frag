@@ -8,11 +8,22 @@
 
 layout(binding = 0) uniform sampler2D u_color_map;
 layout(binding = 1) uniform sampler2D u_normal_map;
+#ifdef XYL_FOREST
+// forest_impostor.vert: the eye and the light in the instance's own frame, its fade share
+layout(location = 3) flat in vec3 v_eye;
+layout(location = 4) flat in vec3 v_light;
+layout(location = 5) flat in vec2 v_keep;
+#define u_eye v_eye
+#define u_light v_light
+#else
 layout(location = 1) uniform vec3 u_eye;
+#endif
 layout(location = 2) uniform vec3 u_center;
 layout(location = 3) uniform float u_radius;
 layout(location = 4) uniform int u_grid;
+#ifndef XYL_FOREST
 layout(location = 6) uniform vec3 u_light;
+#endif
 layout(location = 7) uniform float u_cutoff;
 layout(location = 8) uniform vec3 u_bake_light; // all 0: each view lit from its own camera
 // 1 in a multisampled target: alpha (the filtered coverage) goes to alpha-to-coverage
@@ -55,6 +66,9 @@ const int STEPS = 32;
 void main()
 {
     if (!xyl_dither_keeps(gl_FragCoord.xy, u_dither)) discard;
+#ifdef XYL_FOREST
+    if (!xyl_dither_keeps(gl_FragCoord.xy, v_keep)) discard;
+#endif
     vec3 ray = v_world - u_eye;
     vec4 sum = vec4(0.0);
     for (int k = 0; k < 3; ++k) {

@@ -78,6 +78,7 @@
 #define XYL_FOREST_GL_UNIFORM_BB_KIND 22
 #define XYL_FOREST_GL_UNIFORM_BB_PLANES 23
 #define XYL_FOREST_GL_UNIFORM_EYE 24
+#define XYL_FOREST_GL_UNIFORM_LIGHT 25    /* the world's light (impostors relight per instance) */
 
 /* A forest instance in 16 bytes (the same in C and std430):
  *   bytes 0..11  the tree's base point, 3 floats, world units;
@@ -109,6 +110,16 @@ vec3 xyl_forest_rotation_scale(uint bits)
 vec3 xyl_forest_place(vec3 p, vec3 cs, vec3 position)
 {
     return position + cs.z * vec3(cs.x * p.x + cs.y * p.z, p.y, -cs.y * p.x + cs.x * p.z);
+}
+
+/* The dither keep range of a sorted instance's copy (its LOD byte, forest_gl's fade): 0 keeps
+ * every pixel; q = bits 0..6 in 64ths, bit 7 set: the coarser level's copy, [0, q / 64);
+ * clear: the finer one's, [q / 64, 1). */
+vec2 xyl_forest_keep(uint bits)
+{
+    uint f = bits & 255u;
+    float t = float(f & 127u) / 64.0;
+    return f == 0u ? vec2(0.0) : (f & 128u) != 0u ? vec2(0.0, t) : vec2(t, 1.0);
 }
 
 vec3 xyl_forest_turn(vec3 n, vec3 cs)

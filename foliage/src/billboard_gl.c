@@ -584,6 +584,7 @@ void xyl__billboard_gl_parts(const xyl_billboard_gl *bb, xyl__billboard_parts *o
     out->normal_tex = bb->normal_tex;
     out->kind = (int)bb->kind;
     out->views = bb->views;
+    out->grid = bb->grid;
     memcpy(out->center, bb->center, sizeof out->center);
     memcpy(out->half, bb->half, sizeof out->half);
     memcpy(out->bake_light, bb->bake_light, sizeof out->bake_light);

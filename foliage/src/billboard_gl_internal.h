@@ -11,7 +11,9 @@ typedef struct xyl__billboard_parts {
     GLuint color_tex, normal_tex; /* 2D array textures, one layer a view */
     int kind;                     /* an xyl_billboard_kind */
     uint32_t views;
-    float center[3], half[2];     /* the quads' centre, half width and half height */
+    uint32_t grid;                /* the octahedral kind's views per side (else 0) */
+    float center[3], half[2];     /* the quads' centre, half width and half height; an
+                                     octahedral one's sphere radius is half[0] */
     float bake_light[3];          /* the bake's light; all 0: each view's own direction */
 } xyl__billboard_parts;
 

@@ -228,13 +228,33 @@ static const float scale_of[256] = {
 #undef S4
 };
 
-void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
-                        uint16_t *bucket, uint32_t *counts)
+/* An instance's level at the squared distance d2 (its scale squared s2) with the fade: the
+ * coarsest level whose threshold it meets, and inside that level's band the finer level's share
+ * handed over so far, in 64ths of the dither (*q 1..63; 0: one level). The result depends on
+ * the distance alone, whatever level the instance came from. */
+static uint32_t faded_level(const xyl__forest_choice_species *s, uint32_t lv, float d2, float s2,
+                            float scale, uint32_t *q)
+{
+    while (lv < s->top && s->refine2[lv + 1] * s2 <= d2) ++lv;
+    while (lv > 0 && s->refine2[lv] * s2 > d2) --lv;
+    *q = 0;
+    if (lv == 0 || !(d2 < s->band_end2[lv] * s2)) return lv;
+    float t = (sqrtf(d2) / scale - s->band_lo[lv]) * s->band_inv[lv];
+    float k = floorf(t * 64.0f + 0.5f);
+    if (k >= 64.0f) return lv;
+    if (k <= 0.0f) return s->fine[lv];
+    *q = (uint32_t)k;
+    return lv;
+}
+
+size_t xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
+                          uint16_t *bucket, uint16_t *fine_bucket, uint8_t *share,
+                          uint32_t *counts)
 {
     /* four interleaved histograms: consecutive instances mostly fall into one bucket, and one
      * counter incremented back to back would chain every store to the next load */
     enum { LANES = 4 };
-    size_t total = (size_t)c->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;
+    size_t total = (size_t)c->species_count * XYL__FOREST_BUCKETS_PER_SPECIES, twice = 0;
     uint32_t lanes[LANES][XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES];
     for (int l = 0; l < LANES; ++l) memset(lanes[l], 0, total * sizeof lanes[l][0]);
     for (size_t i = 0; i < n; ++i) {
@@ -245,11 +265,13 @@ void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, 
               cz = inst[i].position[2];
         float dx = c->eye[0] - cx, dy = c->eye[1] - cy, dz = c->eye[2] - cz;
         float d2 = dx * dx + dy * dy + dz * dz;
-        uint32_t cur = p & 255u;
+        uint32_t cur = p & 255u, q = 0;
         uint32_t lv = cur == XYL_FOREST_LOD_BILLBOARD ? s->level_count : cur;
         if (lv > s->top) lv = s->top;
         if (c->full) {
             lv = 0;
+        } else if (c->fade) {
+            lv = faded_level(s, lv, d2, s2, scale, &q);
         } else {
             while (lv < s->top && s->coarsen2[lv + 1] * s2 <= d2) ++lv;
             while (lv > 0 && s->refine2[lv] * s2 > d2) --lv;
@@ -264,12 +286,24 @@ void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, 
         uint32_t b = sp * XYL__FOREST_BUCKETS_PER_SPECIES + lv;
         bucket[i] = seen ? (uint16_t)b : UINT16_MAX;
         lanes[i & (LANES - 1)][b] += seen;
+        if (c->fade) {
+            q = seen ? q : 0;
+            share[i] = (uint8_t)q;
+            if (q) {
+                uint32_t fb = sp * XYL__FOREST_BUCKETS_PER_SPECIES + s->fine[lv];
+                fine_bucket[i] = (uint16_t)fb;
+                ++lanes[i & (LANES - 1)][fb];
+                ++twice;
+            }
+        }
     }
     for (size_t b = 0; b < total; ++b)
         counts[b] = lanes[0][b] + lanes[1][b] + lanes[2][b] + lanes[3][b];
+    return twice;
 }
 
 void xyl__forest_sort(const xyl_forest_instance *inst, size_t n, const uint16_t *bucket,
+                      const uint16_t *fine_bucket, const uint8_t *share,
                       const uint32_t *counts, uint32_t bucket_total, uint32_t *offsets,
                       xyl_forest_instance *sorted)
 {
@@ -281,6 +315,14 @@ void xyl__forest_sort(const xyl_forest_instance *inst, size_t n, const uint16_t 
     offsets[bucket_total] = at;
     uint32_t fill[XYL_FOREST_MAX_SPECIES * XYL__FOREST_BUCKETS_PER_SPECIES];
     memcpy(fill, offsets, bucket_total * sizeof *fill);
-    for (size_t i = 0; i < n; ++i)
-        if (bucket[i] != UINT16_MAX) sorted[fill[bucket[i]]++] = inst[i];
+    for (size_t i = 0; i < n; ++i) {
+        if (bucket[i] == UINT16_MAX) continue;
+        xyl_forest_instance x = inst[i];
+        uint32_t q = share ? share[i] : 0;
+        x.bits = (x.bits & ~255u) | (q ? q | XYL__FOREST_FADE_COARSE : 0u);
+        sorted[fill[bucket[i]]++] = x;
+        if (!q) continue;
+        x.bits = (x.bits & ~255u) | q;
+        sorted[fill[fine_bucket[i]]++] = x;
+    }
 }

@@ -16,20 +16,29 @@
 #include "xylem/xyl_forest_gl.h"
 
 extern const unsigned char xyl__shader_gl_forest_leaf_vert[];
-extern const unsigned char xyl__shader_gl_foliage_leaf_frag[];
+extern const unsigned char xyl__shader_gl_forest_leaf_list_vert[];
+extern const unsigned char xyl__shader_gl_foliage_cut_comp[];
+extern const unsigned char xyl__shader_gl_forest_leaf_frag[];
 extern const unsigned char xyl__shader_gl_forest_stem_vert[];
 extern const unsigned char xyl__shader_gl_forest_stem_frag[];
 extern const unsigned char xyl__shader_gl_forest_billboard_vert[];
-extern const unsigned char xyl__shader_gl_billboard_frag[];
+extern const unsigned char xyl__shader_gl_forest_billboard_frag[];
+extern const unsigned char xyl__shader_gl_forest_impostor_vert[];
+extern const unsigned char xyl__shader_gl_forest_impostor_frag[];
 
 #define BB_UNIFORM_LIGHT 6  /* billboard.frag's */
 #define BB_UNIFORM_CUTOFF 7
 #define BB_UNIFORM_BAKE_LIGHT 8
 #define BB_UNIFORM_TO_COVERAGE 9
 #define BB_UNIFORM_DITHER 10
+#define IMP_UNIFORM_CENTER 2 /* impostor.vert's and .frag's */
+#define IMP_UNIFORM_RADIUS 3
+#define IMP_UNIFORM_GRID 4
 
 typedef struct species {
     GLuint leaf_buf, stem_vao, stem_vbo, stem_ibo;
+    GLuint node_buf; /* the collapse forest's nodes for the per-leaf cut */
+    uint32_t leaf_count;
     xyl__forest_plan plan;
     uint32_t stem_index_count, stem_levels;
     xyl_billboard_gl *billboard;
@@ -37,12 +46,18 @@ typedef struct species {
 } species;
 
 struct xyl_forest_gl {
-    GLuint leaf_program, stem_program, bb_program, vao, instance_buf, texture;
+    GLuint leaf_program, stem_program, bb_program, imp_program, vao, instance_buf, texture;
+    GLuint list_program, cut_program, list_buf, command_buf; /* the per-leaf instances */
+    GLsizeiptr list_capacity;                                /* bytes */
+    GLint ssbo_align;
+    uint32_t near[XYL_FOREST_MAX_PER_LEAF]; /* this frame's per-leaf instances, by species */
+    uint32_t near_count;
     GLsizeiptr instance_capacity; /* bytes */
     species species[XYL_FOREST_MAX_SPECIES];
     uint32_t species_count;
-    xyl_forest_instance *instances, *sorted;
-    uint16_t *bucket;
+    xyl_forest_instance *instances, *sorted; /* sorted: room for every instance twice */
+    uint16_t *bucket, *fine_bucket;         /* per instance, per frame */
+    uint8_t *share;                         /* per instance, per frame: its fade */
     size_t count;
     uint64_t max_instances;
     uint32_t max_levels;
@@ -91,6 +106,26 @@ static xyl_result link(const unsigned char *vs, const unsigned char *fs, const c
     return XYL_OK;
 }
 
+static xyl_result link_compute(const unsigned char *cs, GLuint *out, xyl_diag *diag)
+{
+    char log[192] = "";
+    GLuint sh = xyl__fgl_compile(GL_COMPUTE_SHADER, cs, log, (GLsizei)sizeof log);
+    if (!sh) return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "shader of the cut: %s", log);
+    GLuint p = glCreateProgram();
+    glAttachShader(p, sh);
+    glDeleteShader(sh);
+    glLinkProgram(p);
+    GLint ok = GL_FALSE;
+    glGetProgramiv(p, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        glGetProgramInfoLog(p, (GLsizei)sizeof log, NULL, log);
+        glDeleteProgram(p);
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "program of the cut: %s", log);
+    }
+    *out = p;
+    return XYL_OK;
+}
+
 static xyl_result check_desc(const xyl_forest_gl_desc *d, xyl_diag *diag)
 {
     if (!isfinite(d->hysteresis))
@@ -123,16 +158,27 @@ xyl_result xyl_forest_gl_create(const xyl_forest_gl_desc *desc, xyl_forest_gl **
     f->max_levels = d.max_levels ? d.max_levels : XYL_FOREST_MAX_LEVELS;
     f->hysteresis = d.hysteresis > 0.0f ? d.hysteresis : d.hysteresis < 0.0f ? 0.0f : 0.1f;
     xyl__fgl_drain_errors();
-    r = link(xyl__shader_gl_forest_leaf_vert, xyl__shader_gl_foliage_leaf_frag, "forest_leaf",
+    r = link(xyl__shader_gl_forest_leaf_vert, xyl__shader_gl_forest_leaf_frag, "forest_leaf",
              &f->leaf_program, diag);
     if (r == XYL_OK)
         r = link(xyl__shader_gl_forest_stem_vert, xyl__shader_gl_forest_stem_frag, "forest_stem",
                  &f->stem_program, diag);
     if (r == XYL_OK)
-        r = link(xyl__shader_gl_forest_billboard_vert, xyl__shader_gl_billboard_frag,
+        r = link(xyl__shader_gl_forest_billboard_vert, xyl__shader_gl_forest_billboard_frag,
                  "forest_billboard", &f->bb_program, diag);
+    if (r == XYL_OK)
+        r = link(xyl__shader_gl_forest_impostor_vert, xyl__shader_gl_forest_impostor_frag,
+                 "forest_impostor", &f->imp_program, diag);
+    if (r == XYL_OK)
+        r = link(xyl__shader_gl_forest_leaf_list_vert, xyl__shader_gl_forest_leaf_frag,
+                 "forest_leaf_list", &f->list_program, diag);
+    if (r == XYL_OK) r = link_compute(xyl__shader_gl_foliage_cut_comp, &f->cut_program, diag);
     if (r == XYL_OK) {
         glCreateVertexArrays(1, &f->vao);
+        glCreateBuffers(1, &f->list_buf);
+        glCreateBuffers(1, &f->command_buf);
+        glGetIntegerv(GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, &f->ssbo_align);
+        if (f->ssbo_align < 16) f->ssbo_align = 16;
         glCreateBuffers(1, &f->instance_buf);
         glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &f->max_ssbo_bytes);
         glGetIntegerv(GL_MAX_TEXTURE_SIZE, &f->max_texture_side);
@@ -152,8 +198,8 @@ xyl_result xyl_forest_gl_create(const xyl_forest_gl_desc *desc, xyl_forest_gl **
 static void species_free(xyl_forest_gl *f, species *s, bool gl)
 {
     if (gl) {
-        GLuint bufs[3] = {s->leaf_buf, s->stem_vbo, s->stem_ibo};
-        glDeleteBuffers(3, bufs);
+        GLuint bufs[4] = {s->leaf_buf, s->stem_vbo, s->stem_ibo, s->node_buf};
+        glDeleteBuffers(4, bufs);
         glDeleteVertexArrays(1, &s->stem_vao);
     }
     xyl__forest_plan_free(&s->plan, &f->alloc);
@@ -167,6 +213,11 @@ void xyl_forest_gl_destroy(xyl_forest_gl *f)
         glDeleteProgram(f->leaf_program);
         glDeleteProgram(f->stem_program);
         glDeleteProgram(f->bb_program);
+        glDeleteProgram(f->imp_program);
+        glDeleteProgram(f->list_program);
+        glDeleteProgram(f->cut_program);
+        GLuint bufs[2] = {f->list_buf, f->command_buf};
+        glDeleteBuffers(2, bufs);
         glDeleteVertexArrays(1, &f->vao);
         glDeleteBuffers(1, &f->instance_buf);
         glDeleteTextures(1, &f->texture);
@@ -176,6 +227,8 @@ void xyl_forest_gl_destroy(xyl_forest_gl *f)
     xyl__free(&a, f->instances);
     xyl__free(&a, f->sorted);
     xyl__free(&a, f->bucket);
+    xyl__free(&a, f->fine_bucket);
+    xyl__free(&a, f->share);
     xyl__free(&a, f);
 }
 
@@ -195,15 +248,6 @@ static xyl_result check_species(const xyl_forest_gl *f, const xyl_forest_gl_spec
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "billboard_error %g and stem_width %g must not be negative",
                          (double)d->billboard_error, (double)d->stem_width);
-    if (d->billboard) {
-        xyl__billboard_parts bp;
-        xyl__billboard_gl_parts(d->billboard, &bp);
-        if (bp.kind != XYL_BILLBOARD_SPHERICAL && bp.kind != XYL_BILLBOARD_CYLINDRICAL &&
-            bp.kind != XYL_BILLBOARD_CROSS)
-            return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
-                             "a forest draws spherical, cylindrical and cross billboards, not "
-                             "kind %d", bp.kind);
-    }
     const xyl_mesh *m = d->stems;
     if (m && (m->tri_view_count == 0 || !m->tri_view || !m->positions || !m->normals ||
               m->vertex_count > UINT32_MAX || m->tri_view_count > UINT32_MAX / 3))
@@ -293,17 +337,27 @@ xyl_result xyl_forest_gl_add_species(xyl_forest_gl *f, const xyl_forest_gl_speci
     memset(&s, 0, sizeof s);
     size_t n = d->foliage->leaf_count;
     xyl_foliage_gpu_leaf *records = xyl__alloc_array(&f->alloc, n, sizeof *records);
-    if (!records) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    xyl__foliage_cut_node *nodes = xyl__alloc_array(&f->alloc, n, sizeof *nodes);
+    if (!records || !nodes) {
+        xyl__free(&f->alloc, records);
+        xyl__free(&f->alloc, nodes);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    }
     r = xyl_foliage_pack_gpu(d->foliage->leaves, n, records, diag);
+    if (r == XYL_OK) r = xyl__foliage_cut_nodes(d->foliage, nodes, diag);
     if (r == XYL_OK) r = xyl__forest_plan_make(d->foliage, f->max_levels, &f->alloc, &s.plan, diag);
     if (r == XYL_OK) {
         xyl__fgl_drain_errors();
         glCreateBuffers(1, &s.leaf_buf);
         glNamedBufferStorage(s.leaf_buf, (GLsizeiptr)(n * sizeof *records), records, 0);
+        glCreateBuffers(1, &s.node_buf);
+        glNamedBufferStorage(s.node_buf, (GLsizeiptr)(n * sizeof *nodes), nodes, 0);
+        s.leaf_count = (uint32_t)n;
         if (d->stems) r = upload_stems(&s, d->stems, &f->alloc, diag);
         if (r == XYL_OK) r = xyl__fgl_check(diag, "uploading a species");
     }
     xyl__free(&f->alloc, records);
+    xyl__free(&f->alloc, nodes);
     if (r != XYL_OK) {
         species_free(f, &s, true);
         return r;
@@ -389,19 +443,26 @@ xyl_result xyl_forest_gl_set_instances(xyl_forest_gl *f, const xyl_forest_instan
     xyl_result r = check_instances(f, in, n, diag);
     if (r != XYL_OK) return r;
     xyl_forest_instance *copy = xyl__alloc_array(&f->alloc, n, sizeof *copy);
-    xyl_forest_instance *sorted = xyl__alloc_array(&f->alloc, n, sizeof *sorted);
+    xyl_forest_instance *sorted = xyl__alloc_array(&f->alloc, 2 * n, sizeof *sorted);
     uint16_t *bucket = xyl__alloc_array(&f->alloc, n, sizeof *bucket);
-    if (!copy || !sorted || !bucket) {
+    uint16_t *fine_bucket = xyl__alloc_array(&f->alloc, n, sizeof *fine_bucket);
+    uint8_t *share = xyl__alloc_array(&f->alloc, n, sizeof *share);
+    if (!copy || !sorted || !bucket || !fine_bucket || !share) {
         xyl__free(&f->alloc, copy);
         xyl__free(&f->alloc, sorted);
         xyl__free(&f->alloc, bucket);
+        xyl__free(&f->alloc, fine_bucket);
+        xyl__free(&f->alloc, share);
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     }
     memcpy(copy, in, n * sizeof *copy);
     xyl__free(&f->alloc, f->instances);
     xyl__free(&f->alloc, f->sorted);
     xyl__free(&f->alloc, f->bucket);
+    xyl__free(&f->alloc, f->fine_bucket);
+    xyl__free(&f->alloc, f->share);
     f->instances = copy, f->sorted = sorted, f->bucket = bucket, f->count = n;
+    f->fine_bucket = fine_bucket, f->share = share;
     xyl__diag_ok(diag);
     return XYL_OK;
 }
@@ -417,6 +478,7 @@ const xyl_forest_instance *xyl_forest_gl_instances(const xyl_forest_gl *f, size_
 typedef struct resolved {
     xyl__foliage_frame leaf;  /* view_proj, light, leaf colour, cutoff, translucency */
     float stem_color[4];
+    float eye[3];
     double per_distance;
 } resolved;
 
@@ -441,6 +503,16 @@ static xyl_result check_frame(const xyl_forest_gl *f, const xyl_forest_gl_frame 
     if (!(fr->error_px > 0.0f))
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a pixel budget of %g: error_px must be > 0", (double)fr->error_px);
+    if (!isfinite(fr->fade))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "fade is not finite");
+    if (fr->fade < 0.0f || fr->fade > XYL_FOREST_MAX_FADE)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "a fade band of %g: from 0 (none) to %g times the switch distance",
+                         (double)fr->fade, (double)XYL_FOREST_MAX_FADE);
+    if (fr->per_leaf > XYL_FOREST_MAX_PER_LEAF)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "per_leaf %u: at most %d instances get a cut of their own",
+                         fr->per_leaf, XYL_FOREST_MAX_PER_LEAF);
     if (fr->mode != XYL_FOREST_LOD && fr->mode != XYL_FOREST_LEAF_LEVELS &&
         fr->mode != XYL_FOREST_FULL)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
@@ -454,7 +526,31 @@ static xyl_result check_frame(const xyl_forest_gl *f, const xyl_forest_gl_frame 
     bool none = fr->stem_color[0] == 0.0f && fr->stem_color[1] == 0.0f &&
                 fr->stem_color[2] == 0.0f && fr->stem_color[3] == 0.0f;
     memcpy(out->stem_color, none ? bark : fr->stem_color, sizeof out->stem_color);
+    memcpy(out->eye, fr->eye, sizeof out->eye);
     return XYL_OK;
+}
+
+/* Level k's band: from its threshold t_k to t_k (1 + fade), cut at the next larger threshold
+ * so that bands never overlap and the share reaches 1 where the next band starts. */
+static void fade_bands(xyl__forest_choice_species *c, double r, float fade)
+{
+    double t[XYL__FOREST_BUCKETS_PER_SPECIES + 1];
+    for (uint32_t k = 0; k <= c->top; ++k) t[k] = k ? sqrt((double)c->refine2[k]) - r : 0.0;
+    for (uint32_t k = 1; k <= c->top; ++k) {
+        uint32_t fine = k - 1;
+        while (fine > 0 && !(t[fine] < t[k])) --fine;
+        double end = t[k] * (1.0 + fade);
+        for (uint32_t j = k + 1; j <= c->top; ++j)
+            if (t[j] > t[k]) {
+                end = fmin(end, t[j]);
+                break;
+            }
+        c->fine[k] = (uint8_t)fine;
+        if (!(end > t[k]) || !isfinite(end)) continue;
+        c->band_lo[k] = (float)(t[k] + r);
+        c->band_inv[k] = (float)(1.0 / (end - t[k]));
+        c->band_end2[k] = (float)((end + r) * (end + r));
+    }
 }
 
 static void choice_species(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
@@ -476,10 +572,20 @@ static void choice_species(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr
             c->coarsen2[k] = (float)((t * grow + r) * (t * grow + r));
         }
         c->top = bb ? c->level_count : c->level_count - 1;
+        if (fr->fade > 0.0f) fade_bands(c, r, fr->fade);
     }
 }
 
-static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, xyl_forest_gl_stats *st)
+/* Quads an instance's billboard draws: one per plane, one for an impostor. */
+static uint32_t quads_of(xyl_billboard_gl *bb)
+{
+    xyl__billboard_parts bp;
+    xyl__billboard_gl_parts(bb, &bp);
+    return bp.kind == XYL_BILLBOARD_OCTAHEDRAL ? 1 : bp.views;
+}
+
+static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, size_t twice,
+                        xyl_forest_gl_stats *st)
 {
     for (uint32_t s = 0; s < f->species_count; ++s) {
         const species *sp = &f->species[s];
@@ -496,10 +602,68 @@ static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, xyl_fore
         uint32_t nb = c[sp->plan.level_count];
         st->per_level[XYL_FOREST_MAX_LEVELS] += nb;
         st->visible += nb;
-        if (nb && sp->billboard)
-            st->triangles += 2ull * nb * xyl_billboard_gl_view_count(sp->billboard);
+        if (nb && sp->billboard) st->triangles += 2ull * nb * quads_of(sp->billboard);
     }
     st->triangles += 2 * st->leaves;
+    st->faded = twice;
+    st->visible -= twice;
+}
+
+/* The per_leaf visible instances nearest the eye at a leaf level (not a billboard) leave their
+ * buckets (both, when fading) for f->near, ordered by species: a max-heap on the squared
+ * distance to the sphere's centre keeps the nearest. Returns the instances taken out of the
+ * fade's doubled ones. */
+static size_t pick_near(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, bool fade,
+                        uint32_t *counts)
+{
+    uint32_t heap[XYL_FOREST_MAX_PER_LEAF];
+    float key[XYL_FOREST_MAX_PER_LEAF];
+    uint32_t m = fr->per_leaf, n = 0;
+    for (size_t i = 0; i < f->count; ++i) {
+        uint32_t b = f->bucket[i];
+        if (b == UINT16_MAX) continue;
+        const species *sp = &f->species[b / XYL__FOREST_BUCKETS_PER_SPECIES];
+        if (b % XYL__FOREST_BUCKETS_PER_SPECIES >= sp->plan.level_count) continue;
+        const xyl_forest_instance *x = &f->instances[i];
+        float scale = (float)((x->bits >> 24) + 1u) * (1.0f / 64.0f);
+        float dx = fr->eye[0] - x->position[0], dz = fr->eye[2] - x->position[2];
+        float dy = fr->eye[1] - (x->position[1] + sp->center_y * scale);
+        float d2 = dx * dx + dy * dy + dz * dz;
+        if (n == m && !(d2 < key[0])) continue;
+        uint32_t at = n < m ? n++ : 0; /* push, or replace the farthest (the root) */
+        if (at) { /* sift up */
+            while (at && key[(at - 1) / 2] < d2) {
+                heap[at] = heap[(at - 1) / 2], key[at] = key[(at - 1) / 2];
+                at = (at - 1) / 2;
+            }
+        } else if (n == m && m > 1) { /* sift down from the root */
+            for (;;) {
+                uint32_t c = 2 * at + 1;
+                if (c >= n) break;
+                if (c + 1 < n && key[c + 1] > key[c]) ++c;
+                if (!(key[c] > d2)) break;
+                heap[at] = heap[c], key[at] = key[c];
+                at = c;
+            }
+        }
+        heap[at] = (uint32_t)i, key[at] = d2;
+    }
+    size_t twice = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+        uint32_t i = heap[k];
+        --counts[f->bucket[i]];
+        if (fade && f->share[i]) --counts[f->fine_bucket[i]], ++twice;
+        f->bucket[i] = UINT16_MAX;
+    }
+    /* by species (insertion sort of at most 64), so that their stems are one draw a species */
+    for (uint32_t k = 1; k < n; ++k) {
+        uint32_t x = heap[k], j = k, sx = (f->instances[x].bits >> 8) & 63u;
+        while (j > 0 && ((f->instances[heap[j - 1]].bits >> 8) & 63u) > sx) heap[j] = heap[j - 1], --j;
+        heap[j] = x;
+    }
+    memcpy(f->near, heap, n * sizeof *heap);
+    f->near_count = n;
+    return twice;
 }
 
 /* The choice and the sort; counts and offsets per bucket. */
@@ -516,14 +680,26 @@ static void choose_sort(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, const r
     memcpy(c.eye, fr->eye, sizeof c.eye);
     c.cull = !fr->no_cull && xyl__forest_cone(rs->leaf.view_proj, c.axis, &c.inv_sin, &c.cos2);
     c.full = fr->mode == XYL_FOREST_FULL;
-    xyl__forest_choose(&c, f->instances, f->count, f->bucket, counts);
+    c.fade = !c.full && fr->fade > 0.0f;
+    size_t twice = xyl__forest_choose(&c, f->instances, f->count, f->bucket, f->fine_bucket,
+                                      f->share, counts);
+    f->near_count = 0;
+    if (fr->per_leaf && !c.full) twice -= pick_near(f, fr, c.fade, counts);
     uint32_t total = f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;
-    xyl__forest_sort(f->instances, f->count, f->bucket, counts, total, offsets, f->sorted);
+    xyl__forest_sort(f->instances, f->count, f->bucket, f->fine_bucket, c.fade ? f->share : NULL,
+                     counts, total, offsets, f->sorted);
+    for (uint32_t k = 0; k < f->near_count; ++k) { /* after the buckets, drawn every pixel */
+        xyl_forest_instance x = f->instances[f->near[k]];
+        x.bits &= ~255u;
+        f->sorted[offsets[total] + k] = x;
+    }
     memset(st, 0, sizeof *st);
     st->choose_ms = now_ms() - t0;
     st->instances = f->count;
     st->bytes_per_instance = XYL_FOREST_INSTANCE_SIZE;
-    count_stats(f, counts, st);
+    count_stats(f, counts, twice, st);
+    st->per_leaf = f->near_count;
+    st->visible += f->near_count;
 }
 
 xyl_result xyl_forest_gl_choose(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
@@ -644,6 +820,7 @@ static uint64_t draw_billboards(const xyl_forest_gl *f, const xyl_forest_gl_fram
         if (!sp->billboard || !counts[b]) continue;
         xyl__billboard_parts bp;
         xyl__billboard_gl_parts(sp->billboard, &bp);
+        if (bp.kind == XYL_BILLBOARD_OCTAHEDRAL) continue; /* draw_impostors' */
         glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, offsets[b]);
         glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_BB_CENTER, 1, bp.center);
         glProgramUniform2fv(p, XYL_FOREST_GL_UNIFORM_BB_HALF, 1, bp.half);
@@ -659,6 +836,162 @@ static uint64_t draw_billboards(const xyl_forest_gl *f, const xyl_forest_gl_fram
     return draws;
 }
 
+/* Octahedral impostors: impostor.vert/.frag's uniforms, the eye and light per instance. */
+static uint64_t draw_impostors(const xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
+                               const resolved *rs, const uint32_t *counts,
+                               const uint32_t *offsets)
+{
+    GLuint p = f->imp_program;
+    glUseProgram(p);
+    glProgramUniformMatrix4fv(p, 0, 1, GL_FALSE, rs->leaf.view_proj);
+    glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_EYE, 1, fr->eye);
+    glProgramUniform3fv(p, XYL_FOREST_GL_UNIFORM_LIGHT, 1, rs->leaf.light);
+    glProgramUniform1f(p, BB_UNIFORM_CUTOFF, rs->leaf.cutoff);
+    glProgramUniform2fv(p, BB_UNIFORM_DITHER, 1, rs->leaf.dither);
+    glProgramUniform1i(p, BB_UNIFORM_TO_COVERAGE, 0); /* alpha-tested at the cutoff */
+    glBindVertexArray(f->vao);
+    uint64_t draws = 0;
+    for (uint32_t s = 0; s < f->species_count; ++s) {
+        const species *sp = &f->species[s];
+        uint32_t b = s * XYL__FOREST_BUCKETS_PER_SPECIES + sp->plan.level_count;
+        if (!sp->billboard || !counts[b]) continue;
+        xyl__billboard_parts bp;
+        xyl__billboard_gl_parts(sp->billboard, &bp);
+        if (bp.kind != XYL_BILLBOARD_OCTAHEDRAL) continue;
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, offsets[b]);
+        glProgramUniform3fv(p, IMP_UNIFORM_CENTER, 1, bp.center);
+        glProgramUniform1f(p, IMP_UNIFORM_RADIUS, bp.half[0]);
+        glProgramUniform1i(p, IMP_UNIFORM_GRID, (GLint)bp.grid);
+        glProgramUniform3fv(p, BB_UNIFORM_BAKE_LIGHT, 1, bp.bake_light);
+        glBindTextureUnit(0, bp.color_tex);
+        glBindTextureUnit(1, bp.normal_tex);
+        glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, (GLsizei)counts[b]);
+        ++draws;
+    }
+    return draws;
+}
+
+/* The list and command buffers for this frame's per-leaf instances: each a range of its own,
+ * at offsets the storage buffer alignment allows. */
+static GLsizeiptr align_up(GLsizeiptr x, GLint a)
+{
+    return (x + a - 1) / a * a;
+}
+
+static xyl_result near_buffers(xyl_forest_gl *f, GLsizeiptr *list_at, GLsizeiptr *cmd_stride,
+                               xyl_diag *diag)
+{
+    GLsizeiptr at = 0;
+    for (uint32_t k = 0; k < f->near_count; ++k) {
+        const species *sp = &f->species[(f->instances[f->near[k]].bits >> 8) & 63u];
+        list_at[k] = at;
+        at = align_up(at + (GLsizeiptr)sp->leaf_count * 4, f->ssbo_align);
+    }
+    if (at > f->max_ssbo_bytes)
+        return xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
+                         "the per-leaf instances' lists exceed the driver's storage block size");
+    if (at > f->list_capacity) {
+        glNamedBufferData(f->list_buf, at, NULL, GL_DYNAMIC_COPY);
+        f->list_capacity = at;
+    }
+    *cmd_stride = align_up(16, f->ssbo_align);
+    uint32_t cmds[XYL_FOREST_MAX_PER_LEAF * 64];
+    GLsizeiptr words = *cmd_stride / 4;
+    if (words > 64) return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                                     "a storage buffer alignment of %d bytes", f->ssbo_align);
+    memset(cmds, 0, sizeof cmds);
+    for (uint32_t k = 0; k < f->near_count; ++k) cmds[k * words] = 4; /* vertices a leaf */
+    glNamedBufferData(f->command_buf, (GLsizeiptr)f->near_count * *cmd_stride, cmds,
+                      GL_DYNAMIC_COPY);
+    return XYL_OK;
+}
+
+/* Per-leaf instances: per instance one cut (foliage_cut.comp, the eye in the instance's own
+ * frame, the same per-distance budget since both the errors and the distances are then in
+ * species units), then per instance one indirect draw of its list, and its stems. With st,
+ * the cuts' sizes are read back (a wait for the GPU) and counted. */
+static xyl_result draw_near(xyl_forest_gl *f, const resolved *rs, uint32_t first,
+                            xyl_forest_gl_stats *st, xyl_diag *diag)
+{
+    GLsizeiptr list_at[XYL_FOREST_MAX_PER_LEAF], stride = 0;
+    xyl_result r = near_buffers(f, list_at, &stride, diag);
+    if (r != XYL_OK) return r;
+    GLuint c = f->cut_program;
+    glUseProgram(c);
+    glProgramUniform1f(c, XYL_FOLIAGE_GL_UNIFORM_CUT_PER_DISTANCE, (float)rs->per_distance);
+    for (uint32_t k = 0; k < f->near_count; ++k) {
+        xyl_forest_instance_values v;
+        xyl_forest_instance_unpack(&f->instances[f->near[k]], &v);
+        const species *sp = &f->species[v.species];
+        float cs = cosf(v.rotation), sn = sinf(v.rotation), e[3];
+        for (int i = 0; i < 3; ++i) e[i] = (rs->eye[i] - v.position[i]) / v.scale;
+        glProgramUniform3f(c, XYL_FOLIAGE_GL_UNIFORM_CUT_EYE, cs * e[0] - sn * e[2], e[1],
+                           sn * e[0] + cs * e[2]);
+        glProgramUniform1ui(c, XYL_FOLIAGE_GL_UNIFORM_CUT_COUNT, sp->leaf_count);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_NODES, sp->node_buf);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LIST, f->list_buf,
+                          list_at[k], (GLsizeiptr)sp->leaf_count * 4);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_COMMAND,
+                          f->command_buf, (GLintptr)k * stride, 16);
+        glDispatchCompute((sp->leaf_count + XYL_FOLIAGE_GL_CUT_GROUP - 1) / XYL_FOLIAGE_GL_CUT_GROUP,
+                          1, 1);
+    }
+    glMemoryBarrier(GL_COMMAND_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    GLuint p = f->list_program;
+    glUseProgram(p);
+    xyl__fgl_leaf_uniforms(p, &rs->leaf);
+    glBindVertexArray(f->vao);
+    glBindTextureUnit(XYL_FOLIAGE_GL_BINDING_TEXTURE, f->texture);
+    GLint indirect = 0;
+    glGetIntegerv(GL_DRAW_INDIRECT_BUFFER_BINDING, &indirect);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, f->command_buf);
+    for (uint32_t k = 0; k < f->near_count; ++k) {
+        const species *sp = &f->species[(f->instances[f->near[k]].bits >> 8) & 63u];
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LEAVES, sp->leaf_buf);
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, XYL_FOLIAGE_GL_BINDING_LIST, f->list_buf,
+                          list_at[k], (GLsizeiptr)sp->leaf_count * 4);
+        glProgramUniform1ui(p, XYL_FOREST_GL_UNIFORM_INSTANCE, first + k);
+        glDrawArraysIndirect(GL_TRIANGLE_STRIP, (const void *)(uintptr_t)((GLsizeiptr)k * stride));
+    }
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, (GLuint)indirect);
+    uint64_t draws = f->near_count, tris = 0, stems = 0;
+    /* stems: one draw per species' run (near is ordered by species) */
+    GLuint sp_prog = f->stem_program;
+    glUseProgram(sp_prog);
+    glProgramUniformMatrix4fv(sp_prog, XYL_FOLIAGE_GL_UNIFORM_VIEW_PROJ, 1, GL_FALSE,
+                              rs->leaf.view_proj);
+    glProgramUniform3fv(sp_prog, XYL_FOLIAGE_GL_UNIFORM_LIGHT, 1, rs->leaf.light);
+    glProgramUniform4fv(sp_prog, XYL_FOREST_GL_UNIFORM_STEM_COLOR, 1, rs->stem_color);
+    for (uint32_t k = 0; k < f->near_count;) {
+        uint32_t s = (f->instances[f->near[k]].bits >> 8) & 63u, n = 1;
+        while (k + n < f->near_count && ((f->instances[f->near[k + n]].bits >> 8) & 63u) == s) ++n;
+        const species *sp = &f->species[s];
+        if (sp->stem_index_count) {
+            glBindVertexArray(sp->stem_vao);
+            glProgramUniform1ui(sp_prog, XYL_FOREST_GL_UNIFORM_INSTANCE, first + k);
+            glDrawElementsInstanced(GL_TRIANGLES, (GLsizei)sp->stem_index_count, GL_UNSIGNED_INT,
+                                    NULL, (GLsizei)n);
+            ++draws;
+            tris += (uint64_t)n * (sp->stem_index_count / 3);
+            stems += n;
+        }
+        k += n;
+    }
+    if (st) {
+        st->draws += draws;
+        st->triangles += tris;
+        st->with_stems += stems;
+        uint32_t cmds[XYL_FOREST_MAX_PER_LEAF * 64];
+        glGetNamedBufferSubData(f->command_buf, 0, (GLsizeiptr)f->near_count * stride, cmds);
+        for (uint32_t k = 0; k < f->near_count; ++k) {
+            uint64_t leaves = cmds[k * (stride / 4) + 1];
+            st->leaves += leaves;
+            st->triangles += 2 * leaves;
+        }
+    }
+    return xyl__fgl_check(diag, "drawing the per-leaf instances");
+}
+
 xyl_result xyl_forest_gl_draw(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
                               xyl_forest_gl_stats *stats, xyl_diag *diag)
 {
@@ -671,7 +1004,8 @@ xyl_result xyl_forest_gl_draw(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
     choose_sort(f, fr, &rs, counts, offsets, &st);
     xyl__fgl_drain_errors();
     double t0 = now_ms();
-    r = upload_sorted(f, offsets[f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES], diag);
+    r = upload_sorted(f, offsets[f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES] + f->near_count,
+                      diag);
     st.upload_ms = now_ms() - t0;
     if (r != XYL_OK) return r;
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
@@ -683,9 +1017,13 @@ xyl_result xyl_forest_gl_draw(xyl_forest_gl *f, const xyl_forest_gl_frame *fr,
     st.draws = draw_stems(f, &rs, counts, offsets);
     st.draws += draw_leaves(f, &rs, counts, offsets);
     st.draws += draw_billboards(f, fr, &rs, counts, offsets);
+    st.draws += draw_impostors(f, fr, &rs, counts, offsets);
+    if (f->near_count)
+        r = draw_near(f, &rs, offsets[f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES],
+                      stats ? &st : NULL, diag);
     glBindVertexArray(0);
     if (cull) glEnable(GL_CULL_FACE);
-    r = xyl__fgl_check(diag, "drawing the forest");
+    if (r == XYL_OK) r = xyl__fgl_check(diag, "drawing the forest");
     if (r != XYL_OK) return r;
     if (stats) *stats = st;
     xyl__diag_ok(diag);

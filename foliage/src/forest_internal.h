@@ -50,6 +50,14 @@ typedef struct xyl__forest_choice_species {
     uint32_t top;           /* the coarsest level allowed: level_count - 1, or level_count
                                (the billboard) */
     uint32_t level_count;
+    /* the cross-fade (xyl__forest_choice.fade): level k's band is the species-unit distances
+     * to the centre from band_lo[k] = threshold_k + r to band_lo[k] + 1 / band_inv[k] (below
+     * (band_end[k] scale)^2 = band_end2[k] s^2 in squares), where level fine[k] (the coarsest
+     * one with a smaller threshold) hands over to level k; band_end2[k] 0: no band */
+    float band_lo[XYL__FOREST_BUCKETS_PER_SPECIES];
+    float band_inv[XYL__FOREST_BUCKETS_PER_SPECIES];
+    float band_end2[XYL__FOREST_BUCKETS_PER_SPECIES];
+    uint8_t fine[XYL__FOREST_BUCKETS_PER_SPECIES];
 } xyl__forest_choice_species;
 
 typedef struct xyl__forest_choice {
@@ -63,17 +71,32 @@ typedef struct xyl__forest_choice {
      * the frustum's side planes */
     float axis[3], inv_sin, cos2;
     bool full;              /* every instance at level 0 */
+    bool fade;              /* cross-fades over the species' bands instead of hysteresis */
 } xyl__forest_choice;
+
+/* The LOD byte of an instance in the sorted, uploaded copy (never of the stored one): 0 draws
+ * every pixel; otherwise bits 0..6 hold q in 1..63 and bit 7 the side: the finer level's copy
+ * keeps the dither thresholds [q / 64, 1), the coarser one's (bit 7 set) [0, q / 64)
+ * (xyl_dither.h; xyl_forest_keep in xyl_foliage_shared.h reads it). */
+#define XYL__FOREST_FADE_COARSE 128u
 
 /* Chooses every instance's level (written into its LOD bits), counts the visible ones per
  * bucket (species * XYL__FOREST_BUCKETS_PER_SPECIES + level) into counts (zeroed first) and
- * keeps each visible instance's bucket in bucket[i] (UINT16_MAX: culled). */
-void xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
-                        uint16_t *bucket, uint32_t *counts);
+ * keeps each visible instance's bucket in bucket[i] (UINT16_MAX: culled). With c->fade, an
+ * instance inside a band also gets the finer level's bucket in fine_bucket[i] and the coarser
+ * level's share q (1..63, in 64ths) in share[i] (0: drawn at one level; fine_bucket is then
+ * not written), and is counted in both buckets; without, fine_bucket and share may be NULL.
+ * Returns the visible instances drawn at two levels. */
+size_t xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
+                          uint16_t *bucket, uint16_t *fine_bucket, uint8_t *share,
+                          uint32_t *counts);
 
-/* The visible instances copied into sorted, bucket after bucket; offsets[b] (bucket_total + 1
- * entries) receives where each bucket starts. */
+/* The visible instances copied into sorted, bucket after bucket, with the LOD byte of each
+ * copy replaced by its fade (XYL__FOREST_FADE_COARSE; 0 without one): sorted holds up to the
+ * sum of counts, which is n plus the instances drawn twice. offsets[b] (bucket_total + 1
+ * entries) receives where each bucket starts. share NULL: no instance fades. */
 void xyl__forest_sort(const xyl_forest_instance *inst, size_t n, const uint16_t *bucket,
+                      const uint16_t *fine_bucket, const uint8_t *share,
                       const uint32_t *counts, uint32_t bucket_total, uint32_t *offsets,
                       xyl_forest_instance *sorted);
 

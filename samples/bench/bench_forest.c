@@ -1,9 +1,14 @@
 /* bench_forest: xyl_forest_gl on forests of the default tree (1, 100, 10 000 and 100 000
- * instances on a jittered grid) along a fixed camera path, in three modes: full (every leaf
+ * instances on a jittered grid) along a fixed camera path, in five modes: full (every leaf
  * and the stems of every instance), two-range LOD (each instance at the leaf level its
- * distance allows, stems only where the thickest stem still projects over the budget) and
- * billboards (the same, and a cross billboard baked from the tree past the leaf levels). Per
- * size and mode, each the mean over the path's views: leaves and triangles drawn, the share of
+ * distance allows, stems only where the thickest stem still projects over the budget),
+ * per-leaf LOD (the same, but the M instances nearest the eye, --per-leaf M, default 16, each
+ * get a per-leaf cut of their own on the GPU; their leaves are read back from the draws, so
+ * a per-leaf row that is not drawn leaves them out), billboards (the same, and a cross billboard of 4 planes baked from the tree past the leaf
+ * levels) and impostors (the same with an octahedral impostor of 8 x 8 views instead). The
+ * LOD modes cross-fade over --fade F of each switch distance (default 0.1; 0: hard
+ * switches); "twice" counts the instances inside a band, drawn at two levels. Per size and
+ * mode, each the mean over the path's views: leaves and triangles drawn, the share of
  * the visible instances' full-detail leaves that is drawn, draws, the frame time (median of N
  * frames of clear + forest + glFinish), the CPU time of the LOD choice (its median) and the
  * RMSE of the picture against the full-detail one (8-bit RGB over every pixel, root mean square
@@ -11,7 +16,7 @@
  * a view); otherwise the full mode is counted, not drawn.
  *
  *   bench_forest [--quick] [--frames N] [--size WxH] [--error-px E] [--views N]
- *                [--max-full-triangles T] [--max-triangles T]
+ *                [--max-full-triangles T] [--max-triangles T] [--fade F] [--per-leaf M]
  *
  * The error budget is E pixels (default 1): a leaf level's collapse error, a billboard's error
  * (the tree's radius about its axis) and the stems' radius all project under E pixels where
@@ -47,7 +52,8 @@
 typedef struct bench_options {
     int frames, views;
     uint32_t width, height;
-    float error_px;
+    float error_px, fade;
+    uint32_t per_leaf;
     double max_full_triangles, max_triangles;
     bool quick;
 } bench_options;
@@ -145,17 +151,18 @@ static xyl_result make_forest(const tree *t, xyl_billboard_gl *bb, const uint8_t
     return r;
 }
 
-static xyl_result bake_billboard(const tree *t, const uint8_t *tex, xyl_billboard_gl **bb,
-                                 xyl_diag *d)
+static xyl_result bake_billboard(const tree *t, const uint8_t *tex, bool impostor,
+                                 xyl_billboard_gl **bb, xyl_diag *d)
 {
     xyl_forest_gl *one = NULL;
     xyl_forest_instance inst = {{0, 0, 0}, 63u << 24}; /* scale 1, no turn */
     xyl_result r = make_forest(t, NULL, tex, &one, d);
     if (r == XYL_OK) r = xyl_forest_gl_set_instances(one, &inst, 1, d);
     xyl_billboard_gl_desc bd = {0};
-    bd.kind = XYL_BILLBOARD_CROSS;
-    bd.planes = 4;
-    bd.resolution = 256;
+    bd.kind = impostor ? XYL_BILLBOARD_OCTAHEDRAL : XYL_BILLBOARD_CROSS;
+    bd.planes = impostor ? 0 : 4;
+    bd.grid = impostor ? 8 : 0;
+    bd.resolution = impostor ? 128 : 256;
     memcpy(bd.lo, t->lo, sizeof bd.lo);
     memcpy(bd.hi, t->hi, sizeof bd.hi);
     if (r == XYL_OK) r = xyl_billboard_gl_bake(&bd, bake_tree, one, bb, d);
@@ -163,10 +170,14 @@ static xyl_result bake_billboard(const tree *t, const uint8_t *tex, xyl_billboar
     return r;
 }
 
-typedef enum mode { MODE_FULL, MODE_LOD, MODE_BILLBOARD } mode;
-static const char *const mode_names[3] = {"full", "two-range LOD", "billboards"};
-static const xyl_forest_mode forest_modes[3] = {XYL_FOREST_FULL, XYL_FOREST_LEAF_LEVELS,
-                                                XYL_FOREST_LOD};
+typedef enum mode {
+    MODE_FULL, MODE_LOD, MODE_PER_LEAF, MODE_BILLBOARD, MODE_IMPOSTOR, MODE_COUNT
+} mode;
+static const char *const mode_names[MODE_COUNT] = {"full", "two-range LOD", "per-leaf LOD",
+                                                   "billboards", "impostors"};
+static const xyl_forest_mode forest_modes[MODE_COUNT] = {
+    XYL_FOREST_FULL, XYL_FOREST_LEAF_LEVELS, XYL_FOREST_LEAF_LEVELS, XYL_FOREST_LOD,
+    XYL_FOREST_LOD};
 
 typedef struct view {
     xyl_forest_gl_frame fr;
@@ -203,7 +214,7 @@ static xyl_result path_views(const tree *t, uint64_t count, float spacing, const
 }
 
 typedef struct row {
-    double frame_ms, choose_ms, sq_err, leaves, triangles, full_leaves, draws;
+    double frame_ms, choose_ms, sq_err, leaves, triangles, full_leaves, draws, twice;
     bool drawn, compared;
 } row;
 
@@ -239,12 +250,17 @@ static xyl_result run_mode(xyl_forest_gl *f, mode m, view *views, const bench_op
     for (int v = 0; r == XYL_OK && v < o->views; ++v) {
         xyl_forest_gl_frame fr = views[v].fr;
         fr.mode = forest_modes[m];
+        fr.fade = o->fade;
+        fr.per_leaf = m == MODE_PER_LEAF ? o->per_leaf : 0;
         xyl_forest_gl_stats st;
         double choose[MAX_FRAMES], frame[MAX_FRAMES];
         r = xyl_forest_gl_choose(f, &fr, &st, d);
         if (r != XYL_OK) break;
-        out->leaves += (double)st.leaves;
-        out->triangles += (double)st.triangles;
+        /* the choice alone does not count the per-leaf instances' cuts: the draws do */
+        double chosen_leaves = (double)st.leaves, chosen_triangles = (double)st.triangles;
+        out->leaves += chosen_leaves;
+        out->triangles += chosen_triangles;
+        out->twice += (double)st.faded;
         /* the visible instances' full-detail leaves */
         xyl_forest_gl_species_info info;
         r = xyl_forest_gl_species(f, 0, &info, d);
@@ -262,6 +278,8 @@ static xyl_result run_mode(xyl_forest_gl *f, mode m, view *views, const bench_op
             if (i) frame[i - 1] = (now_s() - t0) * 1e3, choose[i - 1] = st.choose_ms;
         }
         if (r != XYL_OK) break;
+        out->leaves += (double)st.leaves - chosen_leaves;
+        out->triangles += (double)st.triangles - chosen_triangles;
         out->draws += (double)st.draws;
         out->frame_ms += median(frame, o->frames);
         out->choose_ms += median(choose, o->frames);
@@ -275,6 +293,7 @@ static xyl_result run_mode(xyl_forest_gl *f, mode m, view *views, const bench_op
     if (out->compared) out->sq_err = sqrt(out->sq_err / o->views);
     double per = 1.0 / o->views; /* figures per view (frame) */
     out->leaves *= per, out->triangles *= per, out->full_leaves *= per, out->draws *= per;
+    out->twice *= per;
     out->frame_ms *= per, out->choose_ms *= per;
     return r;
 }
@@ -288,14 +307,16 @@ static void print_row(uint64_t n, mode m, const row *w)
     if (w->compared) snprintf(rmse, sizeof rmse, "%.3f", w->sq_err);
     else snprintf(rmse, sizeof rmse, m == MODE_FULL ? "(ref)" : "-");
     double share = w->full_leaves > 0.0 ? w->leaves / w->full_leaves : 0.0;
-    printf("%9llu  %-14s %12.0f %9.5f %13.0f %7.0f %11s %10s %8s\n", (unsigned long long)n,
-           mode_names[m], w->leaves, share, w->triangles, w->draws, frame, choose, rmse);
+    printf("%9llu  %-14s %12.0f %9.5f %13.0f %7.0f %8.1f %11s %10s %8s\n",
+           (unsigned long long)n, mode_names[m], w->leaves, share, w->triangles, w->draws,
+           w->twice, frame, choose, rmse);
 }
 
 static int usage(const char *msg)
 {
     fprintf(stderr, "bench_forest: %s\nusage: bench_forest [--quick] [--frames N] [--size WxH] "
-                    "[--error-px E] [--views N] [--max-full-triangles T] [--max-triangles T]\n",
+                    "[--error-px E] [--views N] [--max-full-triangles T] [--max-triangles T] "
+                    "[--fade F] [--per-leaf M]\n",
             msg);
     return 2;
 }
@@ -321,6 +342,13 @@ static int parse(int argc, char **argv, bench_options *o)
         } else if (strcmp(a, "--error-px") == 0 && val) {
             o->error_px = (float)atof(val), ++i;
             if (!(o->error_px > 0.0f && o->error_px <= 100.0f)) return usage("--error-px takes (0, 100]");
+        } else if (strcmp(a, "--per-leaf") == 0 && val) {
+            o->per_leaf = (uint32_t)atoi(val), ++i;
+            if (o->per_leaf < 1 || o->per_leaf > XYL_FOREST_MAX_PER_LEAF)
+                return usage("--per-leaf takes 1 to 64");
+        } else if (strcmp(a, "--fade") == 0 && val) {
+            o->fade = (float)atof(val), ++i;
+            if (!(o->fade >= 0.0f && o->fade <= XYL_FOREST_MAX_FADE)) return usage("--fade takes [0, 4]");
         } else if (strcmp(a, "--max-full-triangles") == 0 && val) {
             o->max_full_triangles = atof(val), ++i;
             if (!(o->max_full_triangles > 0.0)) return usage("--max-full-triangles takes > 0");
@@ -336,7 +364,7 @@ static int parse(int argc, char **argv, bench_options *o)
 
 int main(int argc, char **argv)
 {
-    bench_options o = {5, 3, 320, 240, 1.0f, 40e6, 60e6, false};
+    bench_options o = {5, 3, 320, 240, 1.0f, 0.1f, 16, 40e6, 60e6, false};
     int rc = parse(argc, argv, &o);
     if (rc) return rc;
     xyl_diag d = {0};
@@ -344,8 +372,8 @@ int main(int argc, char **argv)
     memset(&t, 0, sizeof t);
     for (int k = 0; k < 3; ++k) t.lo[k] = INFINITY, t.hi[k] = -INFINITY;
     xyl_gl_context *ctx = NULL;
-    xyl_billboard_gl *bb = NULL;
-    xyl_forest_gl *f = NULL;
+    xyl_billboard_gl *bb = NULL, *imp = NULL;
+    xyl_forest_gl *f = NULL, *fi = NULL; /* fi: the impostor's */
     size_t px = (size_t)o.width * o.height * 4;
     uint8_t *tex = malloc((size_t)XYL_LEAF_TEXTURE_WIDTH * XYL_LEAF_TEXTURE_HEIGHT * 4);
     uint8_t *img = malloc(px), *ref[MAX_VIEWS] = {0};
@@ -356,8 +384,10 @@ int main(int argc, char **argv)
     if (r == XYL_OK) r = default_tree(&t, &d);
     if (r == XYL_OK) r = xyl_gl_context_create_headless(NULL, &ctx, &d);
     if (tex) xyl_leaf_texture(tex, XYL_LEAF_TEXTURE_WIDTH, XYL_LEAF_TEXTURE_HEIGHT);
-    if (r == XYL_OK) r = bake_billboard(&t, tex, &bb, &d);
+    if (r == XYL_OK) r = bake_billboard(&t, tex, false, &bb, &d);
+    if (r == XYL_OK) r = bake_billboard(&t, tex, true, &imp, &d);
     if (r == XYL_OK) r = make_forest(&t, bb, tex, &f, &d);
+    if (r == XYL_OK) r = make_forest(&t, imp, tex, &fi, &d);
     GLuint fbo = 0, rb[2] = {0, 0};
     xyl_forest_gl_species_info info;
     if (r == XYL_OK) r = xyl_forest_gl_species(f, 0, &info, &d);
@@ -371,14 +401,18 @@ int main(int argc, char **argv)
         glBindFramebuffer(GL_FRAMEBUFFER, fbo);
         glViewport(0, 0, (GLsizei)o.width, (GLsizei)o.height);
         printf("device: %s; default tree: %u leaves, %llu stem triangles, %u leaf levels, "
-               "stems at levels below %u, cross billboard of 4 planes\n",
+               "stems at levels below %u, cross billboard of 4 planes, octahedral impostor of "
+               "8 x 8 views\n",
                xyl_gl_context_renderer(ctx), info.level_leaves[0],
                (unsigned long long)info.stem_triangles, info.level_count, info.stem_levels);
-        printf("budget %.3g px at %u x %u, %d views a size, frame and choice times the median of "
-               "%d frames, each figure the mean of the views; 16 bytes an instance\n", (double)o.error_px,
-               o.width, o.height, o.views, o.frames);
-        printf("%9s  %-14s %12s %9s %13s %7s %11s %10s %8s\n", "instances", "mode", "leaves",
-               "of full", "triangles", "draws", "frame ms", "choice ms", "RMSE");
+        printf("budget %.3g px at %u x %u, fade %.3g, %u per-leaf, %d views a size, frame and choice times "
+               "the median of %d frames, each figure the mean of the views; 16 bytes an "
+               "instance\n", (double)o.error_px, o.width, o.height, (double)o.fade, o.per_leaf,
+               o.views,
+               o.frames);
+        printf("%9s  %-14s %12s %9s %13s %7s %8s %11s %10s %8s\n", "instances", "mode",
+               "leaves", "of full", "triangles", "draws", "twice", "frame ms", "choice ms",
+               "RMSE");
     }
     const uint64_t sizes[4] = {1, 100, 10000, 100000};
     int size_count = o.quick ? 2 : 4;
@@ -392,10 +426,12 @@ int main(int argc, char **argv)
         view views[MAX_VIEWS];
         r = xyl_forest_grid(&gd, inst, 100000, &d);
         if (r == XYL_OK) r = xyl_forest_gl_set_instances(f, inst, gd.count, &d);
+        if (r == XYL_OK) r = xyl_forest_gl_set_instances(fi, inst, gd.count, &d);
         if (r == XYL_OK) r = path_views(&t, gd.count, spacing, &o, views, &d);
-        for (int m = 0; r == XYL_OK && m < 3; ++m) {
+        for (int m = 0; r == XYL_OK && m < MODE_COUNT; ++m) {
             row w;
-            r = run_mode(f, (mode)m, views, &o, ref, ref_ok, img, &w, &d);
+            r = run_mode(m == MODE_IMPOSTOR ? fi : f, (mode)m, views, &o, ref, ref_ok, img, &w,
+                         &d);
             if (r == XYL_OK) print_row(gd.count, (mode)m, &w);
             fflush(stdout);
         }
@@ -407,7 +443,9 @@ int main(int argc, char **argv)
     }
     if (r != XYL_OK) fprintf(stderr, "bench_forest: %s: %s\n", xyl_result_string(r), d.message);
     xyl_forest_gl_destroy(f);
+    xyl_forest_gl_destroy(fi);
     xyl_billboard_gl_destroy(bb);
+    xyl_billboard_gl_destroy(imp);
     xyl_gl_context_destroy(ctx);
     xyl_foliage_destroy(t.foliage);
     xyl_mesh_destroy(t.stems);

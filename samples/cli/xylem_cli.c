@@ -75,6 +75,8 @@ typedef struct render_options {
     uint32_t billboard_size; /* --billboard-size: texels per baked view, 0: 512 */
     bool billboard_error;    /* --billboard-error: the 20-view image error table */
     uint64_t forest;         /* --forest N: N instances of the tree on a grid (0: one tree) */
+    double fade;             /* --fade F: the forest's cross-fade band (has_fade false: 0.1) */
+    bool has_fade;
 } render_options;
 
 /* The leaves of 'foliage' and 'mesh --foliage'. */
@@ -142,7 +144,8 @@ static const char usage_text[] =
     "           [--size WxH] [--wireframe] [--samples N]\n"
     "           [--foliage full|lod|adaptive|none|billboard|impostor]\n"
     "           [--billboard spherical|cylindrical|cross|octahedral] [--planes N] [--grid N]\n"
-    "           [--billboard-size N] [--billboard-error] [--forest N] --out FILE.png\n"
+    "           [--billboard-size N] [--billboard-error] [--forest N [--fade F]]\n"
+    "           --out FILE.png\n"
     "                               refine the stem mesh (PN patches) and render it headless,\n"
     "                               with the source's leaves (GL): lod (default) the leaf LOD\n"
     "                               within the pixel budget, adaptive the coarsest leaf within\n"
@@ -155,8 +158,11 @@ static const char usage_text[] =
     "                               billboard (--grid views per side, 2..32, default 8);\n"
     "                               --forest N: N instances of the tree on a jittered grid,\n"
     "                               each at the leaf level its distance allows (lod; with\n"
-    "                               billboard, billboards far away; full: every leaf), framed\n"
-    "                               as a whole or by --camera\n"
+    "                               billboard or impostor, those far away; adaptive: the 16\n"
+    "                               nearest with a per-leaf cut each; full: every leaf),\n"
+    "                               framed as a whole or by --camera; --fade F cross-fades\n"
+    "                               two levels over F times each switch distance, 0..4,\n"
+    "                               default 0.1 (0: hard switches)\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle|arc]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -335,6 +341,11 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
             return usage_error("--forest takes a whole number of trees from 1 to 4194304, not "
                                "'%s'", val);
         r->forest = u;
+    } else if (strcmp(opt, "--fade") == 0) {
+        if (!parse_double(val, &r->fade) || !(r->fade >= 0.0) || r->fade > XYL_FOREST_MAX_FADE)
+            return usage_error("--fade takes a share of the switch distance from 0 to 4, not "
+                               "'%s'", val);
+        r->has_fade = true;
     } else if (strcmp(opt, "--screenshot") == 0) {
         r->screenshot = val;
     } else if (strcmp(opt, "--size") == 0) {
@@ -1427,6 +1438,8 @@ static xyl_result billboard_error(const options *o, tree_gl *t, xyl_billboard_gl
     return r;
 }
 
+#define FOREST_PER_LEAF 16 /* --forest with --foliage adaptive: the trees with a cut of their own */
+
 /* --forest N: the tree as a species of xyl_forest_gl, N instances on a jittered grid
  * (spacing 1.1 times the tree's width, scales 0.8 to 1.2, seed 1), the camera framing the
  * whole grid (or --camera); one frame to warm up, the second timed to glFinish. */
@@ -1441,6 +1454,8 @@ static xyl_result forest_frame(const options *o, render_job *j, xyl_forest_gl *f
     fr.error_px = o->render.error_px > 0.0 ? (float)o->render.error_px : 0.5f;
     fr.mode = o->render.leaves == LEAVES_FULL ? XYL_FOREST_FULL :
               o->render.leaves == LEAVES_BILLBOARD ? XYL_FOREST_LOD : XYL_FOREST_LEAF_LEVELS;
+    fr.fade = o->render.has_fade ? (float)o->render.fade : 0.1f;
+    fr.per_leaf = o->render.leaves == LEAVES_ADAPTIVE ? FOREST_PER_LEAF : 0;
     memcpy(fr.light_dir, j->frame.light_dir, sizeof fr.light_dir);
     fr.leaf_color[0] = fr.leaf_color[1] = fr.leaf_color[2] = fr.leaf_color[3] = 1.0f;
     memcpy(fr.stem_color, j->frame.color, sizeof fr.stem_color);
@@ -1531,10 +1546,11 @@ static xyl_result render_forest(const options *o, render_job *j, xyl_billboard_g
                (unsigned long long)st.visible, (double)spacing, info.level_count - 1,
                info.has_billboard ? " and billboards" : "");
         printf("forest frame: %.3f ms (wall, to glFinish), LOD choice %.3f ms CPU, upload "
-               "%.3f ms; %llu draws, %llu leaves, %llu triangles, %llu with stems\n", ms,
-               st.choose_ms, st.upload_ms, (unsigned long long)st.draws,
-               (unsigned long long)st.leaves, (unsigned long long)st.triangles,
-               (unsigned long long)st.with_stems);
+               "%.3f ms; %llu draws, %llu leaves, %llu triangles, %llu with stems, %llu "
+               "cross-fading, %llu with a per-leaf cut\n", ms, st.choose_ms, st.upload_ms,
+               (unsigned long long)st.draws, (unsigned long long)st.leaves,
+               (unsigned long long)st.triangles, (unsigned long long)st.with_stems,
+               (unsigned long long)st.faded, (unsigned long long)st.per_leaf);
         printf("level leaves (error):");
         for (uint32_t k = 0; k < info.level_count; ++k)
             printf(" %u (%.3g)", info.level_leaves[k], (double)info.level_error[k]);
@@ -1544,7 +1560,8 @@ static xyl_result render_forest(const options *o, render_job *j, xyl_billboard_g
         for (uint32_t k = 0; k < info.level_count; ++k)
             printf(" %llu", (unsigned long long)st.per_level[k]);
         if (info.has_billboard)
-            printf(", billboard %llu", (unsigned long long)st.per_level[XYL_FOREST_MAX_LEVELS]);
+            printf(", %s %llu", o->render.impostor ? "impostor" : "billboard",
+                   (unsigned long long)st.per_level[XYL_FOREST_MAX_LEVELS]);
         printf("\n");
     }
     xyl_forest_gl_destroy(forest);
@@ -1764,10 +1781,11 @@ static int cmd_render(const options *o)
         return usage_error("%s", "--planes is the cross billboard's");
     if (ro->grid && ro->billboard_kind != 4 && !ro->impostor)
         return usage_error("%s", "--grid is the octahedral billboard's (--foliage impostor)");
-    if (ro->forest && (ro->vulkan || ro->leaves == LEAVES_NONE || ro->leaves == LEAVES_ADAPTIVE ||
-                       ro->billboard_error || ro->impostor || ro->billboard_kind == 4))
-        return usage_error("%s", "--forest draws with the GL backend, with --foliage lod, full "
-                                 "or billboard (not octahedral), without --billboard-error");
+    if (ro->forest && (ro->vulkan || ro->leaves == LEAVES_NONE || ro->billboard_error))
+        return usage_error("%s", "--forest draws with the GL backend, with --foliage lod, "
+                                 "adaptive, full, billboard or impostor, without "
+                                 "--billboard-error");
+    if (ro->has_fade && !ro->forest) return usage_error("%s", "--fade goes with --forest");
     render_job j;
     memset(&j, 0, sizeof j);
     j.image.width = ro->width ? ro->width : 1024;

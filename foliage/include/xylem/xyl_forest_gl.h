@@ -24,6 +24,8 @@
  *     memcpy(fr.view_proj, view_proj, sizeof fr.view_proj);
  *     memcpy(fr.eye, eye, sizeof fr.eye);
  *     fr.viewport_height = 1080; fr.error_px = 1.0f;
+ *     fr.fade = 0.25f;          // optional: cross-fade levels over 25% past each switch
+ *     fr.per_leaf = 16;         // optional: the 16 nearest trees get a per-leaf cut each
  *     xyl_forest_gl_stats st;
  *     xyl_forest_gl_draw(forest, &fr, &st, &diag);
  *     xyl_forest_gl_destroy(forest);
@@ -48,7 +50,30 @@
  * leaf (id % range length) and the instance (id / range length). Stems (the base mesh,
  * per-vertex normals) are drawn for the instances at the levels whose error is under the
  * species' stem_width (where the thickest stem is still wider than the budget), one instanced
- * draw per species; billboards one instanced draw per species.
+ * draw per species; billboards one instanced draw per species (a quad per plane and instance;
+ * an octahedral impostor one quad per instance, its three nearest views blended).
+ *
+ * Cross-fades (frame.fade > 0): the level is then a function of the distance alone, with no
+ * hysteresis, and within a band past each threshold (the billboard's included) the instance is
+ * drawn at both levels, the coarser one's share t rising from 0 to 1 across the band in the
+ * 64 steps of the 8 x 8 dither (shaders/xyl_dither.h): the finer copy keeps the pixels whose
+ * threshold is >= t, the coarser one those below, so every pixel shows exactly one of them.
+ * A still camera draws the same pixels every frame; a moving one changes 1/64 of an
+ * instance's pixels per 1/64 of the band it crosses, never a whole tree at once. The stored
+ * instance stays 16 bytes and keeps its level (the coarser one inside a band). The per-frame
+ * cost: 3 bytes of scratch per instance (the second bucket and the share), and the sorted
+ * copy that is uploaded holds a faded instance twice (16 more bytes each), its LOD byte
+ * replaced by the copy's share (the shaders read the keep range from it). Stems follow the
+ * leaf level they are drawn with.
+ *
+ * Per-leaf instances (frame.per_leaf = M > 0): the M visible instances nearest the eye that
+ * are at a leaf level leave their buckets and each gets the per-leaf cut of
+ * xyl_foliage_gl_draw_adaptive (foliage_cut.comp: per cluster of the collapse forest, the
+ * coarsest leaf within the budget), computed on the GPU from the eye turned and scaled into
+ * the instance's frame, then one indirect draw of its list and their stems. Per frame: M
+ * compute dispatches and M draws; a max-heap picks them in the choice's loop (O(n log M)).
+ * They are drawn without a fade: an instance entering or leaving the nearest M switches
+ * between its cut and its level, both within the budget.
  *
  * Every call checks its input before its first GL call, and must come from the thread where
  * the context is current.
@@ -82,8 +107,9 @@ typedef struct xyl_forest_gl_species_desc {
                                      with its per-vertex normals; copied. Its positions are
                                      taken in the species' own coordinates, like the leaves'
                                      (its origin is not used: instances place the tree) */
-    xyl_billboard_gl *billboard;  /* optional, borrowed: must outlive the forest; spherical,
-                                     cylindrical or cross (an octahedral one is refused) */
+    xyl_billboard_gl *billboard;  /* optional, borrowed: must outlive the forest; any kind
+                                     (an octahedral impostor is relit and parallax-corrected
+                                     per instance in the instance's own frame) */
     float billboard_error;        /* world units the billboard may be off the tree; default
                                      (0): the radius of the tree about its axis (flattening the
                                      crown onto planes through the axis moves no point
@@ -114,7 +140,22 @@ typedef struct xyl_forest_gl_frame {
     float leaf_color[4];      /* default (all 0): 0.42, 0.62, 0.25, 1 */
     float stem_color[4];      /* default (all 0): 0.47, 0.35, 0.24, 1 */
     float alpha_cutoff;       /* (0, 1]; default (0): 0.5 */
+    uint32_t per_leaf;        /* the per_leaf visible instances nearest the eye (at a leaf
+                                 level, not a billboard) get a per-leaf cut of their own
+                                 instead of a level (see "Per-leaf instances" above); at
+                                 most XYL_FOREST_MAX_PER_LEAF; default (0): none. Not in
+                                 XYL_FOREST_FULL */
+    float fade;               /* the cross-fade band, a fraction of each switch distance:
+                                 an instance between level k's threshold d_k and
+                                 (1 + fade) d_k (cut at the next threshold) is drawn at
+                                 level k and the finer one before it with complementary
+                                 screen-door dither (see "Cross-fades" above); [0,
+                                 XYL_FOREST_MAX_FADE]; default (0): hard switches with
+                                 the desc's hysteresis. Not in XYL_FOREST_FULL */
 } xyl_forest_gl_frame;
+
+#define XYL_FOREST_MAX_FADE 4.0f
+#define XYL_FOREST_MAX_PER_LEAF 64
 
 typedef struct xyl_forest_gl_stats {
     uint64_t draws;           /* GL draw calls */
@@ -123,7 +164,14 @@ typedef struct xyl_forest_gl_stats {
     uint64_t instances;       /* all */
     uint64_t visible;         /* past the frustum test */
     uint64_t per_level[XYL_FOREST_MAX_LEVELS + 1]; /* visible instances per leaf level; the
-                                                       last entry: billboards */
+                                                       last entry: billboards. An instance
+                                                       in a fade counts at both levels */
+    uint64_t faded;           /* visible instances inside a fade band, drawn twice */
+    uint64_t per_leaf;        /* visible instances drawn with a cut of their own (not in
+                                 per_level); xyl_forest_gl_draw reads their cuts' sizes
+                                 back from the GPU into leaves and triangles (a wait for
+                                 the GPU; pass stats NULL to avoid it), xyl_forest_gl_choose
+                                 does not count their leaves */
     uint64_t with_stems;      /* visible instances drawn with stems */
     uint32_t bytes_per_instance; /* XYL_FOREST_INSTANCE_SIZE */
     double choose_ms;         /* CPU: the LOD choice, frustum test and bucketing */
@@ -154,7 +202,7 @@ XYL_API void xyl_forest_gl_destroy(xyl_forest_gl *forest);
 /* Adds a species; *index receives its number (0, 1, ...). Errors: XYL_ERR_INVALID_ARGUMENT
  * (NULL forest, desc, foliage or index; a foliage with no leaves, a malformed table, a stem
  * mesh without triangles or normals, a negative billboard_error or stem_width, 64 species
- * already), XYL_ERR_UNSUPPORTED (an octahedral billboard), XYL_ERR_NON_FINITE, those of
+ * already), XYL_ERR_NON_FINITE, those of
  * xyl_foliage_pack_gpu, XYL_ERR_LIMIT_EXCEEDED (a leaf
  * array over the driver's storage block), XYL_ERR_OUT_OF_MEMORY. On failure nothing changes. */
 XYL_API xyl_result xyl_forest_gl_add_species(xyl_forest_gl *forest,
@@ -188,8 +236,11 @@ XYL_API xyl_result xyl_forest_gl_choose(xyl_forest_gl *forest, const xyl_forest_
  * current viewport: depth test (GL_LESS) and writes on, no face culling (restored), no
  * blending. stats may be NULL. Errors: XYL_ERR_INVALID_ARGUMENT (NULL forest or frame, no
  * instances, an all-zero matrix, a budget <= 0, fovy outside (0, pi) when given, an unknown
- * mode, a cutoff outside [0, 1]), XYL_ERR_NON_FINITE, XYL_ERR_OUT_OF_MEMORY (GL). Uses storage
- * buffer bindings 0 and 4 and texture units 0 and 1. */
+ * mode, a cutoff outside [0, 1], a fade outside [0, XYL_FOREST_MAX_FADE], per_leaf over
+ * XYL_FOREST_MAX_PER_LEAF), XYL_ERR_NON_FINITE, XYL_ERR_LIMIT_EXCEEDED (more visible
+ * instances, or per-leaf lists, than the driver's storage block holds), XYL_ERR_OUT_OF_MEMORY
+ * (GL). Uses storage buffer bindings 0 and 4 (with per_leaf also 1 to 3; the draw-indirect
+ * buffer binding is restored) and texture units 0 and 1. */
 XYL_API xyl_result xyl_forest_gl_draw(xyl_forest_gl *forest, const xyl_forest_gl_frame *frame,
                                       xyl_forest_gl_stats *stats, xyl_diag *diag);
 
