@@ -1,0 +1,205 @@
+/* foliage/'s shared Vulkan helpers (foliage_vk_util.h). */
+#include <string.h>
+
+#include "foliage_vk_util.h"
+
+/* Vulkan's host allocations through the caller's allocator (core's aligned blocks). */
+static void *VKAPI_PTR vk_alloc(void *user, size_t size, size_t align,
+                                VkSystemAllocationScope scope)
+{
+    (void)scope;
+    return xyl__alloc_aligned(user, size, align);
+}
+
+static void VKAPI_PTR vk_free(void *user, void *p)
+{
+    xyl__free_aligned(user, p);
+}
+
+static void *VKAPI_PTR vk_realloc(void *user, void *old, size_t size, size_t align,
+                                  VkSystemAllocationScope scope)
+{
+    (void)scope;
+    return xyl__realloc_aligned(user, old, size, align);
+}
+
+void xyl__fvk_init(xyl__fvk *vk, const xyl_allocator *alloc, VkPhysicalDevice physical,
+                   VkDevice device, VkQueue queue)
+{
+    vk->alloc = *alloc;
+    if (alloc->alloc) { /* else the driver's default: as good as malloc */
+        vk->callbacks.pUserData = &vk->alloc;
+        vk->callbacks.pfnAllocation = vk_alloc;
+        vk->callbacks.pfnReallocation = vk_realloc;
+        vk->callbacks.pfnFree = vk_free;
+        vk->vkalloc = &vk->callbacks;
+    }
+    vk->physical = physical;
+    vk->device = device;
+    vk->queue = queue;
+}
+
+xyl_result xyl__fvk_fail(xyl_diag *diag, VkResult r, const char *what)
+{
+    if (r == VK_ERROR_OUT_OF_HOST_MEMORY || r == VK_ERROR_OUT_OF_DEVICE_MEMORY)
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "%s: out of memory (%d)", what,
+                         (int)r);
+    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s failed: VkResult %d", what, (int)r);
+}
+
+#define VK_TRY(call, what)                                                                     \
+    do {                                                                                       \
+        VkResult vr_ = (call);                                                                 \
+        if (vr_ != VK_SUCCESS) return xyl__fvk_fail(diag, vr_, what);                          \
+    } while (0)
+
+xyl_result xyl__fvk_check_device(xyl__fvk *vk, uint32_t queue_family,
+                                 VkSampleCountFlagBits samples, xyl_diag *diag)
+{
+    VkPhysicalDeviceProperties *p = &vk->properties;
+    vkGetPhysicalDeviceProperties(vk->physical, p);
+    if (p->apiVersion < VK_API_VERSION_1_2)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s offers Vulkan %u.%u, not 1.2",
+                         p->deviceName, VK_API_VERSION_MAJOR(p->apiVersion),
+                         VK_API_VERSION_MINOR(p->apiVersion));
+    uint32_t nq = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(vk->physical, &nq, NULL);
+    VkQueueFamilyProperties q[32];
+    if (nq > 32) nq = 32;
+    vkGetPhysicalDeviceQueueFamilyProperties(vk->physical, &nq, q);
+    if (queue_family >= nq || !(q[queue_family].queueFlags & VK_QUEUE_GRAPHICS_BIT))
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
+                         "queue family %u of %s has no graphics queues", queue_family,
+                         p->deviceName);
+    VkSampleCountFlags offered =
+        p->limits.framebufferColorSampleCounts & p->limits.framebufferDepthSampleCounts;
+    if (!(offered & samples))
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s does not offer %u samples",
+                         p->deviceName, (unsigned)samples);
+    vkGetPhysicalDeviceMemoryProperties(vk->physical, &vk->memory);
+    return XYL_OK;
+}
+
+xyl_result xyl__fvk_make_pool(xyl__fvk *vk, uint32_t queue_family, xyl_diag *diag)
+{
+    VkCommandPoolCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    ci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
+    ci.queueFamilyIndex = queue_family;
+    VK_TRY(vkCreateCommandPool(vk->device, &ci, vk->vkalloc, &vk->commands), "vkCreateCommandPool");
+    return XYL_OK;
+}
+
+void xyl__fvk_finish(xyl__fvk *vk)
+{
+    if (vk->commands) vkDestroyCommandPool(vk->device, vk->commands, vk->vkalloc);
+    vk->commands = VK_NULL_HANDLE;
+}
+
+xyl_result xyl__fvk_allocate(const xyl__fvk *vk, VkMemoryRequirements req,
+                             VkMemoryPropertyFlags need, VkDeviceMemory *out, xyl_diag *diag)
+{
+    uint32_t type = 0;
+    while (type < vk->memory.memoryTypeCount &&
+           (!(req.memoryTypeBits & (1u << type)) ||
+            (vk->memory.memoryTypes[type].propertyFlags & need) != need))
+        ++type;
+    if (type == vk->memory.memoryTypeCount)
+        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no memory type fits a resource");
+    VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    ai.allocationSize = req.size;
+    ai.memoryTypeIndex = type;
+    VK_TRY(vkAllocateMemory(vk->device, &ai, vk->vkalloc, out), "vkAllocateMemory");
+    return XYL_OK;
+}
+
+void xyl__fvk_buffer_destroy(const xyl__fvk *vk, xyl__fvk_buffer *b)
+{
+    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, vk->vkalloc);
+    if (b->memory) vkFreeMemory(vk->device, b->memory, vk->vkalloc);
+    memset(b, 0, sizeof *b);
+}
+
+xyl_result xyl__fvk_buffer_create(const xyl__fvk *vk, VkDeviceSize size,
+                                  VkBufferUsageFlags usage, const void *data,
+                                  xyl__fvk_buffer *out, xyl_diag *diag)
+{
+    xyl__fvk_buffer b = {0};
+    VkBufferCreateInfo bi = {.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    bi.size = size;
+    bi.usage = usage;
+    VkResult vr = vkCreateBuffer(vk->device, &bi, vk->vkalloc, &b.buffer);
+    if (vr != VK_SUCCESS) return xyl__fvk_fail(diag, vr, "vkCreateBuffer");
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(vk->device, b.buffer, &req);
+    xyl_result r = xyl__fvk_allocate(vk, req,
+                                     VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
+                                         VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                                     &b.memory, diag);
+    void *map = NULL;
+    if (r == XYL_OK && (vr = vkBindBufferMemory(vk->device, b.buffer, b.memory, 0)) != VK_SUCCESS)
+        r = xyl__fvk_fail(diag, vr, "vkBindBufferMemory");
+    if (r == XYL_OK && (vr = vkMapMemory(vk->device, b.memory, 0, size, 0, &map)) != VK_SUCCESS)
+        r = xyl__fvk_fail(diag, vr, "vkMapMemory");
+    if (r != XYL_OK) {
+        xyl__fvk_buffer_destroy(vk, &b);
+        return r;
+    }
+    if (data) memcpy(map, data, (size_t)size);
+    else memset(map, 0, (size_t)size);
+    vkUnmapMemory(vk->device, b.memory);
+    *out = b;
+    return XYL_OK;
+}
+
+xyl_result xyl__fvk_shader(const xyl__fvk *vk, const unsigned char *code, size_t size,
+                           VkShaderModule *out, xyl_diag *diag)
+{
+    VkShaderModuleCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    si.codeSize = size;
+    si.pCode = (const uint32_t *)(const void *)code; /* the embedded arrays are 4-byte aligned */
+    VK_TRY(vkCreateShaderModule(vk->device, &si, vk->vkalloc, out), "vkCreateShaderModule");
+    return XYL_OK;
+}
+
+xyl_result xyl__fvk_begin_once(const xyl__fvk *vk, VkCommandBuffer *cmd, xyl_diag *diag)
+{
+    VkCommandBufferAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = vk->commands;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    VK_TRY(vkAllocateCommandBuffers(vk->device, &ai, cmd), "vkAllocateCommandBuffers");
+    VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VkResult vr = vkBeginCommandBuffer(*cmd, &bi);
+    if (vr != VK_SUCCESS) {
+        vkFreeCommandBuffers(vk->device, vk->commands, 1, cmd);
+        return xyl__fvk_fail(diag, vr, "vkBeginCommandBuffer");
+    }
+    return XYL_OK;
+}
+
+xyl_result xyl__fvk_submit_wait(const xyl__fvk *vk, VkCommandBuffer cmd, xyl_diag *diag)
+{
+    VkFence fence = VK_NULL_HANDLE;
+    VkFenceCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkResult vr = vkEndCommandBuffer(cmd);
+    const char *what = "vkEndCommandBuffer";
+    if (vr == VK_SUCCESS) {
+        vr = vkCreateFence(vk->device, &fi, vk->vkalloc, &fence);
+        what = "vkCreateFence";
+    }
+    if (vr == VK_SUCCESS) {
+        VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        si.commandBufferCount = 1;
+        si.pCommandBuffers = &cmd;
+        vr = vkQueueSubmit(vk->queue, 1, &si, fence);
+        what = "vkQueueSubmit";
+    }
+    if (vr == VK_SUCCESS) {
+        vr = vkWaitForFences(vk->device, 1, &fence, VK_TRUE, UINT64_MAX);
+        what = "vkWaitForFences";
+    }
+    if (fence) vkDestroyFence(vk->device, fence, vk->vkalloc);
+    vkFreeCommandBuffers(vk->device, vk->commands, 1, &cmd);
+    return vr == VK_SUCCESS ? XYL_OK : xyl__fvk_fail(diag, vr, what);
+}

@@ -1,0 +1,52 @@
+/* What foliage/'s Vulkan objects share: the device they live on, the caller's allocator as
+ * VkAllocationCallbacks, memory, host-visible buffers, one-off submissions and the checks of
+ * a device. Not installed. */
+#ifndef XYL_FOLIAGE_VK_UTIL_H
+#define XYL_FOLIAGE_VK_UTIL_H
+
+#include <vulkan/vulkan.h>
+
+#include "foliage_internal.h"
+
+typedef struct xyl__fvk {
+    xyl_allocator alloc;
+    VkAllocationCallbacks callbacks;
+    const VkAllocationCallbacks *vkalloc; /* &callbacks with a caller's allocator, else NULL */
+    VkPhysicalDevice physical;
+    VkDevice device;
+    VkQueue queue;
+    VkCommandPool commands; /* transient, of the queue's family */
+    VkPhysicalDeviceMemoryProperties memory;
+    VkPhysicalDeviceProperties properties;
+} xyl__fvk;
+
+typedef struct xyl__fvk_buffer {
+    VkBuffer buffer;
+    VkDeviceMemory memory;
+} xyl__fvk_buffer;
+
+/* Takes the allocator (vk must not move afterwards: the callbacks point into it). */
+void xyl__fvk_init(xyl__fvk *vk, const xyl_allocator *alloc, VkPhysicalDevice physical,
+                   VkDevice device, VkQueue queue);
+/* A VkResult as a result code and message: OUT_OF_MEMORY or UNSUPPORTED. */
+xyl_result xyl__fvk_fail(xyl_diag *diag, VkResult r, const char *what);
+/* The device's version (1.2), graphics on the queue family, the sample count offered; fills
+ * vk->properties and vk->memory. */
+xyl_result xyl__fvk_check_device(xyl__fvk *vk, uint32_t queue_family,
+                                 VkSampleCountFlagBits samples, xyl_diag *diag);
+xyl_result xyl__fvk_make_pool(xyl__fvk *vk, uint32_t queue_family, xyl_diag *diag);
+xyl_result xyl__fvk_allocate(const xyl__fvk *vk, VkMemoryRequirements req,
+                             VkMemoryPropertyFlags need, VkDeviceMemory *out, xyl_diag *diag);
+/* A host-visible, coherent buffer holding data (or zeros: NULL) of size bytes. */
+xyl_result xyl__fvk_buffer_create(const xyl__fvk *vk, VkDeviceSize size,
+                                  VkBufferUsageFlags usage, const void *data,
+                                  xyl__fvk_buffer *out, xyl_diag *diag);
+void xyl__fvk_buffer_destroy(const xyl__fvk *vk, xyl__fvk_buffer *b);
+xyl_result xyl__fvk_shader(const xyl__fvk *vk, const unsigned char *code, size_t size,
+                           VkShaderModule *out, xyl_diag *diag);
+/* A one-time command buffer of the pool, begun; submit_wait ends, submits, waits and frees. */
+xyl_result xyl__fvk_begin_once(const xyl__fvk *vk, VkCommandBuffer *cmd, xyl_diag *diag);
+xyl_result xyl__fvk_submit_wait(const xyl__fvk *vk, VkCommandBuffer cmd, xyl_diag *diag);
+void xyl__fvk_finish(xyl__fvk *vk); /* the command pool */
+
+#endif
