@@ -324,7 +324,8 @@ static int setup(void **state)
     for (size_t i = 0; i < s->tree->leaf_count; ++i) {
         const xyl_leaf *l = &s->tree->leaves[i];
         const float c[3] = {l->center.x, l->center.y, l->center.z};
-        const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x), fabsf(l->side.y) + fabsf(l->axis.y),
+        const float e[3] = {fabsf(l->side.x) + fabsf(l->axis.x),
+                            fabsf(l->side.y) + fabsf(l->axis.y),
                             fabsf(l->side.z) + fabsf(l->axis.z)};
         for (int k = 0; k < 3; ++k) {
             s->lo[k] = fminf(s->lo[k], c[k] - e[k]);
@@ -688,7 +689,8 @@ static void baked_views_read_back_as_on_gl(void **state)
 static void each_kind_draws_as_on_gl(void **state)
 {
     suite *s = need_both(state);
-    uint8_t *g = malloc(4 * SIDE * SIDE), *v = malloc(4 * SIDE * SIDE), *t = malloc(4 * SIDE * SIDE);
+    uint8_t *g = malloc(4 * SIDE * SIDE), *v = malloc(4 * SIDE * SIDE),
+            *t = malloc(4 * SIDE * SIDE);
     assert_true(g && v && t);
     shot p = {0};
     frame_camera(s, 0.52f, 0.35f, &p);

@@ -21,7 +21,8 @@ xyl_result xyl__billboard_check(const xyl__billboard_params *d, xyl_diag *diag)
     if (d->kind != XYL_BILLBOARD_CROSS && d->planes > 1)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "%u planes: only a cross billboard has more than one", d->planes);
-    if (d->resolution < XYL_BILLBOARD_MIN_RESOLUTION || d->resolution > XYL_BILLBOARD_MAX_RESOLUTION)
+    if (d->resolution < XYL_BILLBOARD_MIN_RESOLUTION ||
+        d->resolution > XYL_BILLBOARD_MAX_RESOLUTION)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "a billboard resolution of %u: from %d to %d texels", d->resolution,
                          XYL_BILLBOARD_MIN_RESOLUTION, XYL_BILLBOARD_MAX_RESOLUTION);
@@ -88,7 +89,8 @@ void xyl__billboard_view_frame(const xyl__billboard_shape *bb, uint32_t v, float
 }
 
 /* Orthographic world-to-clip matrix (column-major, GL clip) looking along -d at the centre,
- * the quad's rectangle (2 * half[0] by 2 * half[1]) filling the view and depth [-radius, radius] around the centre. */
+ * the quad's rectangle (2 * half[0] by 2 * half[1]) filling the view and depth [-radius, radius]
+ * around the centre. */
 static void bake_matrix(const xyl__billboard_shape *bb, const float right[3], const float up[3],
                         const float d[3], float radius, float m[16])
 {

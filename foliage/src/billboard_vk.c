@@ -32,12 +32,6 @@ _Static_assert(offsetof(xyl_billboard_vk_constants, half_size) == 32, "std140: h
 _Static_assert(offsetof(xyl_billboard_vk_constants, kind) == 40, "std140: kind");
 _Static_assert(offsetof(xyl_billboard_vk_constants, to_coverage) == 48, "std140: to_coverage");
 
-#define VK_TRY(call, what)                                                                     \
-    do {                                                                                       \
-        VkResult vr_ = (call);                                                                 \
-        if (vr_ != VK_SUCCESS) return xyl__fvk_fail(diag, vr_, what);                          \
-    } while (0)
-
 typedef struct vk_image {
     VkImage image;
     VkDeviceMemory memory;
@@ -133,12 +127,12 @@ static xyl_result image_create(const xyl__fvk *vk, const VkImageCreateInfo *ii,
                                VkImageViewType type, VkImageAspectFlags aspect, vk_image *out,
                                xyl_diag *diag)
 {
-    VK_TRY(vkCreateImage(vk->device, ii, vk->vkalloc, &out->image), "vkCreateImage");
+    XYL__FVK_TRY(vkCreateImage(vk->device, ii, vk->vkalloc, &out->image), "vkCreateImage");
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(vk->device, out->image, &req);
     xyl_result r = xyl__fvk_allocate(vk, req, 0, &out->memory, diag);
     if (r != XYL_OK) return r;
-    VK_TRY(vkBindImageMemory(vk->device, out->image, out->memory, 0), "vkBindImageMemory");
+    XYL__FVK_TRY(vkBindImageMemory(vk->device, out->image, out->memory, 0), "vkBindImageMemory");
     VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
     vi.image = out->image;
     vi.viewType = type;
@@ -146,7 +140,7 @@ static xyl_result image_create(const xyl__fvk *vk, const VkImageCreateInfo *ii,
     vi.subresourceRange.aspectMask = aspect;
     vi.subresourceRange.levelCount = ii->mipLevels;
     vi.subresourceRange.layerCount = ii->arrayLayers;
-    VK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view), "vkCreateImageView");
+    XYL__FVK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view), "vkCreateImageView");
     return XYL_OK;
 }
 
@@ -242,7 +236,7 @@ static xyl_result layouts(xyl_billboard_vk *bb, xyl_diag *diag)
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     li.bindingCount = 4;
     li.pBindings = b;
-    VK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &bb->set_layout),
+    XYL__FVK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &bb->set_layout),
            "vkCreateDescriptorSetLayout");
     VkPushConstantRange pc = {both, 0, XYL_BILLBOARD_VK_PUSH_SIZE};
     VkPipelineLayoutCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
@@ -250,7 +244,7 @@ static xyl_result layouts(xyl_billboard_vk *bb, xyl_diag *diag)
     pi.pSetLayouts = &bb->set_layout;
     pi.pushConstantRangeCount = 1;
     pi.pPushConstantRanges = &pc;
-    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &bb->layout),
+    XYL__FVK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &bb->layout),
            "vkCreatePipelineLayout");
     VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
                                      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
@@ -259,13 +253,13 @@ static xyl_result layouts(xyl_billboard_vk *bb, xyl_diag *diag)
     dp.maxSets = 1;
     dp.poolSizeCount = 3;
     dp.pPoolSizes = sizes;
-    VK_TRY(vkCreateDescriptorPool(vk->device, &dp, vk->vkalloc, &bb->pool),
+    XYL__FVK_TRY(vkCreateDescriptorPool(vk->device, &dp, vk->vkalloc, &bb->pool),
            "vkCreateDescriptorPool");
     VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     ai.descriptorPool = bb->pool;
     ai.descriptorSetCount = 1;
     ai.pSetLayouts = &bb->set_layout;
-    VK_TRY(vkAllocateDescriptorSets(vk->device, &ai, &bb->set), "vkAllocateDescriptorSets");
+    XYL__FVK_TRY(vkAllocateDescriptorSets(vk->device, &ai, &bb->set), "vkAllocateDescriptorSets");
     return XYL_OK;
 }
 
@@ -333,8 +327,9 @@ static xyl_result pipeline(const xyl_billboard_vk *bb, const xyl_billboard_vk_de
         ri.depthAttachmentFormat = d->depth_format;
         pi.pNext = &ri;
     }
-    VK_TRY(vkCreateGraphicsPipelines(bb->vk.device, VK_NULL_HANDLE, 1, &pi, bb->vk.vkalloc, out),
-           "vkCreateGraphicsPipelines");
+    XYL__FVK_TRY(
+        vkCreateGraphicsPipelines(bb->vk.device, VK_NULL_HANDLE, 1, &pi, bb->vk.vkalloc, out),
+        "vkCreateGraphicsPipelines");
     return XYL_OK;
 }
 
@@ -368,7 +363,7 @@ static xyl_result objects(xyl_billboard_vk *bb, const xyl_billboard_vk_desc *d, 
     si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
     si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     si.maxLod = VK_LOD_CLAMP_NONE;
-    VK_TRY(vkCreateSampler(vk->device, &si, vk->vkalloc, &bb->sampler), "vkCreateSampler");
+    XYL__FVK_TRY(vkCreateSampler(vk->device, &si, vk->vkalloc, &bb->sampler), "vkCreateSampler");
     const xyl__billboard_shape *s = &bb->shape;
     xyl_billboard_vk_constants c;
     memset(&c, 0, sizeof c);
@@ -448,7 +443,7 @@ static xyl_result bake_pass(const xyl__fvk *vk, bake_target *t, xyl_diag *diag)
     ri.pSubpasses = &sub;
     ri.dependencyCount = 1;
     ri.pDependencies = &dep;
-    VK_TRY(vkCreateRenderPass(vk->device, &ri, vk->vkalloc, &t->pass), "vkCreateRenderPass");
+    XYL__FVK_TRY(vkCreateRenderPass(vk->device, &ri, vk->vkalloc, &t->pass), "vkCreateRenderPass");
     return XYL_OK;
 }
 
@@ -477,7 +472,7 @@ static xyl_result target_make(const xyl__fvk *vk, uint32_t n, bake_target *t, xy
     fi.pAttachments = views;
     fi.width = fi.height = n;
     fi.layers = 1;
-    VK_TRY(vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &t->framebuffer),
+    XYL__FVK_TRY(vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &t->framebuffer),
            "vkCreateFramebuffer");
     VkDeviceSize bytes = 8u * (VkDeviceSize)n * n;
     r = xyl__fvk_buffer_create(vk, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, NULL, &t->readback,
@@ -590,7 +585,8 @@ static xyl_result stage_maps(const xyl_billboard_vk *bb, const bake_target *t, u
     uint32_t n = bb->shape.resolution;
     size_t texels = (size_t)n * n, row = 4u * (size_t)n;
     void *map = NULL;
-    VK_TRY(vkMapMemory(vk->device, t->readback.memory, 0, VK_WHOLE_SIZE, 0, &map), "vkMapMemory");
+    XYL__FVK_TRY(vkMapMemory(vk->device, t->readback.memory, 0, VK_WHOLE_SIZE, 0, &map),
+                 "vkMapMemory");
     const uint8_t *src = map;
     for (uint32_t y = 0; y < n; ++y) {
         memcpy(rgba + (size_t)(n - 1 - y) * row, src + (size_t)y * row, row);
@@ -598,7 +594,8 @@ static xyl_result stage_maps(const xyl_billboard_vk *bb, const bake_target *t, u
     }
     vkUnmapMemory(vk->device, t->readback.memory);
     xyl__billboard_maps(&bb->shape, depth, rgba, normal);
-    VK_TRY(vkMapMemory(vk->device, t->staging.memory, 0, VK_WHOLE_SIZE, 0, &map), "vkMapMemory");
+    XYL__FVK_TRY(vkMapMemory(vk->device, t->staging.memory, 0, VK_WHOLE_SIZE, 0, &map),
+                 "vkMapMemory");
     memcpy(map, rgba, 4 * texels);
     memcpy((uint8_t *)map + 4 * texels, normal, 4 * texels);
     vkUnmapMemory(vk->device, t->staging.memory);
@@ -615,8 +612,8 @@ static xyl_result bake_views(xyl_billboard_vk *bb, xyl_billboard_vk_draw_fn draw
     float *depth = xyl__alloc_array(&a, texels, sizeof *depth);
     bake_target t;
     memset(&t, 0, sizeof t);
-    xyl_result r = maps && depth ? XYL_OK
-                                 : xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    xyl_result r =
+        maps && depth ? XYL_OK : xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     if (r == XYL_OK) r = target_make(vk, bb->shape.resolution, &t, diag);
     for (uint32_t v = 0; r == XYL_OK && v < bb->shape.views; ++v) {
         r = render_view(bb, &t, v, draw, user, diag);

@@ -47,12 +47,6 @@ xyl_result xyl__fvk_fail(xyl_diag *diag, VkResult r, const char *what)
     return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s failed: VkResult %d", what, (int)r);
 }
 
-#define VK_TRY(call, what)                                                                     \
-    do {                                                                                       \
-        VkResult vr_ = (call);                                                                 \
-        if (vr_ != VK_SUCCESS) return xyl__fvk_fail(diag, vr_, what);                          \
-    } while (0)
-
 xyl_result xyl__fvk_check_device(xyl__fvk *vk, uint32_t queue_family,
                                  VkSampleCountFlagBits samples, xyl_diag *diag)
 {
@@ -85,7 +79,8 @@ xyl_result xyl__fvk_make_pool(xyl__fvk *vk, uint32_t queue_family, xyl_diag *dia
     VkCommandPoolCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     ci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
     ci.queueFamilyIndex = queue_family;
-    VK_TRY(vkCreateCommandPool(vk->device, &ci, vk->vkalloc, &vk->commands), "vkCreateCommandPool");
+    XYL__FVK_TRY(vkCreateCommandPool(vk->device, &ci, vk->vkalloc, &vk->commands),
+                 "vkCreateCommandPool");
     return XYL_OK;
 }
 
@@ -108,7 +103,7 @@ xyl_result xyl__fvk_allocate(const xyl__fvk *vk, VkMemoryRequirements req,
     VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = req.size;
     ai.memoryTypeIndex = type;
-    VK_TRY(vkAllocateMemory(vk->device, &ai, vk->vkalloc, out), "vkAllocateMemory");
+    XYL__FVK_TRY(vkAllocateMemory(vk->device, &ai, vk->vkalloc, out), "vkAllocateMemory");
     return XYL_OK;
 }
 
@@ -157,7 +152,7 @@ xyl_result xyl__fvk_shader(const xyl__fvk *vk, const unsigned char *code, size_t
     VkShaderModuleCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     si.codeSize = size;
     si.pCode = (const uint32_t *)(const void *)code; /* the embedded arrays are 4-byte aligned */
-    VK_TRY(vkCreateShaderModule(vk->device, &si, vk->vkalloc, out), "vkCreateShaderModule");
+    XYL__FVK_TRY(vkCreateShaderModule(vk->device, &si, vk->vkalloc, out), "vkCreateShaderModule");
     return XYL_OK;
 }
 
@@ -167,7 +162,7 @@ xyl_result xyl__fvk_begin_once(const xyl__fvk *vk, VkCommandBuffer *cmd, xyl_dia
     ai.commandPool = vk->commands;
     ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
     ai.commandBufferCount = 1;
-    VK_TRY(vkAllocateCommandBuffers(vk->device, &ai, cmd), "vkAllocateCommandBuffers");
+    XYL__FVK_TRY(vkAllocateCommandBuffers(vk->device, &ai, cmd), "vkAllocateCommandBuffers");
     VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
     VkResult vr = vkBeginCommandBuffer(*cmd, &bi);

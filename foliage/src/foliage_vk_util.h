@@ -25,6 +25,13 @@ typedef struct xyl__fvk_buffer {
     VkDeviceMemory memory;
 } xyl__fvk_buffer;
 
+/* Returns the failure of a Vulkan call from a function with a `diag` in scope. */
+#define XYL__FVK_TRY(call, what)                                                               \
+    do {                                                                                       \
+        VkResult vr_ = (call);                                                                 \
+        if (vr_ != VK_SUCCESS) return xyl__fvk_fail(diag, vr_, what);                          \
+    } while (0)
+
 /* Takes the allocator (vk must not move afterwards: the callbacks point into it). */
 void xyl__fvk_init(xyl__fvk *vk, const xyl_allocator *alloc, VkPhysicalDevice physical,
                    VkDevice device, VkQueue queue);
