@@ -296,8 +296,11 @@ static xyl_result pipeline(const xyl_billboard_vk *bb, const xyl_billboard_vk_de
     ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
     ds.depthCompareOp = VK_COMPARE_OP_LESS;
     VkPipelineColorBlendAttachmentState blend = {0};
+    /* the alpha that went to coverage is not the pixel's opacity: without alpha-to-one it is
+     * not written, so the pixel keeps the alpha it had (an opaque clear stays opaque) */
+    bool keep_alpha = ms.alphaToCoverageEnable && !ms.alphaToOneEnable;
     blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                           VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
+                           VK_COLOR_COMPONENT_B_BIT | (keep_alpha ? 0 : VK_COLOR_COMPONENT_A_BIT);
     VkPipelineColorBlendStateCreateInfo cb = {
         .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
     cb.attachmentCount = 1;

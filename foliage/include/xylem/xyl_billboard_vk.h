@@ -43,7 +43,9 @@
  * The draw records one 4-vertex strip per quad (one quad, or the cross's planes) with the GL
  * billboard's shaders: depth test LESS and writes, nothing culled, no blending, the alpha test
  * at the frame's cutoff; with desc.samples > 1 the filtered coverage goes to
- * alpha-to-coverage instead (and alpha-to-one where desc.enabled_features has alphaToOne).
+ * alpha-to-coverage instead, and alpha-to-one makes the covered samples opaque where
+ * desc.enabled_features has alphaToOne; without it the draw does not write alpha (the
+ * samples keep the alpha they had: an opaque clear stays opaque, as GL's alpha-to-one).
  * The frame's values travel as push constants, so a recorded draw owns all it reads but the
  * billboard's images and constants. It binds its pipeline, descriptor set 0 and push
  * constants (rebind yours after it). Clip space and winding as xyl_foliage_vk: the y flip and
