@@ -263,77 +263,25 @@ static xyl_result layouts(xyl_billboard_vk *bb, xyl_diag *diag)
     return XYL_OK;
 }
 
+/* A draw pipeline into the desc's pass (or dynamic rendering) with the vertex stage vert. */
 static xyl_result pipeline(const xyl_billboard_vk *bb, const xyl_billboard_vk_desc *d,
                            VkShaderModule vert, VkPipeline *out, xyl_diag *diag)
 {
-    VkPipelineShaderStageCreateInfo st[2] = {
-        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0, VK_SHADER_STAGE_VERTEX_BIT,
-         vert, "main", NULL},
-        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
-         VK_SHADER_STAGE_FRAGMENT_BIT, bb->frag, "main", NULL}};
-    VkPipelineVertexInputStateCreateInfo vi = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo ia = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
-    VkPipelineViewportStateCreateInfo vp = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-    vp.viewportCount = vp.scissorCount = 1;
-    VkPipelineRasterizationStateCreateInfo rs = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-    rs.polygonMode = VK_POLYGON_MODE_FILL;
-    rs.cullMode = VK_CULL_MODE_NONE; /* a cross plane is seen from both sides */
-    /* the y flip and Vulkan's y-down winding cancel: counter-clockwise is the front, as GL's */
-    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-    rs.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo ms = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    ms.rasterizationSamples = bb->samples;
-    ms.alphaToCoverageEnable = bb->samples != VK_SAMPLE_COUNT_1_BIT;
-    ms.alphaToOneEnable = bb->samples != VK_SAMPLE_COUNT_1_BIT && bb->alpha_to_one;
-    VkPipelineDepthStencilStateCreateInfo ds = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
-    ds.depthCompareOp = VK_COMPARE_OP_LESS;
-    VkPipelineColorBlendAttachmentState blend = {0};
+    xyl__fvk_pipe p = {0};
+    p.vert = vert;
+    p.frag = bb->frag;
+    p.layout = bb->layout;
+    p.pass = d->render_pass;
+    p.subpass = d->subpass;
+    p.color = d->color_format;
+    p.depth = d->depth_format;
+    p.samples = bb->samples;
+    p.alpha_to_coverage = bb->samples != VK_SAMPLE_COUNT_1_BIT;
+    p.alpha_to_one = p.alpha_to_coverage && bb->alpha_to_one;
     /* the alpha that went to coverage is not the pixel's opacity: without alpha-to-one it is
      * not written, so the pixel keeps the alpha it had (an opaque clear stays opaque) */
-    bool keep_alpha = ms.alphaToCoverageEnable && !ms.alphaToOneEnable;
-    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                           VK_COLOR_COMPONENT_B_BIT | (keep_alpha ? 0 : VK_COLOR_COMPONENT_A_BIT);
-    VkPipelineColorBlendStateCreateInfo cb = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-    cb.attachmentCount = 1;
-    cb.pAttachments = &blend;
-    VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-    VkPipelineDynamicStateCreateInfo dy = {VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-                                           NULL, 0, 2, dyn};
-    VkGraphicsPipelineCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    pi.stageCount = 2;
-    pi.pStages = st;
-    pi.pVertexInputState = &vi;
-    pi.pInputAssemblyState = &ia;
-    pi.pViewportState = &vp;
-    pi.pRasterizationState = &rs;
-    pi.pMultisampleState = &ms;
-    pi.pDepthStencilState = &ds;
-    pi.pColorBlendState = &cb;
-    pi.pDynamicState = &dy;
-    pi.layout = bb->layout;
-    pi.renderPass = d->render_pass;
-    pi.subpass = d->subpass;
-    VkPipelineRenderingCreateInfoKHR ri = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
-    if (!d->render_pass) { /* dynamic rendering */
-        ri.colorAttachmentCount = 1;
-        ri.pColorAttachmentFormats = &d->color_format;
-        ri.depthAttachmentFormat = d->depth_format;
-        pi.pNext = &ri;
-    }
-    XYL__FVK_TRY(
-        vkCreateGraphicsPipelines(bb->vk.device, VK_NULL_HANDLE, 1, &pi, bb->vk.vkalloc, out),
-        "vkCreateGraphicsPipelines");
-    return XYL_OK;
+    p.keep_alpha = p.alpha_to_coverage && !p.alpha_to_one;
+    return xyl__fvk_pipeline(&bb->vk, &p, out, diag);
 }
 
 /* Shaders, layouts, pipelines, sampler, the maps and the constants, the descriptor set. */

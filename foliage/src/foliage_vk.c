@@ -301,83 +301,15 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
     return XYL_OK;
 }
 
-typedef struct pipe_target {
-    VkRenderPass pass;
-    uint32_t subpass;
-    VkFormat color, depth;
-    VkSampleCountFlagBits samples;
-    bool capture; /* vertex stage only, rasterizer off, no attachments */
-    bool list;    /* the cut's draw: the vertex shader reads the list */
-} pipe_target;
-
-static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPipeline *out,
-                           xyl_diag *diag)
+/* A draw pipeline of the renderer's layout: capture (vertex stage only), the cut's list, or
+ * the plain draw. */
+static xyl_result pipeline(const xyl_foliage_vk *vk, xyl__fvk_pipe t, bool capture, bool list,
+                           VkPipeline *out, xyl_diag *diag)
 {
-    VkPipelineShaderStageCreateInfo st[2] = {
-        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0, VK_SHADER_STAGE_VERTEX_BIT,
-         t->capture ? vk->vert_capture : t->list ? vk->vert_list : vk->vert, "main", NULL},
-        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
-         VK_SHADER_STAGE_FRAGMENT_BIT, vk->frag, "main", NULL}};
-    VkPipelineVertexInputStateCreateInfo vi = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo ia = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
-    VkPipelineViewportStateCreateInfo vp = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-    vp.viewportCount = vp.scissorCount = 1;
-    VkPipelineRasterizationStateCreateInfo rs = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-    rs.rasterizerDiscardEnable = t->capture;
-    rs.polygonMode = VK_POLYGON_MODE_FILL;
-    rs.cullMode = VK_CULL_MODE_NONE; /* double-sided */
-    /* view_proj flips y and Vulkan measures winding with y down: the mirrors cancel, so the
-     * counter-clockwise side is the front, as in GL, and gl_FrontFacing agrees with GL's */
-    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-    rs.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo ms = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    ms.rasterizationSamples = t->samples;
-    VkPipelineDepthStencilStateCreateInfo ds = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
-    ds.depthCompareOp = VK_COMPARE_OP_LESS;
-    VkPipelineColorBlendAttachmentState blend = {0};
-    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                           VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-    VkPipelineColorBlendStateCreateInfo cb = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-    cb.attachmentCount = t->capture ? 0 : 1;
-    cb.pAttachments = &blend;
-    VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-    VkPipelineDynamicStateCreateInfo dy = {VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-                                           NULL, 0, 2, dyn};
-    VkGraphicsPipelineCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    pi.stageCount = t->capture ? 1 : 2;
-    pi.pStages = st;
-    pi.pVertexInputState = &vi;
-    pi.pInputAssemblyState = &ia;
-    pi.pViewportState = &vp;
-    pi.pRasterizationState = &rs;
-    pi.pMultisampleState = &ms;
-    pi.pDepthStencilState = t->capture ? NULL : &ds;
-    pi.pColorBlendState = &cb;
-    pi.pDynamicState = &dy;
-    pi.layout = vk->layout;
-    pi.renderPass = t->pass;
-    pi.subpass = t->subpass;
-    VkPipelineRenderingCreateInfoKHR ri = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
-    if (!t->pass) { /* dynamic rendering */
-        ri.colorAttachmentCount = 1;
-        ri.pColorAttachmentFormats = &t->color;
-        ri.depthAttachmentFormat = t->depth;
-        pi.pNext = &ri;
-    }
-    XYL__FVK_TRY(
-        vkCreateGraphicsPipelines(vk->base.device, VK_NULL_HANDLE, 1, &pi, vk->base.vkalloc, out),
-        "vkCreateGraphicsPipelines");
-    return XYL_OK;
+    t.vert = capture ? vk->vert_capture : list ? vk->vert_list : vk->vert;
+    t.frag = capture ? VK_NULL_HANDLE : vk->frag;
+    t.layout = vk->layout;
+    return xyl__fvk_pipeline(&vk->base, &t, out, diag);
 }
 
 static xyl_result cut_pipeline(xyl_foliage_vk *vk, xyl_diag *diag)
@@ -411,11 +343,14 @@ static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
         r = xyl__fvk_shader(&vk->base, xyl__shader_vk_foliage_cut_comp,
                             xyl__shader_vk_foliage_cut_comp_size, &vk->cut, diag);
     if (r == XYL_OK) r = layouts(vk, diag);
-    pipe_target t = {d->render_pass, d->subpass, d->color_format, d->depth_format, samples,
-                     false, false};
-    if (r == XYL_OK) r = pipeline(vk, &t, &vk->pipeline, diag);
-    t.list = true;
-    if (r == XYL_OK) r = pipeline(vk, &t, &vk->list_pipeline, diag);
+    xyl__fvk_pipe t = {0};
+    t.pass = d->render_pass;
+    t.subpass = d->subpass;
+    t.color = d->color_format;
+    t.depth = d->depth_format;
+    t.samples = samples;
+    if (r == XYL_OK) r = pipeline(vk, t, false, false, &vk->pipeline, diag);
+    if (r == XYL_OK) r = pipeline(vk, t, false, true, &vk->list_pipeline, diag);
     if (r == XYL_OK) r = cut_pipeline(vk, diag);
     if (r != XYL_OK) return r;
     VkSamplerCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -758,9 +693,10 @@ static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
             vkCreateFramebuffer(vk->base.device, &fi, vk->base.vkalloc, &vk->capture_framebuffer),
             "vkCreateFramebuffer");
     }
-    pipe_target t = {vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,
-                     VK_SAMPLE_COUNT_1_BIT, true, false};
-    return pipeline(vk, &t, &vk->capture_pipeline, diag);
+    xyl__fvk_pipe t = {0};
+    t.pass = vk->capture_pass;
+    t.samples = VK_SAMPLE_COUNT_1_BIT;
+    return pipeline(vk, t, true, false, &vk->capture_pipeline, diag);
 }
 
 static void record_capture(const xyl_foliage_vk *vk, VkCommandBuffer cmd,

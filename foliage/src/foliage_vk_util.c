@@ -198,3 +198,76 @@ xyl_result xyl__fvk_submit_wait(const xyl__fvk *vk, VkCommandBuffer cmd, xyl_dia
     vkFreeCommandBuffers(vk->device, vk->commands, 1, &cmd);
     return vr == VK_SUCCESS ? XYL_OK : xyl__fvk_fail(diag, vr, what);
 }
+
+xyl_result xyl__fvk_pipeline(const xyl__fvk *vk, const xyl__fvk_pipe *p, VkPipeline *out,
+                             xyl_diag *diag)
+{
+    bool vertex_only = p->frag == VK_NULL_HANDLE;
+    VkPipelineShaderStageCreateInfo st[2] = {
+        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0, VK_SHADER_STAGE_VERTEX_BIT,
+         p->vert, "main", NULL},
+        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
+         VK_SHADER_STAGE_FRAGMENT_BIT, p->frag, "main", NULL}};
+    VkPipelineVertexInputStateCreateInfo vi = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    VkPipelineInputAssemblyStateCreateInfo ia = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
+    VkPipelineViewportStateCreateInfo vp = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    vp.viewportCount = vp.scissorCount = 1;
+    VkPipelineRasterizationStateCreateInfo rs = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    rs.rasterizerDiscardEnable = vertex_only;
+    rs.polygonMode = VK_POLYGON_MODE_FILL;
+    rs.cullMode = VK_CULL_MODE_NONE; /* leaves and cross planes are seen from both sides */
+    /* view_proj flips y and Vulkan measures winding with y down: the mirrors cancel, so the
+     * counter-clockwise side is the front, as in GL, and gl_FrontFacing agrees with GL's */
+    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    rs.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo ms = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    ms.rasterizationSamples = p->samples;
+    ms.alphaToCoverageEnable = p->alpha_to_coverage;
+    ms.alphaToOneEnable = p->alpha_to_one;
+    VkPipelineDepthStencilStateCreateInfo ds = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+    ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
+    ds.depthCompareOp = VK_COMPARE_OP_LESS;
+    VkPipelineColorBlendAttachmentState blend = {0};
+    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                           VK_COLOR_COMPONENT_B_BIT |
+                           (p->keep_alpha ? 0 : VK_COLOR_COMPONENT_A_BIT);
+    VkPipelineColorBlendStateCreateInfo cb = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    cb.attachmentCount = vertex_only ? 0 : 1;
+    cb.pAttachments = &blend;
+    VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dy = {VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
+                                           NULL, 0, 2, dyn};
+    VkGraphicsPipelineCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
+    pi.stageCount = vertex_only ? 1 : 2;
+    pi.pStages = st;
+    pi.pVertexInputState = &vi;
+    pi.pInputAssemblyState = &ia;
+    pi.pViewportState = &vp;
+    pi.pRasterizationState = &rs;
+    pi.pMultisampleState = &ms;
+    pi.pDepthStencilState = vertex_only ? NULL : &ds;
+    pi.pColorBlendState = &cb;
+    pi.pDynamicState = &dy;
+    pi.layout = p->layout;
+    pi.renderPass = p->pass;
+    pi.subpass = p->subpass;
+    VkPipelineRenderingCreateInfoKHR ri = {
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
+    if (!p->pass) { /* dynamic rendering */
+        ri.colorAttachmentCount = 1;
+        ri.pColorAttachmentFormats = &p->color;
+        ri.depthAttachmentFormat = p->depth;
+        pi.pNext = &ri;
+    }
+    XYL__FVK_TRY(vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, vk->vkalloc, out),
+                 "vkCreateGraphicsPipelines");
+    return XYL_OK;
+}

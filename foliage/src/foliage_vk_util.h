@@ -51,6 +51,25 @@ xyl_result xyl__fvk_buffer_create(const xyl__fvk *vk, VkDeviceSize size,
 void xyl__fvk_buffer_destroy(const xyl__fvk *vk, xyl__fvk_buffer *b);
 xyl_result xyl__fvk_shader(const xyl__fvk *vk, const unsigned char *code, size_t size,
                            VkShaderModule *out, xyl_diag *diag);
+/* A graphics pipeline of 4-vertex triangle strips expanded in the vertex shader (no vertex
+ * input), viewport and scissor dynamic, nothing culled, counter-clockwise front faces (the y
+ * flip of Vulkan's clip convention and its y-down winding cancel), depth test LESS and
+ * writes, no blending: into subpass `subpass` of `pass`, or with pass VK_NULL_HANDLE dynamic
+ * rendering of one colour and one depth attachment of these formats. frag VK_NULL_HANDLE:
+ * the vertex stage alone, rasterizer off, no attachments. */
+typedef struct xyl__fvk_pipe {
+    VkShaderModule vert, frag;
+    VkPipelineLayout layout;
+    VkRenderPass pass;
+    uint32_t subpass;
+    VkFormat color, depth;
+    VkSampleCountFlagBits samples;
+    bool alpha_to_coverage, alpha_to_one;
+    bool keep_alpha; /* the colour's alpha is not written */
+} xyl__fvk_pipe;
+xyl_result xyl__fvk_pipeline(const xyl__fvk *vk, const xyl__fvk_pipe *p, VkPipeline *out,
+                             xyl_diag *diag);
+
 /* A one-time command buffer of the pool, begun; submit_wait ends, submits, waits and frees. */
 xyl_result xyl__fvk_begin_once(const xyl__fvk *vk, VkCommandBuffer *cmd, xyl_diag *diag);
 xyl_result xyl__fvk_submit_wait(const xyl__fvk *vk, VkCommandBuffer cmd, xyl_diag *diag);
