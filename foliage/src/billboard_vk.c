@@ -32,12 +32,6 @@ _Static_assert(offsetof(xyl_billboard_vk_constants, half_size) == 32, "std140: h
 _Static_assert(offsetof(xyl_billboard_vk_constants, kind) == 40, "std140: kind");
 _Static_assert(offsetof(xyl_billboard_vk_constants, to_coverage) == 48, "std140: to_coverage");
 
-typedef struct vk_image {
-    VkImage image;
-    VkDeviceMemory memory;
-    VkImageView view;
-} vk_image;
-
 struct xyl_billboard_vk {
     xyl__fvk vk;
     xyl__billboard_shape shape;
@@ -51,7 +45,7 @@ struct xyl_billboard_vk {
     VkDescriptorSet set;
     VkPipeline pipeline, instances_pipeline; /* the latter: not for the octahedral kind */
     VkSampler sampler;
-    vk_image color, normal;
+    xyl__fvk_image color, normal;
     xyl__fvk_buffer constants;
     VkDeviceSize instance_count; /* in the bound instance buffer; 0: none bound */
 };
@@ -59,7 +53,7 @@ struct xyl_billboard_vk {
 /* What the bake renders into and reads back through. */
 typedef struct bake_target {
     VkRenderPass pass;
-    vk_image att[2]; /* colour, depth */
+    xyl__fvk_image att[2]; /* colour, depth */
     VkFramebuffer framebuffer;
     xyl__fvk_buffer readback; /* colour, then depth: 8 bytes a texel */
     xyl__fvk_buffer staging;  /* the colour map, then the normal map: 8 bytes a texel */
@@ -69,18 +63,9 @@ typedef struct bake_target {
 
 static xyl_result check_desc(const xyl_billboard_vk_desc *d, xyl_diag *diag)
 {
-    if (!d->physical_device || !d->device || !d->queue)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.physical_device, desc.device and desc.queue are required");
-    if (!d->render_pass &&
-        (d->color_format == VK_FORMAT_UNDEFINED || d->depth_format == VK_FORMAT_UNDEFINED))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.render_pass, or colour and depth formats for dynamic rendering, "
-                         "are required");
-    uint32_t s = (uint32_t)d->samples;
-    if (s != 0 && ((s & (s - 1)) != 0 || s > 64))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.samples %u is not a power of two up to 64", s);
+    xyl_result r = xyl__fvk_check_target(d->physical_device, d->device, d->queue, d->render_pass,
+                                         d->color_format, d->depth_format, d->samples, diag);
+    if (r != XYL_OK) return r;
     const xyl__billboard_params p = {d->kind, d->planes, d->resolution, d->grid,
                                      d->lo, d->hi, d->light_dir};
     return xyl__billboard_check(&p, diag);
@@ -115,37 +100,8 @@ static xyl_result check_limits(const xyl_billboard_vk *bb, xyl_diag *diag)
 
 /* ---- images ------------------------------------------------------------------------------- */
 
-static void image_destroy(const xyl__fvk *vk, vk_image *im)
-{
-    if (im->view) vkDestroyImageView(vk->device, im->view, vk->vkalloc);
-    if (im->image) vkDestroyImage(vk->device, im->image, vk->vkalloc);
-    if (im->memory) vkFreeMemory(vk->device, im->memory, vk->vkalloc);
-    memset(im, 0, sizeof *im);
-}
-
-static xyl_result image_create(const xyl__fvk *vk, const VkImageCreateInfo *ii,
-                               VkImageViewType type, VkImageAspectFlags aspect, vk_image *out,
-                               xyl_diag *diag)
-{
-    XYL__FVK_TRY(vkCreateImage(vk->device, ii, vk->vkalloc, &out->image), "vkCreateImage");
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(vk->device, out->image, &req);
-    xyl_result r = xyl__fvk_allocate(vk, req, 0, &out->memory, diag);
-    if (r != XYL_OK) return r;
-    XYL__FVK_TRY(vkBindImageMemory(vk->device, out->image, out->memory, 0), "vkBindImageMemory");
-    VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    vi.image = out->image;
-    vi.viewType = type;
-    vi.format = ii->format;
-    vi.subresourceRange.aspectMask = aspect;
-    vi.subresourceRange.levelCount = ii->mipLevels;
-    vi.subresourceRange.layerCount = ii->arrayLayers;
-    XYL__FVK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view), "vkCreateImageView");
-    return XYL_OK;
-}
-
 /* A sampled RGBA8 map: the views' array, or the octahedral atlas. */
-static xyl_result map_create(const xyl_billboard_vk *bb, vk_image *out, xyl_diag *diag)
+static xyl_result map_create(const xyl_billboard_vk *bb, xyl__fvk_image *out, xyl_diag *diag)
 {
     VkImageCreateInfo ii = {.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
     ii.imageType = VK_IMAGE_TYPE_2D;
@@ -156,7 +112,7 @@ static xyl_result map_create(const xyl_billboard_vk *bb, vk_image *out, xyl_diag
     ii.samples = VK_SAMPLE_COUNT_1_BIT;
     ii.usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
                VK_IMAGE_USAGE_SAMPLED_BIT;
-    return image_create(&bb->vk, &ii,
+    return xyl__fvk_image_create(&bb->vk, &ii,
                         bb->shape.grid ? VK_IMAGE_VIEW_TYPE_2D : VK_IMAGE_VIEW_TYPE_2D_ARRAY,
                         VK_IMAGE_ASPECT_COLOR_BIT, out, diag);
 }
@@ -353,7 +309,7 @@ static void target_free(const xyl__fvk *vk, bake_target *t)
 {
     if (t->framebuffer) vkDestroyFramebuffer(vk->device, t->framebuffer, vk->vkalloc);
     if (t->pass) vkDestroyRenderPass(vk->device, t->pass, vk->vkalloc);
-    for (int k = 0; k < 2; ++k) image_destroy(vk, &t->att[k]);
+    for (int k = 0; k < 2; ++k) xyl__fvk_image_destroy(vk, &t->att[k]);
     xyl__fvk_buffer_destroy(vk, &t->readback);
     xyl__fvk_buffer_destroy(vk, &t->staging);
 }
@@ -411,7 +367,7 @@ static xyl_result target_make(const xyl__fvk *vk, uint32_t n, bake_target *t, xy
         ii.usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
                    (k ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
                       : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT);
-        r = image_create(vk, &ii, VK_IMAGE_VIEW_TYPE_2D,
+        r = xyl__fvk_image_create(vk, &ii, VK_IMAGE_VIEW_TYPE_2D,
                          k ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT, &t->att[k],
                          diag);
     }
@@ -625,8 +581,8 @@ void xyl_billboard_vk_destroy(xyl_billboard_vk *bb)
     if (!bb) return;
     xyl__fvk *vk = &bb->vk;
     VkDevice dev = vk->device;
-    image_destroy(vk, &bb->color);
-    image_destroy(vk, &bb->normal);
+    xyl__fvk_image_destroy(vk, &bb->color);
+    xyl__fvk_image_destroy(vk, &bb->normal);
     xyl__fvk_buffer_destroy(vk, &bb->constants);
     if (bb->sampler) vkDestroySampler(dev, bb->sampler, vk->vkalloc);
     VkPipeline pipes[2] = {bb->pipeline, bb->instances_pipeline};

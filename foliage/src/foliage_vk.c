@@ -37,12 +37,6 @@ _Static_assert(sizeof(VkDrawIndirectCommand) == 16, "the cut's command is four w
 #define CAPTURE_BYTES_PER_LEAF (4u * sizeof(xyl__foliage_vk_captured))
 #define MAX_CAPTURE_BYTES ((uint64_t)1 << 31)
 
-typedef struct vk_image {
-    VkImage image;
-    VkDeviceMemory memory;
-    VkImageView view;
-} vk_image;
-
 struct xyl_foliage_vk {
     xyl__fvk base; /* device, queue, allocator, memory types, command pool */
     VkPhysicalDeviceFeatures features;
@@ -60,19 +54,11 @@ struct xyl_foliage_vk {
     xyl__fvk_buffer leaves;
     xyl__fvk_buffer nodes, list, command; /* the per-leaf cut's forest, chosen records, draw */
     bool has_cut;                   /* a cut was recorded since the last upload */
-    vk_image texture;
+    xyl__fvk_image texture;
     xyl__foliage_tables tables; /* leaf_count 0: nothing uploaded */
 };
 
 /* ---- the leaf texture --------------------------------------------------------------------- */
-
-static void image_destroy(const xyl_foliage_vk *vk, vk_image *im)
-{
-    if (im->view) vkDestroyImageView(vk->base.device, im->view, vk->base.vkalloc);
-    if (im->image) vkDestroyImage(vk->base.device, im->image, vk->base.vkalloc);
-    if (im->memory) vkFreeMemory(vk->base.device, im->memory, vk->base.vkalloc);
-    memset(im, 0, sizeof *im);
-}
 
 static uint32_t mip_levels(uint32_t w, uint32_t h)
 {
@@ -81,8 +67,8 @@ static uint32_t mip_levels(uint32_t w, uint32_t h)
     return levels;
 }
 
-static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h, vk_image *out,
-                               xyl_diag *diag)
+static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h,
+                               xyl__fvk_image *out, xyl_diag *diag)
 {
     VkImageCreateInfo ii = {.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
     ii.imageType = VK_IMAGE_TYPE_2D;
@@ -93,24 +79,8 @@ static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h,
     ii.samples = VK_SAMPLE_COUNT_1_BIT;
     ii.usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
                VK_IMAGE_USAGE_SAMPLED_BIT;
-    XYL__FVK_TRY(vkCreateImage(vk->base.device, &ii, vk->base.vkalloc, &out->image),
-                 "vkCreateImage");
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(vk->base.device, out->image, &req);
-    xyl_result r = xyl__fvk_allocate(&vk->base, req, 0, &out->memory, diag);
-    if (r != XYL_OK) return r;
-    XYL__FVK_TRY(vkBindImageMemory(vk->base.device, out->image, out->memory, 0),
-                 "vkBindImageMemory");
-    VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    vi.image = out->image;
-    vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    vi.format = ii.format;
-    vi.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
-    vi.subresourceRange.levelCount = ii.mipLevels;
-    vi.subresourceRange.layerCount = 1;
-    XYL__FVK_TRY(vkCreateImageView(vk->base.device, &vi, vk->base.vkalloc, &out->view),
-           "vkCreateImageView");
-    return XYL_OK;
+    return xyl__fvk_image_create(&vk->base, &ii, VK_IMAGE_VIEW_TYPE_2D,
+                                 VK_IMAGE_ASPECT_COLOR_BIT, out, diag);
 }
 
 static void level_barrier(VkCommandBuffer cmd, VkImage image, uint32_t level, uint32_t count,
@@ -194,7 +164,7 @@ static xyl_result upload_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32
                                  xyl_diag *diag)
 {
     xyl__fvk_buffer staging = {0};
-    vk_image im = {0};
+    xyl__fvk_image im = {0};
     VkCommandBuffer cmd = VK_NULL_HANDLE;
     xyl_result r = xyl__fvk_buffer_create(&vk->base, (VkDeviceSize)w * h * 4u,
                                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT, rgba, &staging, diag);
@@ -206,11 +176,11 @@ static xyl_result upload_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32
     }
     xyl__fvk_buffer_destroy(&vk->base, &staging);
     if (r != XYL_OK) {
-        image_destroy(vk, &im);
+        xyl__fvk_image_destroy(&vk->base, &im);
         return r;
     }
     write_sets(vk, XYL_FOLIAGE_VK_BINDING_TEXTURE, VK_NULL_HANDLE, im.view);
-    image_destroy(vk, &vk->texture);
+    xyl__fvk_image_destroy(&vk->base, &vk->texture);
     vk->texture = im;
     return XYL_OK;
 }
@@ -219,19 +189,8 @@ static xyl_result upload_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32
 
 static xyl_result check_desc(const xyl_foliage_vk_desc *d, xyl_diag *diag)
 {
-    if (!d->physical_device || !d->device || !d->queue)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.physical_device, desc.device and desc.queue are required");
-    if (!d->render_pass &&
-        (d->color_format == VK_FORMAT_UNDEFINED || d->depth_format == VK_FORMAT_UNDEFINED))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.render_pass, or colour and depth formats for dynamic rendering, "
-                         "are required");
-    uint32_t s = (uint32_t)d->samples;
-    if (s != 0 && ((s & (s - 1)) != 0 || s > 64))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.samples %u is not a power of two up to 64", s);
-    return XYL_OK;
+    return xyl__fvk_check_target(d->physical_device, d->device, d->queue, d->render_pass,
+                                 d->color_format, d->depth_format, d->samples, diag);
 }
 
 /* The device's version, queue family, sample count and limits, before anything is made. */
@@ -397,7 +356,7 @@ void xyl_foliage_vk_destroy(xyl_foliage_vk *vk)
     xyl__fvk_buffer_destroy(&vk->base, &vk->nodes);
     xyl__fvk_buffer_destroy(&vk->base, &vk->list);
     xyl__fvk_buffer_destroy(&vk->base, &vk->command);
-    image_destroy(vk, &vk->texture);
+    xyl__fvk_image_destroy(&vk->base, &vk->texture);
     xyl__fvk_finish(&vk->base);
     if (vk->sampler) vkDestroySampler(dev, vk->sampler, vk->base.vkalloc);
     if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, vk->base.vkalloc);

@@ -271,3 +271,51 @@ xyl_result xyl__fvk_pipeline(const xyl__fvk *vk, const xyl__fvk_pipe *p, VkPipel
                  "vkCreateGraphicsPipelines");
     return XYL_OK;
 }
+
+xyl_result xyl__fvk_check_target(VkPhysicalDevice physical, VkDevice device, VkQueue queue,
+                                 VkRenderPass pass, VkFormat color, VkFormat depth,
+                                 VkSampleCountFlagBits samples, xyl_diag *diag)
+{
+    if (!physical || !device || !queue)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc.physical_device, desc.device and desc.queue are required");
+    if (!pass && (color == VK_FORMAT_UNDEFINED || depth == VK_FORMAT_UNDEFINED))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc.render_pass, or colour and depth formats for dynamic rendering, "
+                         "are required");
+    uint32_t s = (uint32_t)samples;
+    if (s != 0 && ((s & (s - 1)) != 0 || s > 64))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "desc.samples %u is not a power of two up to 64", s);
+    return XYL_OK;
+}
+
+void xyl__fvk_image_destroy(const xyl__fvk *vk, xyl__fvk_image *im)
+{
+    if (im->view) vkDestroyImageView(vk->device, im->view, vk->vkalloc);
+    if (im->image) vkDestroyImage(vk->device, im->image, vk->vkalloc);
+    if (im->memory) vkFreeMemory(vk->device, im->memory, vk->vkalloc);
+    memset(im, 0, sizeof *im);
+}
+
+xyl_result xyl__fvk_image_create(const xyl__fvk *vk, const VkImageCreateInfo *ii,
+                                 VkImageViewType type, VkImageAspectFlags aspect,
+                                 xyl__fvk_image *out, xyl_diag *diag)
+{
+    XYL__FVK_TRY(vkCreateImage(vk->device, ii, vk->vkalloc, &out->image), "vkCreateImage");
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(vk->device, out->image, &req);
+    xyl_result r = xyl__fvk_allocate(vk, req, 0, &out->memory, diag);
+    if (r != XYL_OK) return r;
+    XYL__FVK_TRY(vkBindImageMemory(vk->device, out->image, out->memory, 0), "vkBindImageMemory");
+    VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    vi.image = out->image;
+    vi.viewType = type;
+    vi.format = ii->format;
+    vi.subresourceRange.aspectMask = aspect;
+    vi.subresourceRange.levelCount = ii->mipLevels;
+    vi.subresourceRange.layerCount = ii->arrayLayers;
+    XYL__FVK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view),
+                 "vkCreateImageView");
+    return XYL_OK;
+}

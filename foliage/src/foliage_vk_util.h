@@ -32,6 +32,12 @@ typedef struct xyl__fvk_buffer {
         if (vr_ != VK_SUCCESS) return xyl__fvk_fail(diag, vr_, what);                          \
     } while (0)
 
+typedef struct xyl__fvk_image {
+    VkImage image;
+    VkDeviceMemory memory;
+    VkImageView view;
+} xyl__fvk_image;
+
 /* Takes the allocator (vk must not move afterwards: the callbacks point into it). */
 void xyl__fvk_init(xyl__fvk *vk, const xyl_allocator *alloc, VkPhysicalDevice physical,
                    VkDevice device, VkQueue queue);
@@ -51,6 +57,17 @@ xyl_result xyl__fvk_buffer_create(const xyl__fvk *vk, VkDeviceSize size,
 void xyl__fvk_buffer_destroy(const xyl__fvk *vk, xyl__fvk_buffer *b);
 xyl_result xyl__fvk_shader(const xyl__fvk *vk, const unsigned char *code, size_t size,
                            VkShaderModule *out, xyl_diag *diag);
+/* The draw target of a desc: a device and queue, a render pass or dynamic rendering's
+ * formats, a sample count that is 0 or a power of two up to 64 (XYL_ERR_INVALID_ARGUMENT). */
+xyl_result xyl__fvk_check_target(VkPhysicalDevice physical, VkDevice device, VkQueue queue,
+                                 VkRenderPass pass, VkFormat color, VkFormat depth,
+                                 VkSampleCountFlagBits samples, xyl_diag *diag);
+/* An image of ii, device-local, with a view of all its levels and layers. */
+xyl_result xyl__fvk_image_create(const xyl__fvk *vk, const VkImageCreateInfo *ii,
+                                 VkImageViewType type, VkImageAspectFlags aspect,
+                                 xyl__fvk_image *out, xyl_diag *diag);
+void xyl__fvk_image_destroy(const xyl__fvk *vk, xyl__fvk_image *im);
+
 /* A graphics pipeline of 4-vertex triangle strips expanded in the vertex shader (no vertex
  * input), viewport and scissor dynamic, nothing culled, counter-clockwise front faces (the y
  * flip of Vulkan's clip convention and its y-down winding cancel), depth test LESS and
