@@ -170,11 +170,13 @@ XYL_API xyl_result xyl_billboard_vk_cmd_draw(xyl_billboard_vk *bb, VkCommandBuff
  * (cross planes turn with the instance, spherical and cylindrical quads face the eye); the
  * LOD bits are not read. Spherical, cylindrical and cross kinds only. Errors
  * (set_instances): XYL_ERR_INVALID_ARGUMENT (NULL bb, a null buffer, a size below 16 bytes or
- * not a multiple of 16), XYL_ERR_UNSUPPORTED (the octahedral kind). */
+ * not a multiple of 16), XYL_ERR_LIMIT_EXCEEDED (a size over the device's
+ * maxStorageBufferRange), XYL_ERR_UNSUPPORTED (the octahedral kind). */
 XYL_API xyl_result xyl_billboard_vk_set_instances(xyl_billboard_vk *bb, VkBuffer instances,
                                                   VkDeviceSize size, xyl_diag *diag);
 /* Errors: those of cmd_draw, XYL_ERR_INVALID_ARGUMENT (no instances bound, first + count over
- * the bound buffer's instances, a count of 0). */
+ * the bound buffer's instances, a count of 0), XYL_ERR_LIMIT_EXCEEDED (count times the cross's
+ * planes over UINT32_MAX); on error nothing is recorded. */
 XYL_API xyl_result xyl_billboard_vk_cmd_draw_instances(xyl_billboard_vk *bb,
                                                        VkCommandBuffer cmd,
                                                        const xyl_billboard_vk_frame *frame,
