@@ -760,6 +760,45 @@ static void bad_input_gets_result_codes(void **state)
     no_messages(s);
 }
 
+/* Every host allocation of a bake, the driver's included, goes through the caller's
+ * allocator: a failure at any of the first 12 allocations, or at every 8th up to the 44th,
+ * is XYL_ERR_OUT_OF_MEMORY with nothing left allocated (nor on the device: the validation layer reports objects left at the end),
+ * and a billboard baked and destroyed frees all it took. */
+static void bake_allocates_through_the_callers_allocator(void **state)
+{
+    suite *s = need_both(state);
+    xyl_diag d = {0};
+    tu_counter c = {0, 0, 0, 0};
+    xyl_billboard_vk_desc bd = vk_desc(s, &kinds[2]);
+    bd.alloc = tu_counting(&c);
+    xyl_billboard_vk *bb = NULL;
+    expect(xyl_billboard_vk_bake(&bd, vk_draw_leaves, s, &bb, &d), XYL_OK, &d);
+    size_t total = c.attempts;
+    xyl_billboard_vk_destroy(bb);
+    print_message("%zu allocations through the caller's allocator\n", c.allocs);
+    assert_true(c.allocs > 10); /* the driver's too */
+    assert_int_equal(c.allocs, c.frees);
+    s->a.expect_oom = true;
+    /* the first 12, then every 8th up to the 44th: the device checks, shader modules, layouts,
+     * images. Not later: lavapipe (Mesa 22) itself fails on its own out-of-memory paths, with
+     * libc's free() on a block of the caller's allocator at the 52nd of 446 (a pipeline), and
+     * in vkCmdPipelineBarrier after a failed allocation while recording at the 137th */
+    for (size_t i = 1; i <= 16; ++i) {
+        size_t k = i <= 12 ? i : 12 + 8 * (i - 12);
+        c = (tu_counter){0, 0, 0, k};
+        if (getenv("XYL_TEST_VK_VERBOSE")) fprintf(stderr, "failing allocation %zu of %zu\n", k, total);
+        bb = (xyl_billboard_vk *)(uintptr_t)1;
+        expect(xyl_billboard_vk_bake(&bd, vk_draw_leaves, s, &bb, &d), XYL_ERR_OUT_OF_MEMORY,
+               &d);
+        assert_ptr_equal(bb, (xyl_billboard_vk *)(uintptr_t)1);
+        assert_int_equal(c.allocs, c.frees);
+    }
+    s->a.expect_oom = false;
+    print_message("%u reports of the injected failures\n", s->a.oom_messages);
+    assert_true(total > 44);
+    no_messages(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -769,6 +808,7 @@ int main(void)
         cmocka_unit_test(dither_ranges_split_the_pixels),
         cmocka_unit_test(instances_place_the_billboard),
         cmocka_unit_test(bad_input_gets_result_codes),
+        cmocka_unit_test(bake_allocates_through_the_callers_allocator),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
