@@ -602,7 +602,8 @@ static void dither_ranges_split_the_pixels(void **state)
  * the billboard's own picture; one moved by a fifth of the box along +X, seen from a camera
  * moved the same way, draws that picture again (within 0.01 colour and 0.03 coverage RMSE in
  * 4 x 4 blocks: the same quads through other float sums), while the same instance from the
- * unmoved camera is another picture. */
+ * unmoved camera is another picture; one turned by 45 degrees and twice as large, seen from
+ * the camera turned and scaled the same way, draws it again too. */
 static void instances_place_the_billboard(void **state)
 {
     suite *s = need_both(state);
@@ -656,6 +657,27 @@ static void instances_place_the_billboard(void **state)
     assert_true(covered > SIDE * SIDE / 50);
     assert_true(colour <= 0.01 && coverage <= 0.03);
     assert_true(other_coverage > 3.0 * coverage + 0.05);
+    /* turned by 45 degrees (128 of 1024 steps) and twice as large, seen from the camera turned
+     * and scaled the same way about the base point: the billboard's own picture again */
+    iv.position[0] = 0.0f, iv.rotation = 3.14159265358979f / 4.0f, iv.scale = 2.0f;
+    expect(xyl_forest_instance_pack(&iv, &inst[1], &d), XYL_OK, &d);
+    vk_ok(vkMapMemory(a->device, mem, 0, VK_WHOLE_SIZE, 0, &map), "vkMapMemory");
+    memcpy(map, inst, sizeof inst);
+    vkUnmapMemory(a->device, mem);
+    frame_camera(s, 0.4f, 0.3f, &p);
+    const float c = cosf(iv.rotation), sn = sinf(iv.rotation);
+    float *pts[2] = {p.cam.eye, p.cam.target};
+    for (int k = 0; k < 2; ++k) {
+        float x = pts[k][0], z = pts[k][2];
+        pts[k][0] = 2.0f * (c * x + sn * z), pts[k][1] *= 2.0f, pts[k][2] = 2.0f * (-sn * x + c * z);
+    }
+    p.cam.near_plane *= 2.0f, p.cam.far_plane *= 2.0f;
+    vk_picture(s, &p, moved);
+    keep_png("instance_turned_scaled", moved);
+    block_rmse(own, moved, &colour, &coverage, &covered);
+    print_message("instance turned and scaled with the camera: colour RMSE %.4f, coverage RMSE "
+                  "%.4f\n", colour, coverage);
+    assert_true(colour <= 0.01 && coverage <= 0.03);
     /* runs outside the bound instances, and no instances on an impostor */
     xyl_billboard_vk_frame fr = {0};
     fr.view_proj[0] = 1.0f;
