@@ -225,21 +225,33 @@ typedef struct shot {
     /* the forest's instanced draw instead of cmd_draw: instances [first, first + count) */
     bool instances;
     uint32_t first, count;
+    /* multisampled: 4 samples resolved (GL: a blit; Vulkan: the msaa pass below), cleared to
+     * the opaque background */
+    bool msaa;
+    VkRenderPass pass;
+    VkFramebuffer framebuffer;
 } shot;
+
+static const float msaa_background[4] = {0.85f, 0.9f, 0.95f, 1.0f};
 
 /* A SIDE x SIDE GL picture, top row first, cleared to 0. */
 static void gl_picture(suite *s, const shot *p, uint8_t *rgba)
 {
-    GLuint rb[2], fbo;
-    glCreateRenderbuffers(2, rb);
-    glNamedRenderbufferStorage(rb[0], GL_RGBA8, SIDE, SIDE);
-    glNamedRenderbufferStorage(rb[1], GL_DEPTH_COMPONENT32F, SIDE, SIDE);
-    glCreateFramebuffers(1, &fbo);
-    glNamedFramebufferRenderbuffer(fbo, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
-    glNamedFramebufferRenderbuffer(fbo, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    GLuint rb[3], fbo[2];
+    GLsizei samples = p->msaa ? 4 : 0;
+    glCreateRenderbuffers(3, rb);
+    glNamedRenderbufferStorageMultisample(rb[0], samples, GL_RGBA8, SIDE, SIDE);
+    glNamedRenderbufferStorageMultisample(rb[1], samples, GL_DEPTH_COMPONENT32F, SIDE, SIDE);
+    glNamedRenderbufferStorage(rb[2], GL_RGBA8, SIDE, SIDE);
+    glCreateFramebuffers(2, fbo);
+    glNamedFramebufferRenderbuffer(fbo[0], GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[0]);
+    glNamedFramebufferRenderbuffer(fbo[0], GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, rb[1]);
+    glNamedFramebufferRenderbuffer(fbo[1], GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, rb[2]);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo[0]);
     glViewport(0, 0, SIDE, SIDE);
-    glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
+    const float *bg = msaa_background;
+    if (p->msaa) glClearColor(bg[0], bg[1], bg[2], bg[3]);
+    else glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
     glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     xyl_diag d = {0};
     float m[16];
@@ -254,6 +266,9 @@ static void gl_picture(suite *s, const shot *p, uint8_t *rgba)
         memcpy(fr.dither, p->dither, sizeof fr.dither);
         expect(xyl_billboard_gl_draw(p->gl, &fr, &d), XYL_OK, &d);
     }
+    glBlitNamedFramebuffer(fbo[0], fbo[1], 0, 0, SIDE, SIDE, 0, 0, SIDE, SIDE,
+                           GL_COLOR_BUFFER_BIT, GL_NEAREST); /* the resolve */
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo[1]);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     uint8_t *tmp = malloc(4 * SIDE * SIDE);
     assert_non_null(tmp);
@@ -262,8 +277,8 @@ static void gl_picture(suite *s, const shot *p, uint8_t *rgba)
         memcpy(rgba + 4 * y * SIDE, tmp + 4 * (SIDE - 1 - y) * SIDE, 4 * SIDE);
     free(tmp);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glDeleteFramebuffers(1, &fbo);
-    glDeleteRenderbuffers(2, rb);
+    glDeleteFramebuffers(2, fbo);
+    glDeleteRenderbuffers(3, rb);
 }
 
 /* The same on Vulkan: the application's pass, the frame recorded into its command buffer. */
@@ -278,14 +293,15 @@ static void vk_picture(suite *s, const shot *p, uint8_t *rgba)
     vk_ok(vkAllocateCommandBuffers(a->device, &ai, &cb), "vkAllocateCommandBuffers");
     VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     vk_ok(vkBeginCommandBuffer(cb, &bi), "vkBeginCommandBuffer");
-    VkClearValue clear[2];
+    VkClearValue clear[3];
     memset(clear, 0, sizeof clear);
+    if (p->msaa) memcpy(clear[0].color.float32, msaa_background, sizeof msaa_background);
     clear[1].depthStencil.depth = 1.0f;
     VkRenderPassBeginInfo rb = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
-    rb.renderPass = a->pass;
-    rb.framebuffer = a->framebuffer;
+    rb.renderPass = p->msaa ? p->pass : a->pass;
+    rb.framebuffer = p->msaa ? p->framebuffer : a->framebuffer;
     rb.renderArea.extent = (VkExtent2D){SIDE, SIDE};
-    rb.clearValueCount = 2;
+    rb.clearValueCount = p->msaa ? 3 : 2;
     rb.pClearValues = clear;
     vkCmdBeginRenderPass(cb, &rb, VK_SUBPASS_CONTENTS_INLINE);
     VkViewport vp = {0.0f, 0.0f, (float)SIDE, (float)SIDE, 0.0f, 1.0f};
@@ -700,6 +716,145 @@ static void instances_place_the_billboard(void **state)
     no_messages(s);
 }
 
+/* A 4-sample pass resolving into the application's colour image (left in TRANSFER_SRC for
+ * the copy), with its own multisampled colour and depth. */
+typedef struct msaa_target {
+    VkRenderPass pass;
+    VkImage image[2];
+    VkDeviceMemory memory[2];
+    VkImageView view[2];
+    VkFramebuffer framebuffer;
+} msaa_target;
+
+static void msaa_make(app *a, msaa_target *m)
+{
+    VkAttachmentDescription att[3];
+    memset(att, 0, sizeof att);
+    const VkFormat formats[3] = {COLOR_FORMAT, DEPTH_FORMAT, COLOR_FORMAT};
+    for (int k = 0; k < 3; ++k) {
+        att[k].format = formats[k];
+        att[k].samples = k == 2 ? VK_SAMPLE_COUNT_1_BIT : VK_SAMPLE_COUNT_4_BIT;
+        att[k].loadOp = k == 2 ? VK_ATTACHMENT_LOAD_OP_DONT_CARE : VK_ATTACHMENT_LOAD_OP_CLEAR;
+        att[k].storeOp = k == 2 ? VK_ATTACHMENT_STORE_OP_STORE : VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        att[k].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+        att[k].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+        att[k].finalLayout = k == 1 ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL
+                             : k == 2 ? VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL
+                                      : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    }
+    VkAttachmentReference color = {0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+    VkAttachmentReference depth = {1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    VkAttachmentReference resolve = {2, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+    VkSubpassDescription sub = {0};
+    sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+    sub.colorAttachmentCount = 1;
+    sub.pColorAttachments = &color;
+    sub.pResolveAttachments = &resolve;
+    sub.pDepthStencilAttachment = &depth;
+    VkSubpassDependency dep = {0, VK_SUBPASS_EXTERNAL,
+                               VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
+                               VK_PIPELINE_STAGE_TRANSFER_BIT,
+                               VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_ACCESS_TRANSFER_READ_BIT,
+                               0};
+    VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+    ri.attachmentCount = 3;
+    ri.pAttachments = att;
+    ri.subpassCount = 1;
+    ri.pSubpasses = &sub;
+    ri.dependencyCount = 1;
+    ri.pDependencies = &dep;
+    vk_ok(vkCreateRenderPass(a->device, &ri, NULL, &m->pass), "vkCreateRenderPass");
+    for (int k = 0; k < 2; ++k) {
+        VkImageCreateInfo ii = {.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+        ii.imageType = VK_IMAGE_TYPE_2D;
+        ii.format = formats[k];
+        ii.extent = (VkExtent3D){SIDE, SIDE, 1};
+        ii.mipLevels = ii.arrayLayers = 1;
+        ii.samples = VK_SAMPLE_COUNT_4_BIT;
+        ii.usage = k ? VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT
+                     : VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+        vk_ok(vkCreateImage(a->device, &ii, NULL, &m->image[k]), "vkCreateImage");
+        VkMemoryRequirements req;
+        vkGetImageMemoryRequirements(a->device, m->image[k], &req);
+        m->memory[k] = memory_for(a, req, 0);
+        vk_ok(vkBindImageMemory(a->device, m->image[k], m->memory[k], 0), "vkBindImageMemory");
+        VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+        vi.image = m->image[k];
+        vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
+        vi.format = formats[k];
+        vi.subresourceRange.aspectMask = k ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+        vi.subresourceRange.levelCount = vi.subresourceRange.layerCount = 1;
+        vk_ok(vkCreateImageView(a->device, &vi, NULL, &m->view[k]), "vkCreateImageView");
+    }
+    VkImageView views[3] = {m->view[0], m->view[1], a->view[0]};
+    VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+    fi.renderPass = m->pass;
+    fi.attachmentCount = 3;
+    fi.pAttachments = views;
+    fi.width = fi.height = SIDE;
+    fi.layers = 1;
+    vk_ok(vkCreateFramebuffer(a->device, &fi, NULL, &m->framebuffer), "vkCreateFramebuffer");
+}
+
+static void msaa_free(app *a, msaa_target *m)
+{
+    vkDestroyFramebuffer(a->device, m->framebuffer, NULL);
+    for (int k = 0; k < 2; ++k) {
+        vkDestroyImageView(a->device, m->view[k], NULL);
+        vkDestroyImage(a->device, m->image[k], NULL);
+        vkFreeMemory(a->device, m->memory[k], NULL);
+    }
+    vkDestroyRenderPass(a->device, m->pass, NULL);
+}
+
+/* Into 4 samples the billboard's filtered coverage goes to alpha-to-coverage: each kind drawn
+ * into a multisampled Vulkan pass (resolved) is GL's multisampled picture (alpha-to-coverage
+ * and alpha-to-one there) within MSAA_COLOUR_RMSE over every pixel, against an opaque
+ * background; the bake itself stays single-sampled. */
+#define MSAA_COLOUR_RMSE 0.02
+static void multisampled_draws_as_on_gl(void **state)
+{
+    suite *s = need_both(state);
+    msaa_target m;
+    memset(&m, 0, sizeof m);
+    msaa_make(&s->a, &m);
+    uint8_t *g = malloc(4 * SIDE * SIDE), *v = malloc(4 * SIDE * SIDE);
+    assert_true(g && v);
+    for (int k = 0; k < 4; ++k) {
+        xyl_diag d = {0};
+        shot p = {0};
+        xyl_billboard_gl_desc gd = gl_desc(s, &kinds[k]);
+        xyl_billboard_vk_desc vd = vk_desc(s, &kinds[k]);
+        vd.render_pass = m.pass;
+        vd.samples = VK_SAMPLE_COUNT_4_BIT;
+        expect(xyl_billboard_gl_bake(&gd, gl_draw_leaves, s, &p.gl, &d), XYL_OK, &d);
+        expect(xyl_billboard_vk_bake(&vd, vk_draw_leaves, s, &p.vk, &d), XYL_OK, &d);
+        frame_camera(s, 0.52f, 0.35f, &p);
+        p.msaa = true, p.pass = m.pass, p.framebuffer = m.framebuffer;
+        gl_picture(s, &p, g);
+        vk_picture(s, &p, v);
+        char name[64];
+        snprintf(name, sizeof name, "msaa_%s_gl", kinds[k].name);
+        keep_png(name, g);
+        snprintf(name, sizeof name, "msaa_%s_vk", kinds[k].name);
+        keep_png(name, v);
+        double rmse = colour_rmse(g, v);
+        size_t shown = 0;
+        for (size_t i = 0; i < (size_t)SIDE * SIDE; ++i)
+            shown += abs(v[4 * i + 1] - (int)lrintf(msaa_background[1] * 255.0f)) > 8;
+        print_message("%s, 4 samples: colour RMSE against GL %.4f, %zu pixels off the "
+                      "background\n", kinds[k].name, rmse, shown);
+        assert_true(shown > SIDE * SIDE / 50);
+        assert_true(rmse <= MSAA_COLOUR_RMSE);
+        xyl_billboard_gl_destroy(p.gl);
+        xyl_billboard_vk_destroy(p.vk);
+    }
+    free(g);
+    free(v);
+    msaa_free(&s->a, &m);
+    no_messages(s);
+}
+
 static void bad_input_gets_result_codes(void **state)
 {
     suite *s = need_both(state);
@@ -829,6 +984,7 @@ int main(void)
         cmocka_unit_test(impostor_error_is_gls),
         cmocka_unit_test(dither_ranges_split_the_pixels),
         cmocka_unit_test(instances_place_the_billboard),
+        cmocka_unit_test(multisampled_draws_as_on_gl),
         cmocka_unit_test(bad_input_gets_result_codes),
         cmocka_unit_test(bake_allocates_through_the_callers_allocator),
     };
