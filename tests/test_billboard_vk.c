@@ -230,6 +230,7 @@ typedef struct shot {
     bool msaa;
     VkRenderPass pass;
     VkFramebuffer framebuffer;
+    bool dynamic; /* Vulkan: dynamic rendering into the application's images */
 } shot;
 
 static const float msaa_background[4] = {0.85f, 0.9f, 0.95f, 1.0f};
@@ -303,7 +304,8 @@ static void vk_picture(suite *s, const shot *p, uint8_t *rgba)
     rb.renderArea.extent = (VkExtent2D){SIDE, SIDE};
     rb.clearValueCount = p->msaa ? 3 : 2;
     rb.pClearValues = clear;
-    vkCmdBeginRenderPass(cb, &rb, VK_SUBPASS_CONTENTS_INLINE);
+    if (p->dynamic) begin_dynamic(a, cb, clear);
+    else vkCmdBeginRenderPass(cb, &rb, VK_SUBPASS_CONTENTS_INLINE);
     VkViewport vp = {0.0f, 0.0f, (float)SIDE, (float)SIDE, 0.0f, 1.0f};
     VkRect2D sc = {{0, 0}, {SIDE, SIDE}};
     vkCmdSetViewport(cb, 0, 1, &vp);
@@ -325,7 +327,8 @@ static void vk_picture(suite *s, const shot *p, uint8_t *rgba)
         else
             expect(xyl_billboard_vk_cmd_draw(p->vk, cb, &fr, &d), XYL_OK, &d);
     }
-    vkCmdEndRenderPass(cb);
+    if (p->dynamic) end_dynamic(a, cb);
+    else vkCmdEndRenderPass(cb);
     VkBufferImageCopy copy = {0};
     copy.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
     copy.imageSubresource.layerCount = 1;
@@ -855,6 +858,44 @@ static void multisampled_draws_as_on_gl(void **state)
     no_messages(s);
 }
 
+/* A billboard made for dynamic rendering (Vulkan 1.3: no render pass, the colour and depth
+ * formats) draws, inside vkCmdBeginRendering on the application's images, the picture the
+ * render pass's billboard draws, byte for byte. */
+static void dynamic_rendering_draws_what_the_pass_draws(void **state)
+{
+    suite *s = need_both(state);
+    if (!s->a.dynamic_rendering) {
+        print_message("skipped: no Vulkan 1.3 dynamic rendering\n");
+        skip();
+    }
+    uint8_t *pass = malloc(4 * SIDE * SIDE), *dyn = malloc(4 * SIDE * SIDE);
+    assert_true(pass && dyn);
+    for (int k = 2; k < 4; ++k) {
+        xyl_diag d = {0};
+        shot p = {0};
+        xyl_billboard_vk_desc vd = vk_desc(s, &kinds[k]);
+        expect(xyl_billboard_vk_bake(&vd, vk_draw_leaves, s, &p.vk, &d), XYL_OK, &d);
+        frame_camera(s, 0.52f, 0.35f, &p);
+        vk_picture(s, &p, pass);
+        xyl_billboard_vk_destroy(p.vk);
+        vd.render_pass = VK_NULL_HANDLE;
+        vd.color_format = COLOR_FORMAT;
+        vd.depth_format = DEPTH_FORMAT;
+        expect(xyl_billboard_vk_bake(&vd, vk_draw_leaves, s, &p.vk, &d), XYL_OK, &d);
+        p.dynamic = true;
+        vk_picture(s, &p, dyn);
+        size_t covered = 0;
+        for (size_t i = 0; i < (size_t)SIDE * SIDE; ++i) covered += dyn[4 * i + 3] > 0;
+        print_message("%s: %zu pixels covered with dynamic rendering\n", kinds[k].name, covered);
+        assert_true(covered > SIDE * SIDE / 50);
+        assert_memory_equal(pass, dyn, 4 * SIDE * SIDE);
+        xyl_billboard_vk_destroy(p.vk);
+    }
+    free(pass);
+    free(dyn);
+    no_messages(s);
+}
+
 static void bad_input_gets_result_codes(void **state)
 {
     suite *s = need_both(state);
@@ -985,6 +1026,7 @@ int main(void)
         cmocka_unit_test(dither_ranges_split_the_pixels),
         cmocka_unit_test(instances_place_the_billboard),
         cmocka_unit_test(multisampled_draws_as_on_gl),
+        cmocka_unit_test(dynamic_rendering_draws_what_the_pass_draws),
         cmocka_unit_test(bad_input_gets_result_codes),
         cmocka_unit_test(bake_allocates_through_the_callers_allocator),
     };

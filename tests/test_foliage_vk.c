@@ -272,65 +272,6 @@ static xyl_foliage_vk_frame square_frame(void)
     return fr;
 }
 
-static void image_barrier(VkCommandBuffer cb, VkImage image, VkImageAspectFlags aspect,
-                          VkImageLayout from, VkImageLayout to, VkPipelineStageFlags src_stage,
-                          VkAccessFlags src, VkPipelineStageFlags dst_stage, VkAccessFlags dst)
-{
-    VkImageMemoryBarrier b = {.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
-    b.srcAccessMask = src;
-    b.dstAccessMask = dst;
-    b.oldLayout = from;
-    b.newLayout = to;
-    b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.image = image;
-    b.subresourceRange.aspectMask = aspect;
-    b.subresourceRange.levelCount = b.subresourceRange.layerCount = 1;
-    vkCmdPipelineBarrier(cb, src_stage, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
-}
-
-/* Dynamic rendering into the same images: their layouts are the application's to set. */
-static void begin_dynamic(const app *a, VkCommandBuffer cb, const VkClearValue *clear)
-{
-    image_barrier(cb, a->image[0], VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-                  VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT);
-    image_barrier(cb, a->image[1], VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                  VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, 0,
-                  VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
-                      VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT,
-                  VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
-                      VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT);
-    VkRenderingAttachmentInfo color = {.sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    color.imageView = a->view[0];
-    color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    color.clearValue = clear[0];
-    VkRenderingAttachmentInfo depth = color;
-    depth.imageView = a->view[1];
-    depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
-    depth.clearValue = clear[1];
-    VkRenderingInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDERING_INFO};
-    ri.renderArea.extent = (VkExtent2D){SIDE, SIDE};
-    ri.layerCount = 1;
-    ri.colorAttachmentCount = 1;
-    ri.pColorAttachments = &color;
-    ri.pDepthAttachment = &depth;
-    vkCmdBeginRendering(cb, &ri);
-}
-
-static void end_dynamic(const app *a, VkCommandBuffer cb)
-{
-    vkCmdEndRendering(cb);
-    image_barrier(cb, a->image[0], VK_IMAGE_ASPECT_COLOR_BIT,
-                  VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-                  VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT,
-                  VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT,
-                  VK_ACCESS_TRANSFER_READ_BIT);
-}
-
 /* The application's frame: clear, vk's leaves at lods (in the render pass, or with dynamic
  * rendering), or with lods NULL the per-leaf cut for view `cut` (the compute pass before the
  * render pass, its indirect draw inside), a copy of the colour image; rgba top row first. */
