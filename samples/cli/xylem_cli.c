@@ -1039,6 +1039,7 @@ typedef struct render_job {
     xyl_foliage_view leaf_view;
     size_t leaves_drawn;
     bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
+    bool gpu_timer_billboard; /* gpu_ms times the billboard drawn in the tree's place */
     float stem_width;     /* twice the skeleton's thickest node's radius: where a forest
                              leaves stems out */
 } render_job;
@@ -1643,6 +1644,7 @@ static xyl_result render_vk_tree(const options *o, render_job *j, xyl_diag *d)
     xyl_result r = xyl_cli_render_vk_tree(&t, j->rgba, name, &j->gpu_ms, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
     j->gpu_timer_all = true;
+    j->gpu_timer_billboard = t.billboard != NULL;
     free(tex);
     if (r == XYL_OK) printf("device: %s (Vulkan)\n", name);
     if (r == XYL_OK && t.billboard)
@@ -1714,7 +1716,10 @@ static void print_render(const options *o, const render_job *j, const char *path
            j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
            "GPU timer %.3f ms%s\n", j->select_ms, j->render_ms, j->gpu_ms,
-           !j->draw_leaves ? "" : j->gpu_timer_all ? " (stems and leaves)" : " (stems)");
+           !j->draw_leaves           ? ""
+           : j->gpu_timer_billboard ? " (the billboard)"
+           : j->gpu_timer_all       ? " (stems and leaves)"
+                                    : " (stems)");
     printf("wrote %s\n", path);
 }
 
