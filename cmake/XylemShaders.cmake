@@ -109,3 +109,8 @@ xyl_shader(vk_foliage_leaf_capture_vert foliage_leaf.vert vk_foliage XYL_CAPTURE
 xyl_shader(vk_foliage_leaf_frag foliage_leaf.frag vk_foliage)
 xyl_shader(vk_foliage_leaf_list_vert foliage_leaf.vert vk_foliage XYL_LIST)
 xyl_shader(vk_foliage_cut_comp foliage_cut.comp vk_foliage XYL_CUT)
+xyl_shader(vk_billboard_vert billboard.vert vk_foliage XYL_BILLBOARD)
+xyl_shader(vk_billboard_instances_vert billboard.vert vk_foliage XYL_BILLBOARD XYL_INSTANCES)
+xyl_shader(vk_billboard_frag billboard.frag vk_foliage XYL_BILLBOARD)
+xyl_shader(vk_impostor_vert impostor.vert vk_foliage XYL_BILLBOARD)
+xyl_shader(vk_impostor_frag impostor.frag vk_foliage XYL_BILLBOARD)

@@ -4,6 +4,15 @@
 // Lambert-plus-sky term (tess_shade.frag), n the baked normal turned into world space. The
 // colour is stored premultiplied by coverage, so a filtered texel's colour is texel.rgb / texel.a.
 
+#ifdef XYL_VULKAN
+layout(set = 0, binding = XYL_BILLBOARD_VK_BINDING_COLOR) uniform sampler2DArray u_color_map;
+layout(set = 0, binding = XYL_BILLBOARD_VK_BINDING_NORMAL) uniform sampler2DArray u_normal_map;
+#define u_light xyl_bpush.light.xyz
+#define u_cutoff xyl_bpush.eye.w
+#define u_bake_light xyl_bconst.bake_light.xyz
+#define u_to_coverage xyl_bconst.to_coverage
+#define u_dither xyl_bpush.dither
+#else
 layout(binding = 0) uniform sampler2DArray u_color_map;
 layout(binding = 1) uniform sampler2DArray u_normal_map;
 layout(location = 6) uniform vec3 u_light;
@@ -12,6 +21,7 @@ layout(location = 8) uniform vec3 u_bake_light; // all 0: each view lit from its
 // 1 in a multisampled target: alpha (the filtered coverage) goes to alpha-to-coverage
 layout(location = 9) uniform int u_to_coverage;
 layout(location = 10) uniform vec2 u_dither; // a cross-fade's keep range (xyl_dither.h)
+#endif
 
 layout(location = 0) in vec2 v_uv;
 layout(location = 1) flat in vec3 v_right;

@@ -6,6 +6,19 @@
 // direction)), and the views are blended by weight times coverage; colours are stored
 // premultiplied by coverage.
 
+#ifdef XYL_VULKAN
+layout(set = 0, binding = XYL_BILLBOARD_VK_BINDING_COLOR) uniform sampler2D u_color_map;
+layout(set = 0, binding = XYL_BILLBOARD_VK_BINDING_NORMAL) uniform sampler2D u_normal_map;
+#define u_eye xyl_bpush.eye.xyz
+#define u_center xyl_bconst.center.xyz
+#define u_radius xyl_bconst.center.w
+#define u_grid xyl_bconst.planes
+#define u_light xyl_bpush.light.xyz
+#define u_cutoff xyl_bpush.eye.w
+#define u_bake_light xyl_bconst.bake_light.xyz
+#define u_to_coverage xyl_bconst.to_coverage
+#define u_dither xyl_bpush.dither
+#else
 layout(binding = 0) uniform sampler2D u_color_map;
 layout(binding = 1) uniform sampler2D u_normal_map;
 #ifdef XYL_FOREST
@@ -29,6 +42,7 @@ layout(location = 8) uniform vec3 u_bake_light; // all 0: each view lit from its
 // 1 in a multisampled target: alpha (the filtered coverage) goes to alpha-to-coverage
 layout(location = 9) uniform int u_to_coverage;
 layout(location = 10) uniform vec2 u_dither; // a cross-fade's keep range (xyl_dither.h)
+#endif
 
 layout(location = 0) in vec3 v_world;
 layout(location = 1) flat in ivec3 v_views;

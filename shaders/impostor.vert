@@ -4,11 +4,21 @@
 // the eye is encoded on the octahedron and the three grid views around it are handed on with
 // their barycentric weights; the fragment stage blends them.
 
+#ifdef XYL_VULKAN
+#define u_view_proj xyl_bpush.view_proj
+#define u_eye xyl_bpush.eye.xyz
+#define u_center xyl_bconst.center.xyz
+#define u_radius xyl_bconst.center.w
+#define u_grid xyl_bconst.planes
+#define XYL_VERTEX gl_VertexIndex
+#else
 layout(location = 0) uniform mat4 u_view_proj;
 layout(location = 1) uniform vec3 u_eye;
 layout(location = 2) uniform vec3 u_center;
 layout(location = 3) uniform float u_radius;
 layout(location = 4) uniform int u_grid;
+#define XYL_VERTEX gl_VertexID
+#endif
 
 layout(location = 0) out vec3 v_world;
 layout(location = 1) flat out ivec3 v_views; // grid views, column + row * u_grid
@@ -21,7 +31,7 @@ vec2 sign_not_zero(vec2 v)
 
 void main()
 {
-    vec2 st = vec2((gl_VertexID & 1) != 0 ? 1.0 : -1.0, (gl_VertexID & 2) != 0 ? 1.0 : -1.0);
+    vec2 st = vec2((XYL_VERTEX & 1) != 0 ? 1.0 : -1.0, (XYL_VERTEX & 2) != 0 ? 1.0 : -1.0);
     vec3 to_eye = u_eye - u_center;
     float dist = length(to_eye);
     vec3 d = dist > 1e-6 * u_radius ? to_eye / dist : vec3(0.0, 0.0, 1.0);

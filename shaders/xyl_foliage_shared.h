@@ -64,6 +64,17 @@
 #define XYL_FOLIAGE_VK_BINDING_COMMAND 5
 #define XYL_FOLIAGE_VK_CUT_PUSH_SIZE 20
 
+/* The Vulkan billboard's (xylem/xyl_billboard_vk.h, billboard.* and impostor.* with
+ * XYL_BILLBOARD): set 0 holds the baked colour and normal maps, the billboard's constants (a
+ * uniform buffer, xyl_billboard_vk_constants below) and, for a forest's instanced draw, the
+ * instances; a draw's values are push constants (xyl_billboard_vk_push below). */
+#define XYL_BILLBOARD_VK_BINDING_COLOR 0
+#define XYL_BILLBOARD_VK_BINDING_NORMAL 1
+#define XYL_BILLBOARD_VK_BINDING_CONSTANTS 2
+#define XYL_BILLBOARD_VK_BINDING_INSTANCES 3
+#define XYL_BILLBOARD_VK_PUSH_SIZE 112
+#define XYL_BILLBOARD_VK_CONSTANTS_SIZE 64
+
 /* The forest renderer's (xylem/xyl_forest_gl.h, forest_*.vert): a frame's instances sorted by
  * species and level in one storage buffer of xyl_forest_instance records, the leaf records at
  * XYL_FOLIAGE_GL_BINDING_LEAVES, and the uniforms its vertex shaders add to the leaf and
@@ -169,7 +180,27 @@ vec2 xyl_foliage_corner_uv(xyl_foliage_gpu_leaf l, vec2 st)
     return mix(r.xy, r.zw, 0.5 * st + 0.5);
 }
 
-#if defined(XYL_VULKAN) && !defined(XYL_CUT)
+#if defined(XYL_VULKAN) && defined(XYL_BILLBOARD)
+/* A Vulkan billboard draw's values, in push constants (std430 offsets: 0, 64, 80, 96, 104). */
+layout(push_constant) uniform xyl_billboard_vk_push {
+    mat4 view_proj;     /* Vulkan clip convention (y down, depth 0..1) */
+    vec4 eye;           /* xyz: the camera; w: the alpha cutoff */
+    vec4 light;         /* xyz: towards the light, normalised */
+    vec2 dither;        /* the keep range of xyl_dither.h; (0, 0): every fragment */
+    uint first;         /* an instanced draw's first instance */
+    uint pad;
+} xyl_bpush;
+/* The billboard's own values, fixed at its bake (std140 offsets: 0, 16, 32, 40, 44, 48). */
+layout(std140, set = 0, binding = XYL_BILLBOARD_VK_BINDING_CONSTANTS) uniform
+xyl_billboard_vk_constants {
+    vec4 center;        /* xyz: the quads' centre; w: the octahedral kind's radius */
+    vec4 bake_light;    /* xyz: the bake's light, all 0: each view's own direction */
+    vec2 half_size;     /* the quads' half width and half height */
+    int kind;           /* an xyl_billboard_kind */
+    int planes;         /* cross: the planes; octahedral: the grid */
+    int to_coverage;    /* 1 in a multisampled target: alpha goes to alpha-to-coverage */
+} xyl_bconst;
+#elif defined(XYL_VULKAN) && !defined(XYL_CUT)
 /* A Vulkan draw's values, in push constants (std430 offsets: 0, 64, 80, 96, 100, 104). */
 layout(push_constant) uniform xyl_foliage_vk_push {
     mat4 view_proj;     /* Vulkan clip convention (y down, depth 0..1) */
@@ -201,6 +232,27 @@ typedef struct xyl_foliage_vk_push {
     float translucency;
     float dither[2];
 } xyl_foliage_vk_push;
+
+/* The push constants and constants of a Vulkan billboard draw (pinned in
+ * foliage/src/billboard_vk.c). */
+typedef struct xyl_billboard_vk_push {
+    float view_proj[16];
+    float eye[4];
+    float light[4];
+    float dither[2];
+    uint32_t first;
+    uint32_t pad;
+} xyl_billboard_vk_push;
+
+typedef struct xyl_billboard_vk_constants {
+    float center[4];
+    float bake_light[4];
+    float half_size[2];
+    int32_t kind;
+    int32_t planes;
+    int32_t to_coverage;
+    int32_t pad[3];
+} xyl_billboard_vk_constants;
 
 /* The push constants of the Vulkan per-leaf cut (pinned in foliage/src/foliage_vk.c). */
 typedef struct xyl_foliage_vk_cut_push {

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "billboard_gl_internal.h"
+#include "billboard_shape.h"
 #include "foliage_draw.h"
 #include "foliage_gl_util.h"
 #include "foliage_internal.h"
@@ -29,56 +30,9 @@ struct xyl_billboard_gl {
     uint32_t views, resolution, grid; /* grid: the octahedral kind's, else 0 */
     float center[3], half[2]; /* the quads' centre, half width and half height */
     float bake_light[3];      /* the bake's light; all 0: each view's own direction */
+    xyl__billboard_shape shape; /* all of the above, as the bake computed them */
     xyl_allocator alloc;
 };
-
-static xyl_result check_desc(const xyl_billboard_gl_desc *d, xyl_diag *diag)
-{
-    if (d->kind != XYL_BILLBOARD_SPHERICAL && d->kind != XYL_BILLBOARD_CYLINDRICAL &&
-        d->kind != XYL_BILLBOARD_CROSS && d->kind != XYL_BILLBOARD_OCTAHEDRAL)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "unknown billboard kind %d (spherical 0, cylindrical 1, cross 2, "
-                         "octahedral 3)", (int)d->kind);
-    if (d->kind == XYL_BILLBOARD_CROSS &&
-        (d->planes < 2 || d->planes > XYL_BILLBOARD_MAX_PLANES))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a cross billboard has 2 to %d planes, not %u", XYL_BILLBOARD_MAX_PLANES,
-                         d->planes);
-    if (d->kind != XYL_BILLBOARD_CROSS && d->planes > 1)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "%u planes: only a cross billboard has more than one", d->planes);
-    if (d->resolution < XYL_BILLBOARD_MIN_RESOLUTION || d->resolution > XYL_BILLBOARD_MAX_RESOLUTION)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a billboard resolution of %u: from %d to %d texels", d->resolution,
-                         XYL_BILLBOARD_MIN_RESOLUTION, XYL_BILLBOARD_MAX_RESOLUTION);
-    if (d->kind != XYL_BILLBOARD_OCTAHEDRAL && d->grid != 0)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "a grid of %u: only an octahedral billboard has a grid", d->grid);
-    if (d->kind == XYL_BILLBOARD_OCTAHEDRAL) {
-        uint32_t g = d->grid ? d->grid : XYL_BILLBOARD_DEFAULT_GRID;
-        if (g < XYL_BILLBOARD_MIN_GRID || g > XYL_BILLBOARD_MAX_GRID)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                             "an octahedral grid of %u views per side: from %d to %d", g,
-                             XYL_BILLBOARD_MIN_GRID, XYL_BILLBOARD_MAX_GRID);
-        if ((uint64_t)g * d->resolution > XYL_BILLBOARD_MAX_ATLAS)
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                             "an octahedral atlas of %u x %u views of %u texels is %llu texels "
-                             "wide, over %d", g, g, d->resolution,
-                             (unsigned long long)g * d->resolution, XYL_BILLBOARD_MAX_ATLAS);
-    }
-    for (int k = 0; k < 3; ++k)
-        if (!isfinite(d->light_dir[k]))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the bake's light is not finite");
-    for (int k = 0; k < 3; ++k) {
-        if (!isfinite(d->lo[k]) || !isfinite(d->hi[k]))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "the tree's box is not finite");
-        if (!(d->lo[k] < d->hi[k]))
-            return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, k,
-                             "the tree's box is empty or inverted on axis %d (%g .. %g)", k,
-                             (double)d->lo[k], (double)d->hi[k]);
-    }
-    return XYL_OK;
-}
 
 /* ---- program ------------------------------------------------------------------------------ */
 
@@ -116,56 +70,6 @@ static xyl_result build_program(xyl_billboard_gl *bb, xyl_diag *diag)
 
 /* ---- bake --------------------------------------------------------------------------------- */
 
-/* Grid view v's direction on the octahedron (the header's formula). */
-static void octahedral_dir(uint32_t grid, uint32_t v, double d[3])
-{
-    double ox = 2.0 * (v % grid) / (grid - 1) - 1.0, oz = 2.0 * (v / grid) / (grid - 1) - 1.0;
-    double y = 1.0 - fabs(ox) - fabs(oz);
-    if (y < 0.0) {
-        double fx = (1.0 - fabs(oz)) * (ox >= 0.0 ? 1.0 : -1.0);
-        double fz = (1.0 - fabs(ox)) * (oz >= 0.0 ? 1.0 : -1.0);
-        ox = fx, oz = fz;
-    }
-    double len = sqrt(ox * ox + y * y + oz * oz);
-    d[0] = ox / len, d[1] = y / len, d[2] = oz / len;
-}
-
-/* View v's frame: d from the centre towards its camera, right and up across its picture. */
-static void view_frame(const xyl_billboard_gl *bb, uint32_t v, float right[3], float up[3],
-                       float d[3])
-{
-    double w[3] = {0.0, 0.0, 1.0};
-    if (bb->kind == XYL_BILLBOARD_OCTAHEDRAL) {
-        octahedral_dir(bb->grid, v, w);
-    } else if (bb->kind == XYL_BILLBOARD_CROSS) {
-        double a = 3.14159265358979323846 * v / bb->views;
-        w[0] = sin(a), w[2] = cos(a);
-    }
-    double h = sqrt(w[0] * w[0] + w[2] * w[2]); /* right = normalize(Y x d) */
-    double r[3] = {h > 1e-4 ? w[2] / h : 1.0, 0.0, h > 1e-4 ? -w[0] / h : 0.0};
-    double u[3] = {w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2], w[0] * r[1] - w[1] * r[0]};
-    for (int k = 0; k < 3; ++k) right[k] = (float)r[k], up[k] = (float)u[k], d[k] = (float)w[k];
-}
-
-/* Orthographic world-to-clip matrix (column-major, GL clip) looking along -d at the centre,
- * the quad's rectangle (2 * half[0] by 2 * half[1]) filling the view and depth [-radius, radius] around the centre. */
-static void bake_matrix(const xyl_billboard_gl *bb, const float right[3], const float up[3],
-                        const float d[3], float radius, float m[16])
-{
-    const float *rows[3] = {right, up, d};
-    const float scale[3] = {1.0f / bb->half[0], 1.0f / bb->half[1], -1.0f / radius};
-    memset(m, 0, 16 * sizeof *m);
-    for (int r = 0; r < 3; ++r) {
-        float c = 0.0f;
-        for (int k = 0; k < 3; ++k) {
-            m[k * 4 + r] = rows[r][k] * scale[r];
-            c += rows[r][k] * bb->center[k];
-        }
-        m[12 + r] = -c * scale[r];
-    }
-    m[15] = 1.0f;
-}
-
 typedef struct bake_target {
     GLuint fbo, rb[2];
 } bake_target;
@@ -190,60 +94,6 @@ static xyl_result target_make(bake_target *t, uint32_t side, xyl_diag *diag)
         r = xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
                       "a %u x %u bake framebuffer is incomplete", side, side);
     return r;
-}
-
-/* Normals from the depth buffer (rows bottom to top, depth in [0, 1], 1 = nothing): the height
- * towards the camera h = (1 - 2 depth) * radius, n ~ (-dh/dx, -dh/dy, 1), texels step[0] wide
- * and step[1] high in world units; h / radius * 0.5 + 0.5 goes to alpha (0.5 where empty), for
- * the impostor's parallax correction. A neighbour that is empty or lies across a jump of more
- * than four texels' size is not used. */
-static void depth_to_normals(const float *depth, uint32_t n, float radius, const float step[2],
-                             uint8_t *out)
-{
-    const float jump = 4.0f * fmaxf(step[0], step[1]);
-    for (uint32_t y = 0; y < n; ++y)
-        for (uint32_t x = 0; x < n; ++x) {
-            size_t i = (size_t)y * n + x;
-            uint8_t *o = out + 4 * i;
-            if (depth[i] >= 1.0f) {
-                o[0] = 128, o[1] = 128, o[2] = 255, o[3] = 128;
-                continue;
-            }
-            float h = (1.0f - 2.0f * depth[i]) * radius, g[2] = {0.0f, 0.0f};
-            for (int axis = 0; axis < 2; ++axis) {
-                float sum = 0.0f;
-                int used = 0;
-                for (int s = -1; s <= 1; s += 2) {
-                    int64_t xx = (int64_t)x + (axis == 0 ? s : 0);
-                    int64_t yy = (int64_t)y + (axis == 1 ? s : 0);
-                    if (xx < 0 || yy < 0 || xx >= (int64_t)n || yy >= (int64_t)n) continue;
-                    float dn = depth[(size_t)yy * n + (size_t)xx];
-                    if (dn >= 1.0f) continue;
-                    float dh = ((1.0f - 2.0f * dn) * radius - h) * (float)s;
-                    if (fabsf(dh) > jump) continue;
-                    sum += dh;
-                    ++used;
-                }
-                g[axis] = used ? sum / (float)used / step[axis] : 0.0f;
-            }
-            float v[3] = {-g[0], -g[1], 1.0f};
-            float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-            for (int k = 0; k < 3; ++k)
-                o[k] = (uint8_t)lrintf((v[k] / len * 0.5f + 0.5f) * 255.0f);
-            o[3] = (uint8_t)lrintf(fminf(fmaxf(h / radius * 0.5f + 0.5f, 0.0f), 1.0f) * 255.0f);
-        }
-}
-
-/* Coverage from depth into the colour's alpha, the colour premultiplied by it (empty texels
- * 0): filtering and mipmaps then average colour over covered texels only, once the draw
- * divides by alpha, and an edge texel is not darkened by the empty ones around it. */
-static void colour_coverage(const float *depth, uint32_t n, uint8_t *rgba)
-{
-    for (size_t i = 0; i < (size_t)n * n; ++i)
-        if (depth[i] < 1.0f)
-            rgba[4 * i + 3] = 255;
-        else
-            memset(rgba + 4 * i, 0, 4);
 }
 
 static GLuint make_array(uint32_t side, uint32_t layers)
@@ -323,34 +173,29 @@ static void restore_state(const saved_state *s)
 }
 
 /* Every view: clear, the caller's draw, read colour and depth back, fill the layers. */
-static xyl_result bake_views(xyl_billboard_gl *bb, float radius, xyl_billboard_draw_fn draw,
+static xyl_result bake_views(xyl_billboard_gl *bb, xyl_billboard_draw_fn draw,
                              void *user, uint8_t *rgba, uint8_t *nrm, float *depth,
                              xyl_diag *diag)
 {
     uint32_t n = bb->resolution;
     bake_target t = {0};
     xyl_result r = target_make(&t, n, diag);
-    const float step[2] = {2.0f * bb->half[0] / (float)n, 2.0f * bb->half[1] / (float)n};
     for (uint32_t v = 0; r == XYL_OK && v < bb->views; ++v) {
-        float right[3], up[3], d[3], m[16];
-        view_frame(bb, v, right, up, d);
-        bake_matrix(bb, right, up, d, radius, m);
+        float m[16], light[3];
+        xyl__billboard_bake_camera(&bb->shape, v, m, light);
         glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
         glViewport(0, 0, (GLsizei)n, (GLsizei)n);
         glClearColor(0.0f, 0.0f, 0.0f, 0.0f);
         glClearDepth(1.0);
         glDepthMask(GL_TRUE);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        bool fixed = bb->bake_light[0] != 0.0f || bb->bake_light[1] != 0.0f ||
-                     bb->bake_light[2] != 0.0f;
-        r = draw(user, m, fixed ? bb->bake_light : d, diag);
+        r = draw(user, m, light, diag);
         if (r != XYL_OK) break;
         xyl__fgl_drain_errors(); /* the caller's draw reports its own */
         glBindFramebuffer(GL_READ_FRAMEBUFFER, t.fbo);
         glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_RGBA, GL_UNSIGNED_BYTE, rgba);
         glReadPixels(0, 0, (GLsizei)n, (GLsizei)n, GL_DEPTH_COMPONENT, GL_FLOAT, depth);
-        colour_coverage(depth, n, rgba);
-        depth_to_normals(depth, n, radius, step, nrm);
+        xyl__billboard_maps(&bb->shape, depth, rgba, nrm);
         GLint at[3];
         view_place(bb, v, at);
         if (bb->kind == XYL_BILLBOARD_OCTAHEDRAL) {
@@ -381,7 +226,9 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
     if (!desc || !draw || !out)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "desc, draw and out are required");
-    xyl_result r = check_desc(desc, diag);
+    const xyl__billboard_params params = {desc->kind, desc->planes, desc->resolution,
+                                          desc->grid, desc->lo, desc->hi, desc->light_dir};
+    xyl_result r = xyl__billboard_check(&params, diag);
     if (r == XYL_OK) r = xyl__fgl_need_context(diag);
     if (r != XYL_OK) return r;
     GLint max_side = 0, max_layers = 0;
@@ -403,24 +250,14 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
     xyl_billboard_gl *bb = xyl__calloc(&a, 1, sizeof *bb);
     if (!bb) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     bb->alloc = a;
-    bb->kind = desc->kind;
-    bb->views = desc->kind == XYL_BILLBOARD_CROSS ? desc->planes : grid ? grid * grid : 1;
-    bb->resolution = desc->resolution;
-    bb->grid = grid;
-    float ll = sqrtf(desc->light_dir[0] * desc->light_dir[0] +
-                     desc->light_dir[1] * desc->light_dir[1] +
-                     desc->light_dir[2] * desc->light_dir[2]);
-    if (ll > 0.0f && isfinite(ll))
-        for (int k = 0; k < 3; ++k) bb->bake_light[k] = desc->light_dir[k] / ll;
-    float ext[3];
-    for (int k = 0; k < 3; ++k) {
-        bb->center[k] = 0.5f * (desc->lo[k] + desc->hi[k]);
-        ext[k] = 0.5f * (desc->hi[k] - desc->lo[k]);
-    }
-    bb->half[0] = sqrtf(ext[0] * ext[0] + ext[2] * ext[2]); /* any turn about the axis fits */
-    bb->half[1] = ext[1];
-    float radius = sqrtf(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]) * 1.01f;
-    if (grid) bb->half[0] = bb->half[1] = radius; /* the sphere fits from every direction */
+    xyl__billboard_shape_of(&params, &bb->shape);
+    bb->kind = bb->shape.kind;
+    bb->views = bb->shape.views;
+    bb->resolution = bb->shape.resolution;
+    bb->grid = bb->shape.grid;
+    memcpy(bb->bake_light, bb->shape.bake_light, sizeof bb->bake_light);
+    memcpy(bb->center, bb->shape.center, sizeof bb->center);
+    memcpy(bb->half, bb->shape.half, sizeof bb->half);
     size_t texels = (size_t)bb->resolution * bb->resolution;
     uint8_t *rgba = xyl__alloc_array(&a, texels, 8);
     float *depth = xyl__alloc_array(&a, texels, sizeof *depth);
@@ -439,7 +276,7 @@ xyl_result xyl_billboard_gl_bake(const xyl_billboard_gl_desc *desc, xyl_billboar
             r = xyl__fgl_check(diag, "making the billboard's textures");
         }
         if (r == XYL_OK)
-            r = bake_views(bb, radius, draw, user, rgba, rgba + 4 * texels, depth, diag);
+            r = bake_views(bb, draw, user, rgba, rgba + 4 * texels, depth, diag);
         restore_state(&saved);
     }
     xyl__free(&a, rgba);
@@ -513,27 +350,11 @@ xyl_result xyl_billboard_gl_draw(xyl_billboard_gl *bb, const xyl_billboard_gl_fr
 {
     if (!bb || !frame)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "bb and frame are required");
-    bool any = false;
-    for (int i = 0; i < 16; ++i) {
-        if (!isfinite(frame->view_proj[i]))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, i, "view_proj[%d] is not finite", i);
-        any = any || frame->view_proj[i] != 0.0f;
-    }
-    if (!any)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1, "view_proj is all zero");
-    for (int k = 0; k < 3; ++k)
-        if (!isfinite(frame->eye[k]) || !isfinite(frame->light_dir[k]))
-            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, k, "eye or light_dir is not finite");
-    if (!(frame->alpha_cutoff >= 0.0f && frame->alpha_cutoff <= 1.0f))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "alpha_cutoff %g is outside [0, 1]", (double)frame->alpha_cutoff);
-    xyl_result checked = xyl__foliage_dither_check(frame->dither, diag);
+    float l[3], cutoff;
+    xyl_result checked =
+        xyl__billboard_frame_check(frame->view_proj, frame->eye, frame->light_dir,
+                                   frame->alpha_cutoff, frame->dither, l, &cutoff, diag);
     if (checked != XYL_OK) return checked;
-    float l[3] = {frame->light_dir[0], frame->light_dir[1], frame->light_dir[2]};
-    float len = sqrtf(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
-    if (!(len > 0.0f) || !isfinite(len)) l[0] = 0.0f, l[1] = 1.0f, l[2] = 0.0f, len = 1.0f;
-    for (int k = 0; k < 3; ++k) l[k] /= len;
-    float cutoff = frame->alpha_cutoff > 0.0f ? frame->alpha_cutoff : 0.5f;
     xyl__fgl_drain_errors();
     GLboolean cull = glIsEnabled(GL_CULL_FACE);
     GLboolean a2c = glIsEnabled(GL_SAMPLE_ALPHA_TO_COVERAGE), a21 = glIsEnabled(GL_SAMPLE_ALPHA_TO_ONE);

@@ -10,6 +10,7 @@
 #include "foliage_draw.h"
 #include "foliage_internal.h"
 #include "foliage_vk_debug.h"
+#include "foliage_vk_util.h"
 
 extern const unsigned char xyl__shader_vk_foliage_leaf_vert[];
 extern const size_t xyl__shader_vk_foliage_leaf_vert_size;
@@ -36,26 +37,9 @@ _Static_assert(sizeof(VkDrawIndirectCommand) == 16, "the cut's command is four w
 #define CAPTURE_BYTES_PER_LEAF (4u * sizeof(xyl__foliage_vk_captured))
 #define MAX_CAPTURE_BYTES ((uint64_t)1 << 31)
 
-typedef struct vk_buffer {
-    VkBuffer buffer;
-    VkDeviceMemory memory;
-} vk_buffer;
-
-typedef struct vk_image {
-    VkImage image;
-    VkDeviceMemory memory;
-    VkImageView view;
-} vk_image;
-
 struct xyl_foliage_vk {
-    xyl_allocator alloc;
-    VkAllocationCallbacks callbacks;
-    const VkAllocationCallbacks *vkalloc; /* &callbacks with a caller's allocator, else NULL */
-    VkPhysicalDevice physical;
-    VkDevice device;
-    VkQueue queue;
+    xyl__fvk base; /* device, queue, allocator, memory types, command pool */
     VkPhysicalDeviceFeatures features;
-    VkPhysicalDeviceMemoryProperties memory;
     VkDeviceSize max_storage_range;
     uint32_t max_image_side;
     VkShaderModule vert, vert_capture, vert_list, frag, cut;
@@ -67,162 +51,14 @@ struct xyl_foliage_vk {
     VkRenderPass capture_pass; /* no attachments: the capture rasterizes nothing */
     VkFramebuffer capture_framebuffer;
     VkSampler sampler;
-    VkCommandPool commands;
-    vk_buffer leaves;
-    vk_buffer nodes, list, command; /* the per-leaf cut's forest, chosen records, draw */
+    xyl__fvk_buffer leaves;
+    xyl__fvk_buffer nodes, list, command; /* the per-leaf cut's forest, chosen records, draw */
     bool has_cut;                   /* a cut was recorded since the last upload */
-    vk_image texture;
+    xyl__fvk_image texture;
     xyl__foliage_tables tables; /* leaf_count 0: nothing uploaded */
 };
 
-/* ---- errors and memory -------------------------------------------------------------------- */
-
-/* Vulkan's host allocations through the caller's allocator (core's aligned blocks). */
-static void *VKAPI_PTR vk_alloc(void *user, size_t size, size_t align,
-                                VkSystemAllocationScope scope)
-{
-    (void)scope;
-    return xyl__alloc_aligned(user, size, align);
-}
-
-static void VKAPI_PTR vk_free(void *user, void *p)
-{
-    xyl__free_aligned(user, p);
-}
-
-static void *VKAPI_PTR vk_realloc(void *user, void *old, size_t size, size_t align,
-                                  VkSystemAllocationScope scope)
-{
-    (void)scope;
-    return xyl__realloc_aligned(user, old, size, align);
-}
-
-static xyl_result vk_fail(xyl_diag *diag, VkResult r, const char *what)
-{
-    if (r == VK_ERROR_OUT_OF_HOST_MEMORY || r == VK_ERROR_OUT_OF_DEVICE_MEMORY)
-        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "%s: out of memory (%d)", what,
-                         (int)r);
-    return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s failed: VkResult %d", what, (int)r);
-}
-
-#define VK_TRY(call, what)                                                                     \
-    do {                                                                                       \
-        VkResult vr_ = (call);                                                                 \
-        if (vr_ != VK_SUCCESS) return vk_fail(diag, vr_, what);                                \
-    } while (0)
-
-static xyl_result allocate(const xyl_foliage_vk *vk, VkMemoryRequirements req,
-                           VkMemoryPropertyFlags need, VkDeviceMemory *out, xyl_diag *diag)
-{
-    uint32_t type = 0;
-    while (type < vk->memory.memoryTypeCount &&
-           (!(req.memoryTypeBits & (1u << type)) ||
-            (vk->memory.memoryTypes[type].propertyFlags & need) != need))
-        ++type;
-    if (type == vk->memory.memoryTypeCount)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "no memory type fits a leaf buffer");
-    VkMemoryAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-    ai.allocationSize = req.size;
-    ai.memoryTypeIndex = type;
-    VK_TRY(vkAllocateMemory(vk->device, &ai, vk->vkalloc, out), "vkAllocateMemory");
-    return XYL_OK;
-}
-
-static void buffer_destroy(const xyl_foliage_vk *vk, vk_buffer *b)
-{
-    if (b->buffer) vkDestroyBuffer(vk->device, b->buffer, vk->vkalloc);
-    if (b->memory) vkFreeMemory(vk->device, b->memory, vk->vkalloc);
-    memset(b, 0, sizeof *b);
-}
-
-/* A host-visible, coherent buffer holding `data` (or zero-filled: NULL) of `size` bytes. */
-static xyl_result buffer_create(const xyl_foliage_vk *vk, VkDeviceSize size,
-                                VkBufferUsageFlags usage, const void *data, vk_buffer *out,
-                                xyl_diag *diag)
-{
-    vk_buffer b = {0};
-    VkBufferCreateInfo bi = {.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-    bi.size = size;
-    bi.usage = usage;
-    VkResult vr = vkCreateBuffer(vk->device, &bi, vk->vkalloc, &b.buffer);
-    if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkCreateBuffer");
-    VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(vk->device, b.buffer, &req);
-    xyl_result r = allocate(vk, req,
-                            VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT |
-                                VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                            &b.memory, diag);
-    void *map = NULL;
-    if (r == XYL_OK && (vr = vkBindBufferMemory(vk->device, b.buffer, b.memory, 0)) != VK_SUCCESS)
-        r = vk_fail(diag, vr, "vkBindBufferMemory");
-    if (r == XYL_OK && (vr = vkMapMemory(vk->device, b.memory, 0, size, 0, &map)) != VK_SUCCESS)
-        r = vk_fail(diag, vr, "vkMapMemory");
-    if (r != XYL_OK) {
-        buffer_destroy(vk, &b);
-        return r;
-    }
-    if (data) memcpy(map, data, (size_t)size);
-    else memset(map, 0, (size_t)size);
-    vkUnmapMemory(vk->device, b.memory);
-    *out = b;
-    return XYL_OK;
-}
-
-/* ---- one-off submissions ------------------------------------------------------------------ */
-
-static xyl_result begin_once(const xyl_foliage_vk *vk, VkCommandBuffer *cmd, xyl_diag *diag)
-{
-    VkCommandBufferAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    ai.commandPool = vk->commands;
-    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    ai.commandBufferCount = 1;
-    VK_TRY(vkAllocateCommandBuffers(vk->device, &ai, cmd), "vkAllocateCommandBuffers");
-    VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-    VkResult vr = vkBeginCommandBuffer(*cmd, &bi);
-    if (vr != VK_SUCCESS) {
-        vkFreeCommandBuffers(vk->device, vk->commands, 1, cmd);
-        return vk_fail(diag, vr, "vkBeginCommandBuffer");
-    }
-    return XYL_OK;
-}
-
-/* Ends, submits and waits for cmd, then frees it. */
-static xyl_result submit_wait(const xyl_foliage_vk *vk, VkCommandBuffer cmd, xyl_diag *diag)
-{
-    VkFence fence = VK_NULL_HANDLE;
-    VkFenceCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    VkResult vr = vkEndCommandBuffer(cmd);
-    const char *what = "vkEndCommandBuffer";
-    if (vr == VK_SUCCESS) {
-        vr = vkCreateFence(vk->device, &fi, vk->vkalloc, &fence);
-        what = "vkCreateFence";
-    }
-    if (vr == VK_SUCCESS) {
-        VkSubmitInfo si = {.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO};
-        si.commandBufferCount = 1;
-        si.pCommandBuffers = &cmd;
-        vr = vkQueueSubmit(vk->queue, 1, &si, fence);
-        what = "vkQueueSubmit";
-    }
-    if (vr == VK_SUCCESS) {
-        vr = vkWaitForFences(vk->device, 1, &fence, VK_TRUE, UINT64_MAX);
-        what = "vkWaitForFences";
-    }
-    if (fence) vkDestroyFence(vk->device, fence, vk->vkalloc);
-    vkFreeCommandBuffers(vk->device, vk->commands, 1, &cmd);
-    return vr == VK_SUCCESS ? XYL_OK : vk_fail(diag, vr, what);
-}
-
 /* ---- the leaf texture --------------------------------------------------------------------- */
-
-static void image_destroy(const xyl_foliage_vk *vk, vk_image *im)
-{
-    if (im->view) vkDestroyImageView(vk->device, im->view, vk->vkalloc);
-    if (im->image) vkDestroyImage(vk->device, im->image, vk->vkalloc);
-    if (im->memory) vkFreeMemory(vk->device, im->memory, vk->vkalloc);
-    memset(im, 0, sizeof *im);
-}
 
 static uint32_t mip_levels(uint32_t w, uint32_t h)
 {
@@ -231,8 +67,8 @@ static uint32_t mip_levels(uint32_t w, uint32_t h)
     return levels;
 }
 
-static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h, vk_image *out,
-                               xyl_diag *diag)
+static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h,
+                               xyl__fvk_image *out, xyl_diag *diag)
 {
     VkImageCreateInfo ii = {.sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
     ii.imageType = VK_IMAGE_TYPE_2D;
@@ -243,21 +79,8 @@ static xyl_result image_create(const xyl_foliage_vk *vk, uint32_t w, uint32_t h,
     ii.samples = VK_SAMPLE_COUNT_1_BIT;
     ii.usage = VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
                VK_IMAGE_USAGE_SAMPLED_BIT;
-    VK_TRY(vkCreateImage(vk->device, &ii, vk->vkalloc, &out->image), "vkCreateImage");
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(vk->device, out->image, &req);
-    xyl_result r = allocate(vk, req, 0, &out->memory, diag);
-    if (r != XYL_OK) return r;
-    VK_TRY(vkBindImageMemory(vk->device, out->image, out->memory, 0), "vkBindImageMemory");
-    VkImageViewCreateInfo vi = {.sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-    vi.image = out->image;
-    vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-    vi.format = ii.format;
-    vi.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
-    vi.subresourceRange.levelCount = ii.mipLevels;
-    vi.subresourceRange.layerCount = 1;
-    VK_TRY(vkCreateImageView(vk->device, &vi, vk->vkalloc, &out->view), "vkCreateImageView");
-    return XYL_OK;
+    return xyl__fvk_image_create(&vk->base, &ii, VK_IMAGE_VIEW_TYPE_2D,
+                                 VK_IMAGE_ASPECT_COLOR_BIT, out, diag);
 }
 
 static void level_barrier(VkCommandBuffer cmd, VkImage image, uint32_t level, uint32_t count,
@@ -333,31 +156,31 @@ static void write_sets(const xyl_foliage_vk *vk, uint32_t binding, VkBuffer buff
         w[k].pBufferInfo = view ? NULL : &bi;
         w[k].pImageInfo = view ? &ii : NULL;
     }
-    vkUpdateDescriptorSets(vk->device, 2, w, 0, NULL);
+    vkUpdateDescriptorSets(vk->base.device, 2, w, 0, NULL);
 }
 
 /* A new image, swapped in only when its upload worked. */
 static xyl_result upload_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32_t w, uint32_t h,
                                  xyl_diag *diag)
 {
-    vk_buffer staging = {0};
-    vk_image im = {0};
+    xyl__fvk_buffer staging = {0};
+    xyl__fvk_image im = {0};
     VkCommandBuffer cmd = VK_NULL_HANDLE;
-    xyl_result r = buffer_create(vk, (VkDeviceSize)w * h * 4u, VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
-                                 rgba, &staging, diag);
+    xyl_result r = xyl__fvk_buffer_create(&vk->base, (VkDeviceSize)w * h * 4u,
+                                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT, rgba, &staging, diag);
     if (r == XYL_OK) r = image_create(vk, w, h, &im, diag);
-    if (r == XYL_OK) r = begin_once(vk, &cmd, diag);
+    if (r == XYL_OK) r = xyl__fvk_begin_once(&vk->base, &cmd, diag);
     if (r == XYL_OK) {
         record_texture(cmd, staging.buffer, im.image, w, h);
-        r = submit_wait(vk, cmd, diag);
+        r = xyl__fvk_submit_wait(&vk->base, cmd, diag);
     }
-    buffer_destroy(vk, &staging);
+    xyl__fvk_buffer_destroy(&vk->base, &staging);
     if (r != XYL_OK) {
-        image_destroy(vk, &im);
+        xyl__fvk_image_destroy(&vk->base, &im);
         return r;
     }
     write_sets(vk, XYL_FOLIAGE_VK_BINDING_TEXTURE, VK_NULL_HANDLE, im.view);
-    image_destroy(vk, &vk->texture);
+    xyl__fvk_image_destroy(&vk->base, &vk->texture);
     vk->texture = im;
     return XYL_OK;
 }
@@ -366,59 +189,19 @@ static xyl_result upload_texture(xyl_foliage_vk *vk, const uint8_t *rgba, uint32
 
 static xyl_result check_desc(const xyl_foliage_vk_desc *d, xyl_diag *diag)
 {
-    if (!d->physical_device || !d->device || !d->queue)
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.physical_device, desc.device and desc.queue are required");
-    if (!d->render_pass &&
-        (d->color_format == VK_FORMAT_UNDEFINED || d->depth_format == VK_FORMAT_UNDEFINED))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.render_pass, or colour and depth formats for dynamic rendering, "
-                         "are required");
-    uint32_t s = (uint32_t)d->samples;
-    if (s != 0 && ((s & (s - 1)) != 0 || s > 64))
-        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
-                         "desc.samples %u is not a power of two up to 64", s);
-    return XYL_OK;
+    return xyl__fvk_check_target(d->physical_device, d->device, d->queue, d->render_pass,
+                                 d->color_format, d->depth_format, d->samples, diag);
 }
 
 /* The device's version, queue family, sample count and limits, before anything is made. */
 static xyl_result query_device(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
                                VkSampleCountFlagBits samples, xyl_diag *diag)
 {
-    VkPhysicalDeviceProperties p;
-    vkGetPhysicalDeviceProperties(d->physical_device, &p);
-    if (p.apiVersion < VK_API_VERSION_1_2)
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s offers Vulkan %u.%u, not 1.2",
-                         p.deviceName, VK_API_VERSION_MAJOR(p.apiVersion),
-                         VK_API_VERSION_MINOR(p.apiVersion));
-    uint32_t nq = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(d->physical_device, &nq, NULL);
-    VkQueueFamilyProperties q[32];
-    if (nq > 32) nq = 32;
-    vkGetPhysicalDeviceQueueFamilyProperties(d->physical_device, &nq, q);
-    if (d->queue_family >= nq || !(q[d->queue_family].queueFlags & VK_QUEUE_GRAPHICS_BIT))
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
-                         "queue family %u of %s has no graphics queues", d->queue_family,
-                         p.deviceName);
-    VkSampleCountFlags offered =
-        p.limits.framebufferColorSampleCounts & p.limits.framebufferDepthSampleCounts;
-    if (!(offered & samples))
-        return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1, "%s does not offer %u samples",
-                         p.deviceName, (unsigned)samples);
-    vk->max_storage_range = p.limits.maxStorageBufferRange;
-    vk->max_image_side = p.limits.maxImageDimension2D;
-    vkGetPhysicalDeviceMemoryProperties(d->physical_device, &vk->memory);
+    xyl_result r = xyl__fvk_check_device(&vk->base, d->queue_family, samples, diag);
+    if (r != XYL_OK) return r;
+    vk->max_storage_range = vk->base.properties.limits.maxStorageBufferRange;
+    vk->max_image_side = vk->base.properties.limits.maxImageDimension2D;
     if (d->enabled_features) vk->features = *d->enabled_features;
-    return XYL_OK;
-}
-
-static xyl_result shader(const xyl_foliage_vk *vk, const unsigned char *code, size_t size,
-                         VkShaderModule *out, xyl_diag *diag)
-{
-    VkShaderModuleCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    si.codeSize = size;
-    si.pCode = (const uint32_t *)(const void *)code; /* the embedded arrays are 4-byte aligned */
-    VK_TRY(vkCreateShaderModule(vk->device, &si, vk->vkalloc, out), "vkCreateShaderModule");
     return XYL_OK;
 }
 
@@ -441,8 +224,9 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     li.bindingCount = 6;
     li.pBindings = b;
-    VK_TRY(vkCreateDescriptorSetLayout(vk->device, &li, vk->vkalloc, &vk->set_layout),
-           "vkCreateDescriptorSetLayout");
+    XYL__FVK_TRY(
+        vkCreateDescriptorSetLayout(vk->base.device, &li, vk->base.vkalloc, &vk->set_layout),
+        "vkCreateDescriptorSetLayout");
     VkPushConstantRange pc = {VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                               XYL_FOLIAGE_VK_PUSH_SIZE};
     VkPipelineLayoutCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
@@ -450,10 +234,11 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
     pi.pSetLayouts = &vk->set_layout;
     pi.pushConstantRangeCount = 1;
     pi.pPushConstantRanges = &pc;
-    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->layout), "vkCreatePipelineLayout");
+    XYL__FVK_TRY(vkCreatePipelineLayout(vk->base.device, &pi, vk->base.vkalloc, &vk->layout),
+           "vkCreatePipelineLayout");
     VkPushConstantRange cut_pc = {VK_SHADER_STAGE_COMPUTE_BIT, 0, XYL_FOLIAGE_VK_CUT_PUSH_SIZE};
     pi.pPushConstantRanges = &cut_pc;
-    VK_TRY(vkCreatePipelineLayout(vk->device, &pi, vk->vkalloc, &vk->cut_layout),
+    XYL__FVK_TRY(vkCreatePipelineLayout(vk->base.device, &pi, vk->base.vkalloc, &vk->cut_layout),
            "vkCreatePipelineLayout");
     VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 10},
                                      {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2}};
@@ -461,95 +246,29 @@ static xyl_result layouts(xyl_foliage_vk *vk, xyl_diag *diag)
     dp.maxSets = 2;
     dp.poolSizeCount = 2;
     dp.pPoolSizes = sizes;
-    VK_TRY(vkCreateDescriptorPool(vk->device, &dp, vk->vkalloc, &vk->pool), "vkCreateDescriptorPool");
+    XYL__FVK_TRY(vkCreateDescriptorPool(vk->base.device, &dp, vk->base.vkalloc, &vk->pool),
+           "vkCreateDescriptorPool");
     VkDescriptorSetLayout sl[2] = {vk->set_layout, vk->set_layout};
     VkDescriptorSet sets[2];
     VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     ai.descriptorPool = vk->pool;
     ai.descriptorSetCount = 2;
     ai.pSetLayouts = sl;
-    VK_TRY(vkAllocateDescriptorSets(vk->device, &ai, sets), "vkAllocateDescriptorSets");
+    XYL__FVK_TRY(vkAllocateDescriptorSets(vk->base.device, &ai, sets), "vkAllocateDescriptorSets");
     vk->set = sets[0];
     vk->capture_set = sets[1];
     return XYL_OK;
 }
 
-typedef struct pipe_target {
-    VkRenderPass pass;
-    uint32_t subpass;
-    VkFormat color, depth;
-    VkSampleCountFlagBits samples;
-    bool capture; /* vertex stage only, rasterizer off, no attachments */
-    bool list;    /* the cut's draw: the vertex shader reads the list */
-} pipe_target;
-
-static xyl_result pipeline(const xyl_foliage_vk *vk, const pipe_target *t, VkPipeline *out,
-                           xyl_diag *diag)
+/* A draw pipeline of the renderer's layout: capture (vertex stage only), the cut's list, or
+ * the plain draw. */
+static xyl_result pipeline(const xyl_foliage_vk *vk, xyl__fvk_pipe t, bool capture, bool list,
+                           VkPipeline *out, xyl_diag *diag)
 {
-    VkPipelineShaderStageCreateInfo st[2] = {
-        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0, VK_SHADER_STAGE_VERTEX_BIT,
-         t->capture ? vk->vert_capture : t->list ? vk->vert_list : vk->vert, "main", NULL},
-        {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
-         VK_SHADER_STAGE_FRAGMENT_BIT, vk->frag, "main", NULL}};
-    VkPipelineVertexInputStateCreateInfo vi = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    VkPipelineInputAssemblyStateCreateInfo ia = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
-    VkPipelineViewportStateCreateInfo vp = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-    vp.viewportCount = vp.scissorCount = 1;
-    VkPipelineRasterizationStateCreateInfo rs = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-    rs.rasterizerDiscardEnable = t->capture;
-    rs.polygonMode = VK_POLYGON_MODE_FILL;
-    rs.cullMode = VK_CULL_MODE_NONE; /* double-sided */
-    /* view_proj flips y and Vulkan measures winding with y down: the mirrors cancel, so the
-     * counter-clockwise side is the front, as in GL, and gl_FrontFacing agrees with GL's */
-    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
-    rs.lineWidth = 1.0f;
-    VkPipelineMultisampleStateCreateInfo ms = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-    ms.rasterizationSamples = t->samples;
-    VkPipelineDepthStencilStateCreateInfo ds = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-    ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
-    ds.depthCompareOp = VK_COMPARE_OP_LESS;
-    VkPipelineColorBlendAttachmentState blend = {0};
-    blend.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
-                           VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT;
-    VkPipelineColorBlendStateCreateInfo cb = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-    cb.attachmentCount = t->capture ? 0 : 1;
-    cb.pAttachments = &blend;
-    VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-    VkPipelineDynamicStateCreateInfo dy = {VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO,
-                                           NULL, 0, 2, dyn};
-    VkGraphicsPipelineCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO};
-    pi.stageCount = t->capture ? 1 : 2;
-    pi.pStages = st;
-    pi.pVertexInputState = &vi;
-    pi.pInputAssemblyState = &ia;
-    pi.pViewportState = &vp;
-    pi.pRasterizationState = &rs;
-    pi.pMultisampleState = &ms;
-    pi.pDepthStencilState = t->capture ? NULL : &ds;
-    pi.pColorBlendState = &cb;
-    pi.pDynamicState = &dy;
-    pi.layout = vk->layout;
-    pi.renderPass = t->pass;
-    pi.subpass = t->subpass;
-    VkPipelineRenderingCreateInfoKHR ri = {
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO_KHR};
-    if (!t->pass) { /* dynamic rendering */
-        ri.colorAttachmentCount = 1;
-        ri.pColorAttachmentFormats = &t->color;
-        ri.depthAttachmentFormat = t->depth;
-        pi.pNext = &ri;
-    }
-    VK_TRY(vkCreateGraphicsPipelines(vk->device, VK_NULL_HANDLE, 1, &pi, vk->vkalloc, out),
-           "vkCreateGraphicsPipelines");
-    return XYL_OK;
+    t.vert = capture ? vk->vert_capture : list ? vk->vert_list : vk->vert;
+    t.frag = capture ? VK_NULL_HANDLE : vk->frag;
+    t.layout = vk->layout;
+    return xyl__fvk_pipeline(&vk->base, &t, out, diag);
 }
 
 static xyl_result cut_pipeline(xyl_foliage_vk *vk, xyl_diag *diag)
@@ -559,7 +278,7 @@ static xyl_result cut_pipeline(xyl_foliage_vk *vk, xyl_diag *diag)
         VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, NULL, 0,
         VK_SHADER_STAGE_COMPUTE_BIT, vk->cut, "main", NULL};
     ci.layout = vk->cut_layout;
-    VK_TRY(vkCreateComputePipelines(vk->device, VK_NULL_HANDLE, 1, &ci, vk->vkalloc,
+    XYL__FVK_TRY(vkCreateComputePipelines(vk->base.device, VK_NULL_HANDLE, 1, &ci, vk->base.vkalloc,
                                     &vk->cut_pipeline),
            "vkCreateComputePipelines");
     return XYL_OK;
@@ -568,26 +287,29 @@ static xyl_result cut_pipeline(xyl_foliage_vk *vk, xyl_diag *diag)
 static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
                           VkSampleCountFlagBits samples, xyl_diag *diag)
 {
-    xyl_result r = shader(vk, xyl__shader_vk_foliage_leaf_vert,
+    xyl_result r = xyl__fvk_shader(&vk->base, xyl__shader_vk_foliage_leaf_vert,
                           xyl__shader_vk_foliage_leaf_vert_size, &vk->vert, diag);
     if (r == XYL_OK)
-        r = shader(vk, xyl__shader_vk_foliage_leaf_capture_vert,
+        r = xyl__fvk_shader(&vk->base, xyl__shader_vk_foliage_leaf_capture_vert,
                    xyl__shader_vk_foliage_leaf_capture_vert_size, &vk->vert_capture, diag);
     if (r == XYL_OK)
-        r = shader(vk, xyl__shader_vk_foliage_leaf_frag, xyl__shader_vk_foliage_leaf_frag_size,
-                   &vk->frag, diag);
+        r = xyl__fvk_shader(&vk->base, xyl__shader_vk_foliage_leaf_frag,
+                            xyl__shader_vk_foliage_leaf_frag_size, &vk->frag, diag);
     if (r == XYL_OK)
-        r = shader(vk, xyl__shader_vk_foliage_leaf_list_vert,
+        r = xyl__fvk_shader(&vk->base, xyl__shader_vk_foliage_leaf_list_vert,
                    xyl__shader_vk_foliage_leaf_list_vert_size, &vk->vert_list, diag);
     if (r == XYL_OK)
-        r = shader(vk, xyl__shader_vk_foliage_cut_comp, xyl__shader_vk_foliage_cut_comp_size,
-                   &vk->cut, diag);
+        r = xyl__fvk_shader(&vk->base, xyl__shader_vk_foliage_cut_comp,
+                            xyl__shader_vk_foliage_cut_comp_size, &vk->cut, diag);
     if (r == XYL_OK) r = layouts(vk, diag);
-    pipe_target t = {d->render_pass, d->subpass, d->color_format, d->depth_format, samples,
-                     false, false};
-    if (r == XYL_OK) r = pipeline(vk, &t, &vk->pipeline, diag);
-    t.list = true;
-    if (r == XYL_OK) r = pipeline(vk, &t, &vk->list_pipeline, diag);
+    xyl__fvk_pipe t = {0};
+    t.pass = d->render_pass;
+    t.subpass = d->subpass;
+    t.color = d->color_format;
+    t.depth = d->depth_format;
+    t.samples = samples;
+    if (r == XYL_OK) r = pipeline(vk, t, false, false, &vk->pipeline, diag);
+    if (r == XYL_OK) r = pipeline(vk, t, false, true, &vk->list_pipeline, diag);
     if (r == XYL_OK) r = cut_pipeline(vk, diag);
     if (r != XYL_OK) return r;
     VkSamplerCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -595,11 +317,10 @@ static xyl_result objects(xyl_foliage_vk *vk, const xyl_foliage_vk_desc *d,
     si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR;
     si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
     si.maxLod = VK_LOD_CLAMP_NONE;
-    VK_TRY(vkCreateSampler(vk->device, &si, vk->vkalloc, &vk->sampler), "vkCreateSampler");
-    VkCommandPoolCreateInfo ci = {.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    ci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
-    ci.queueFamilyIndex = d->queue_family;
-    VK_TRY(vkCreateCommandPool(vk->device, &ci, vk->vkalloc, &vk->commands), "vkCreateCommandPool");
+    XYL__FVK_TRY(vkCreateSampler(vk->base.device, &si, vk->base.vkalloc, &vk->sampler),
+           "vkCreateSampler");
+    r = xyl__fvk_make_pool(&vk->base, d->queue_family, diag);
+    if (r != XYL_OK) return r;
     const uint8_t white[4] = {255, 255, 255, 255};
     return upload_texture(vk, white, 1, 1, diag);
 }
@@ -615,17 +336,7 @@ xyl_result xyl_foliage_vk_create(const xyl_foliage_vk_desc *desc, xyl_foliage_vk
     xyl_allocator a = desc->alloc;
     xyl_foliage_vk *vk = xyl__calloc(&a, 1, sizeof *vk);
     if (!vk) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
-    vk->alloc = a;
-    if (a.alloc) { /* else the driver's default: as good as malloc */
-        vk->callbacks.pUserData = &vk->alloc;
-        vk->callbacks.pfnAllocation = vk_alloc;
-        vk->callbacks.pfnReallocation = vk_realloc;
-        vk->callbacks.pfnFree = vk_free;
-        vk->vkalloc = &vk->callbacks;
-    }
-    vk->physical = desc->physical_device;
-    vk->device = desc->device;
-    vk->queue = desc->queue;
+    xyl__fvk_init(&vk->base, &a, desc->physical_device, desc->device, desc->queue);
     r = query_device(vk, desc, samples, diag);
     if (r == XYL_OK) r = objects(vk, desc, samples, diag);
     if (r != XYL_OK) {
@@ -640,28 +351,29 @@ xyl_result xyl_foliage_vk_create(const xyl_foliage_vk_desc *desc, xyl_foliage_vk
 void xyl_foliage_vk_destroy(xyl_foliage_vk *vk)
 {
     if (!vk) return;
-    VkDevice dev = vk->device;
-    buffer_destroy(vk, &vk->leaves);
-    buffer_destroy(vk, &vk->nodes);
-    buffer_destroy(vk, &vk->list);
-    buffer_destroy(vk, &vk->command);
-    image_destroy(vk, &vk->texture);
-    if (vk->commands) vkDestroyCommandPool(dev, vk->commands, vk->vkalloc);
-    if (vk->sampler) vkDestroySampler(dev, vk->sampler, vk->vkalloc);
-    if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, vk->vkalloc);
-    if (vk->capture_framebuffer) vkDestroyFramebuffer(dev, vk->capture_framebuffer, vk->vkalloc);
-    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, vk->vkalloc);
+    VkDevice dev = vk->base.device;
+    xyl__fvk_buffer_destroy(&vk->base, &vk->leaves);
+    xyl__fvk_buffer_destroy(&vk->base, &vk->nodes);
+    xyl__fvk_buffer_destroy(&vk->base, &vk->list);
+    xyl__fvk_buffer_destroy(&vk->base, &vk->command);
+    xyl__fvk_image_destroy(&vk->base, &vk->texture);
+    xyl__fvk_finish(&vk->base);
+    if (vk->sampler) vkDestroySampler(dev, vk->sampler, vk->base.vkalloc);
+    if (vk->capture_pipeline) vkDestroyPipeline(dev, vk->capture_pipeline, vk->base.vkalloc);
+    if (vk->capture_framebuffer)
+        vkDestroyFramebuffer(dev, vk->capture_framebuffer, vk->base.vkalloc);
+    if (vk->capture_pass) vkDestroyRenderPass(dev, vk->capture_pass, vk->base.vkalloc);
     VkPipeline pipes[3] = {vk->pipeline, vk->list_pipeline, vk->cut_pipeline};
     for (int k = 0; k < 3; ++k)
-        if (pipes[k]) vkDestroyPipeline(dev, pipes[k], vk->vkalloc);
-    if (vk->pool) vkDestroyDescriptorPool(dev, vk->pool, vk->vkalloc);
-    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, vk->vkalloc);
-    if (vk->cut_layout) vkDestroyPipelineLayout(dev, vk->cut_layout, vk->vkalloc);
-    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, vk->vkalloc);
+        if (pipes[k]) vkDestroyPipeline(dev, pipes[k], vk->base.vkalloc);
+    if (vk->pool) vkDestroyDescriptorPool(dev, vk->pool, vk->base.vkalloc);
+    if (vk->layout) vkDestroyPipelineLayout(dev, vk->layout, vk->base.vkalloc);
+    if (vk->cut_layout) vkDestroyPipelineLayout(dev, vk->cut_layout, vk->base.vkalloc);
+    if (vk->set_layout) vkDestroyDescriptorSetLayout(dev, vk->set_layout, vk->base.vkalloc);
     VkShaderModule mods[5] = {vk->vert, vk->vert_capture, vk->vert_list, vk->frag, vk->cut};
     for (int k = 0; k < 5; ++k)
-        if (mods[k]) vkDestroyShaderModule(dev, mods[k], vk->vkalloc);
-    xyl_allocator a = vk->alloc;
+        if (mods[k]) vkDestroyShaderModule(dev, mods[k], vk->base.vkalloc);
+    xyl_allocator a = vk->base.alloc;
     xyl__foliage_tables_free(&vk->tables, &a);
     xyl__free(&a, vk);
 }
@@ -679,45 +391,48 @@ xyl_result xyl_foliage_vk_set_foliage(xyl_foliage_vk *vk, const xyl_foliage *fol
                          "%zu leaves exceed the device's storage buffer range (%llu bytes)", n,
                          (unsigned long long)vk->max_storage_range);
     xyl__foliage_tables tables;
-    xyl_result r = xyl__foliage_tables_make(foliage, &vk->alloc, &tables, diag);
+    xyl_result r = xyl__foliage_tables_make(foliage, &vk->base.alloc, &tables, diag);
     if (r != XYL_OK) return r;
-    xyl_foliage_gpu_leaf *records = xyl__alloc_array(&vk->alloc, n, sizeof *records);
-    xyl__foliage_cut_node *nodes = xyl__alloc_array(&vk->alloc, n, sizeof *nodes);
+    xyl_foliage_gpu_leaf *records = xyl__alloc_array(&vk->base.alloc, n, sizeof *records);
+    xyl__foliage_cut_node *nodes = xyl__alloc_array(&vk->base.alloc, n, sizeof *nodes);
     if (!records || !nodes) r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     if (r == XYL_OK) r = xyl_foliage_pack_gpu(foliage->leaves, n, records, diag);
     if (r == XYL_OK) r = xyl__foliage_cut_nodes(foliage, nodes, diag);
     /* the records, the cut's nodes, its list and its command, swapped in together */
-    vk_buffer b[4] = {{0}};
+    xyl__fvk_buffer b[4] = {{0}};
     const VkBufferUsageFlags storage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
     if (r == XYL_OK)
-        r = buffer_create(vk, (VkDeviceSize)n * sizeof *records, storage, records, &b[0], diag);
+        r = xyl__fvk_buffer_create(&vk->base, (VkDeviceSize)n * sizeof *records, storage, records,
+                                   &b[0], diag);
     if (r == XYL_OK)
-        r = buffer_create(vk, (VkDeviceSize)n * sizeof *nodes, storage, nodes, &b[1], diag);
+        r = xyl__fvk_buffer_create(&vk->base, (VkDeviceSize)n * sizeof *nodes, storage, nodes,
+                                   &b[1], diag);
     if (r == XYL_OK)
-        r = buffer_create(vk, (VkDeviceSize)n * sizeof(uint32_t), storage, NULL, &b[2], diag);
+        r = xyl__fvk_buffer_create(&vk->base, (VkDeviceSize)n * sizeof(uint32_t), storage, NULL,
+                                   &b[2], diag);
     if (r == XYL_OK)
-        r = buffer_create(vk, sizeof(VkDrawIndirectCommand),
+        r = xyl__fvk_buffer_create(&vk->base, sizeof(VkDrawIndirectCommand),
                           storage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                               VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                           NULL, &b[3], diag);
-    xyl__free(&vk->alloc, records);
-    xyl__free(&vk->alloc, nodes);
+    xyl__free(&vk->base.alloc, records);
+    xyl__free(&vk->base.alloc, nodes);
     if (r != XYL_OK) {
-        for (int k = 0; k < 4; ++k) buffer_destroy(vk, &b[k]);
-        xyl__foliage_tables_free(&tables, &vk->alloc);
+        for (int k = 0; k < 4; ++k) xyl__fvk_buffer_destroy(&vk->base, &b[k]);
+        xyl__foliage_tables_free(&tables, &vk->base.alloc);
         return r;
     }
     write_sets(vk, XYL_FOLIAGE_VK_BINDING_LEAVES, b[0].buffer, VK_NULL_HANDLE);
     write_sets(vk, XYL_FOLIAGE_VK_BINDING_NODES, b[1].buffer, VK_NULL_HANDLE);
     write_sets(vk, XYL_FOLIAGE_VK_BINDING_LIST, b[2].buffer, VK_NULL_HANDLE);
     write_sets(vk, XYL_FOLIAGE_VK_BINDING_COMMAND, b[3].buffer, VK_NULL_HANDLE);
-    vk_buffer *mine[4] = {&vk->leaves, &vk->nodes, &vk->list, &vk->command};
+    xyl__fvk_buffer *mine[4] = {&vk->leaves, &vk->nodes, &vk->list, &vk->command};
     for (int k = 0; k < 4; ++k) {
-        buffer_destroy(vk, mine[k]);
+        xyl__fvk_buffer_destroy(&vk->base, mine[k]);
         *mine[k] = b[k];
     }
     vk->has_cut = false;
-    xyl__foliage_tables_free(&vk->tables, &vk->alloc);
+    xyl__foliage_tables_free(&vk->tables, &vk->base.alloc);
     vk->tables = tables;
     xyl__diag_ok(diag);
     return XYL_OK;
@@ -886,10 +601,10 @@ xyl_result xyl_foliage_vk_last_cut(xyl_foliage_vk *vk, uint32_t *out, size_t cap
                          "no cut recorded since the foliage was uploaded");
     VkDrawIndirectCommand command;
     void *map = NULL;
-    VkResult vr = vkMapMemory(vk->device, vk->command.memory, 0, sizeof command, 0, &map);
-    if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkMapMemory");
+    VkResult vr = vkMapMemory(vk->base.device, vk->command.memory, 0, sizeof command, 0, &map);
+    if (vr != VK_SUCCESS) return xyl__fvk_fail(diag, vr, "vkMapMemory");
     memcpy(&command, map, sizeof command);
-    vkUnmapMemory(vk->device, vk->command.memory);
+    vkUnmapMemory(vk->base.device, vk->command.memory);
     size_t n = command.instanceCount;
     if (n > vk->tables.leaf_count || command.vertexCount != 4)
         return xyl__fail(diag, XYL_ERR_UNSUPPORTED, 0, 0, -1,
@@ -900,10 +615,10 @@ xyl_result xyl_foliage_vk_last_cut(xyl_foliage_vk *vk, uint32_t *out, size_t cap
             return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                              "the cut has %zu leaves, out holds %zu", n, capacity);
         if (n) {
-            vr = vkMapMemory(vk->device, vk->list.memory, 0, n * sizeof *out, 0, &map);
-            if (vr != VK_SUCCESS) return vk_fail(diag, vr, "vkMapMemory");
+            vr = vkMapMemory(vk->base.device, vk->list.memory, 0, n * sizeof *out, 0, &map);
+            if (vr != VK_SUCCESS) return xyl__fvk_fail(diag, vr, "vkMapMemory");
             memcpy(out, map, n * sizeof *out);
-            vkUnmapMemory(vk->device, vk->list.memory);
+            vkUnmapMemory(vk->base.device, vk->list.memory);
         }
     }
     *count = n;
@@ -926,19 +641,21 @@ static xyl_result capture_reserve(xyl_foliage_vk *vk, xyl_diag *diag)
         VkRenderPassCreateInfo ri = {.sType = VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
         ri.subpassCount = 1;
         ri.pSubpasses = &sub;
-        VK_TRY(vkCreateRenderPass(vk->device, &ri, vk->vkalloc, &vk->capture_pass),
+        XYL__FVK_TRY(vkCreateRenderPass(vk->base.device, &ri, vk->base.vkalloc, &vk->capture_pass),
                "vkCreateRenderPass");
     }
     if (!vk->capture_framebuffer) {
         VkFramebufferCreateInfo fi = {.sType = VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
         fi.renderPass = vk->capture_pass;
         fi.width = fi.height = fi.layers = 1;
-        VK_TRY(vkCreateFramebuffer(vk->device, &fi, vk->vkalloc, &vk->capture_framebuffer),
-               "vkCreateFramebuffer");
+        XYL__FVK_TRY(
+            vkCreateFramebuffer(vk->base.device, &fi, vk->base.vkalloc, &vk->capture_framebuffer),
+            "vkCreateFramebuffer");
     }
-    pipe_target t = {vk->capture_pass, 0, VK_FORMAT_UNDEFINED, VK_FORMAT_UNDEFINED,
-                     VK_SAMPLE_COUNT_1_BIT, true, false};
-    return pipeline(vk, &t, &vk->capture_pipeline, diag);
+    xyl__fvk_pipe t = {0};
+    t.pass = vk->capture_pass;
+    t.samples = VK_SAMPLE_COUNT_1_BIT;
+    return pipeline(vk, t, true, false, &vk->capture_pipeline, diag);
 }
 
 static void record_capture(const xyl_foliage_vk *vk, VkCommandBuffer cmd,
@@ -981,10 +698,10 @@ xyl_result xyl__foliage_vk_capture(xyl_foliage_vk *vk, const xyl_foliage_vk_fram
     r = capture_reserve(vk, diag);
     if (r != XYL_OK) return r;
     memset(out, 0xff, entries * sizeof *out); /* leaf UINT32_MAX: no vertex stored */
-    vk_buffer b = {0};
-    r = buffer_create(vk, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, out, &b, diag);
+    xyl__fvk_buffer b = {0};
+    r = xyl__fvk_buffer_create(&vk->base, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, out, &b, diag);
     VkCommandBuffer cmd = VK_NULL_HANDLE;
-    if (r == XYL_OK) r = begin_once(vk, &cmd, diag);
+    if (r == XYL_OK) r = xyl__fvk_begin_once(&vk->base, &cmd, diag);
     if (r == XYL_OK) {
         VkDescriptorBufferInfo bi = {b.buffer, 0, VK_WHOLE_SIZE};
         VkWriteDescriptorSet w = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
@@ -993,19 +710,20 @@ xyl_result xyl__foliage_vk_capture(xyl_foliage_vk *vk, const xyl_foliage_vk_fram
         w.descriptorCount = 1;
         w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         w.pBufferInfo = &bi;
-        vkUpdateDescriptorSets(vk->device, 1, &w, 0, NULL);
+        vkUpdateDescriptorSets(vk->base.device, 1, &w, 0, NULL);
         record_capture(vk, cmd, &push, lods);
-        r = submit_wait(vk, cmd, diag);
+        r = xyl__fvk_submit_wait(&vk->base, cmd, diag);
     }
     void *map = NULL;
     VkResult vr = VK_SUCCESS;
-    if (r == XYL_OK && (vr = vkMapMemory(vk->device, b.memory, 0, bytes, 0, &map)) != VK_SUCCESS)
-        r = vk_fail(diag, vr, "vkMapMemory");
+    if (r == XYL_OK &&
+        (vr = vkMapMemory(vk->base.device, b.memory, 0, bytes, 0, &map)) != VK_SUCCESS)
+        r = xyl__fvk_fail(diag, vr, "vkMapMemory");
     if (r == XYL_OK) {
         memcpy(out, map, (size_t)bytes);
-        vkUnmapMemory(vk->device, b.memory);
+        vkUnmapMemory(vk->base.device, b.memory);
     }
-    buffer_destroy(vk, &b);
+    xyl__fvk_buffer_destroy(&vk->base, &b);
     if (r == XYL_OK) xyl__diag_ok(diag);
     return r;
 }

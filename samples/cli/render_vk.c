@@ -6,6 +6,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <time.h>
+
+#include <xylem/xyl_billboard_vk.h>
 #include <xylem/xyl_foliage_vk.h>
 #include <xylem/xyl_tess_vk.h>
 
@@ -78,6 +81,7 @@ static xyl_result open_device(app *a, char *name, xyl_diag *d)
         a->features.drawIndirectFirstInstance = VK_TRUE;
         a->features.multiDrawIndirect = f.multiDrawIndirect;
         a->features.fillModeNonSolid = f.fillModeNonSolid;
+        a->features.alphaToOne = f.alphaToOne; /* the billboard's alpha-to-coverage */
     }
     if (!a->physical) {
         snprintf(d->message, sizeof d->message,
@@ -249,9 +253,32 @@ static void close_app(app *a)
     if (a->instance) vkDestroyInstance(a->instance, NULL);
 }
 
-/* The frame: the pass, stems then leaves, the copy of the shown image to host memory. */
+/* Records stems then leaves with this matrix and light into cb, inside a render pass. */
+static xyl_result record_tree(VkCommandBuffer cb, xyl_tess_vk *stems, xyl_foliage_vk *leaves,
+                              const xyl_cli_vk_tree *t, const float view_proj[16],
+                              const float light[3], bool wireframe, xyl_diag *d)
+{
+    xyl_tess_frame sf = t->frame;
+    memcpy(sf.view_proj, view_proj, sizeof sf.view_proj);
+    memcpy(sf.light_dir, light, 3 * sizeof *light);
+    if (wireframe) sf.flags |= XYL_TESS_FLAG_WIREFRAME;
+    xyl_result r = xyl_tess_vk_cmd_draw(stems, cb, 0, t->batches, &sf, d);
+    xyl_foliage_vk_frame lf = {0};
+    memcpy(lf.view_proj, view_proj, sizeof lf.view_proj);
+    memcpy(lf.light_dir, light, sizeof lf.light_dir);
+    lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
+    if (r == XYL_OK && t->lods)
+        r = xyl_foliage_vk_cmd_draw(leaves, cb, &lf, t->lods, t->foliage->sector_count, d);
+    else if (r == XYL_OK)
+        r = xyl_foliage_vk_cmd_draw_cut(leaves, cb, &lf, d);
+    return r;
+}
+
+/* The frame: the pass, stems then leaves (or the billboard), the copy of the shown image to
+ * host memory. */
 static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
-                         xyl_foliage_vk *leaves, const xyl_cli_vk_tree *t, xyl_diag *d)
+                         xyl_foliage_vk *leaves, xyl_billboard_vk *bb, const xyl_cli_vk_tree *t,
+                         xyl_diag *d)
 {
     VkCommandBufferBeginInfo bi = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -261,7 +288,7 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
         vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, a->timer, 0);
     }
     xyl_result r = XYL_OK;
-    if (!t->lods) r = xyl_foliage_vk_cmd_cut(leaves, cb, t->cut_view, d); /* outside the pass */
+    if (!bb && !t->lods) r = xyl_foliage_vk_cmd_cut(leaves, cb, t->cut_view, d); /* outside */
     VkClearValue clear[3];
     memset(clear, 0, sizeof clear);
     memcpy(clear[0].color.float32, t->image->background, sizeof clear[0].color.float32);
@@ -277,17 +304,16 @@ static xyl_result record(const app *a, VkCommandBuffer cb, xyl_tess_vk *stems,
     VkRect2D sc = {{0, 0}, {a->width, a->height}};
     vkCmdSetViewport(cb, 0, 1, &vp);
     vkCmdSetScissor(cb, 0, 1, &sc);
-    xyl_tess_frame sf = t->frame;
-    if (t->image->wireframe) sf.flags |= XYL_TESS_FLAG_WIREFRAME;
-    if (r == XYL_OK) r = xyl_tess_vk_cmd_draw(stems, cb, 0, t->batches, &sf, d);
-    xyl_foliage_vk_frame lf = {0};
-    memcpy(lf.view_proj, t->frame.view_proj, sizeof lf.view_proj);
-    memcpy(lf.light_dir, t->frame.light_dir, sizeof lf.light_dir);
-    lf.color[0] = lf.color[1] = lf.color[2] = lf.color[3] = 1.0f; /* the texture's own */
-    if (r == XYL_OK && t->lods)
-        r = xyl_foliage_vk_cmd_draw(leaves, cb, &lf, t->lods, t->foliage->sector_count, d);
-    else if (r == XYL_OK)
-        r = xyl_foliage_vk_cmd_draw_cut(leaves, cb, &lf, d);
+    if (r == XYL_OK && bb) {
+        xyl_billboard_vk_frame bf = {0};
+        memcpy(bf.view_proj, t->frame.view_proj, sizeof bf.view_proj);
+        memcpy(bf.eye, t->billboard->eye, sizeof bf.eye);
+        memcpy(bf.light_dir, t->frame.light_dir, sizeof bf.light_dir);
+        r = xyl_billboard_vk_cmd_draw(bb, cb, &bf, d);
+    } else if (r == XYL_OK) {
+        r = record_tree(cb, stems, leaves, t, t->frame.view_proj, t->frame.light_dir,
+                        t->image->wireframe, d);
+    }
     vkCmdEndRenderPass(cb);
     if (a->timer) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, a->timer, 1);
     VkBufferImageCopy copy = {0};
@@ -331,34 +357,102 @@ static xyl_result submit_and_read(const app *a, VkCommandBuffer cb, uint8_t *rgb
     return XYL_OK;
 }
 
-static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, double *gpu_ms,
-                       xyl_diag *d)
+/* Stems and leaves renderers for this pass and sample count, the species uploaded. */
+static xyl_result make_renderers(const app *a, const xyl_cli_vk_tree *t, VkRenderPass pass,
+                                 VkSampleCountFlagBits samples, xyl_tess_vk **stems,
+                                 xyl_foliage_vk **leaves, xyl_diag *d)
 {
     xyl_tess_vk_device_desc sd = {0};
     sd.physical_device = a->physical;
     sd.device = a->device;
     sd.enabled_features = &a->features;
-    sd.render_pass = a->pass;
-    sd.samples = a->samples;
+    sd.render_pass = pass;
+    sd.samples = samples;
     sd.frames_in_flight = 1;
     xyl_foliage_vk_desc ld = {0};
     ld.physical_device = a->physical;
     ld.device = a->device;
     ld.queue = a->queue;
     ld.queue_family = a->family;
-    ld.render_pass = a->pass;
-    ld.samples = a->samples;
+    ld.render_pass = pass;
+    ld.samples = samples;
     ld.enabled_features = &a->features;
+    xyl_result r = xyl_tess_vk_create_for_device(&sd, t->patterns, stems, d);
+    if (r == XYL_OK) r = xyl_tess_vk_set_patches(*stems, t->patches, d);
+    if (r == XYL_OK) r = xyl_foliage_vk_create(&ld, leaves, d);
+    if (r == XYL_OK) r = xyl_foliage_vk_set_foliage(*leaves, t->foliage, d);
+    if (r == XYL_OK)
+        r = xyl_foliage_vk_set_texture(*leaves, t->leaf_texture, t->texture_width,
+                                       t->texture_height, d);
+    return r;
+}
+
+/* The billboard's bake: the tree drawn by renderers made, at the first view, for the bake's
+ * own pass (one sample; the frame's may have more). */
+typedef struct bake_tree {
+    const app *a;
+    const xyl_cli_vk_tree *t;
+    xyl_tess_vk *stems;
+    xyl_foliage_vk *leaves;
+} bake_tree;
+
+static xyl_result bake_draw(void *user, VkCommandBuffer cb, VkRenderPass pass,
+                            const float view_proj[16], const float light[3], xyl_diag *d)
+{
+    bake_tree *b = user;
+    xyl_result r = XYL_OK;
+    if (!b->stems)
+        r = make_renderers(b->a, b->t, pass, VK_SAMPLE_COUNT_1_BIT, &b->stems, &b->leaves, d);
+    if (r == XYL_OK) r = record_tree(cb, b->stems, b->leaves, b->t, view_proj, light, false, d);
+    return r;
+}
+
+static double seconds(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static xyl_result bake(const app *a, const xyl_cli_vk_tree *t, xyl_billboard_vk **bb,
+                       xyl_diag *d)
+{
+    xyl_cli_vk_billboard *in = t->billboard;
+    xyl_billboard_vk_desc bd = {0};
+    bd.physical_device = a->physical;
+    bd.device = a->device;
+    bd.queue = a->queue;
+    bd.queue_family = a->family;
+    bd.render_pass = a->pass;
+    bd.samples = a->samples;
+    bd.enabled_features = &a->features;
+    bd.kind = (xyl_billboard_kind)in->kind;
+    bd.planes = in->planes;
+    bd.grid = in->grid;
+    bd.resolution = in->resolution;
+    memcpy(bd.lo, in->lo, sizeof bd.lo);
+    memcpy(bd.hi, in->hi, sizeof bd.hi);
+    memcpy(bd.light_dir, t->frame.light_dir, sizeof bd.light_dir); /* the scene's light */
+    bake_tree b = {a, t, NULL, NULL};
+    double t0 = seconds();
+    xyl_result r = xyl_billboard_vk_bake(&bd, bake_draw, &b, bb, d);
+    in->bake_ms = (seconds() - t0) * 1e3;
+    in->views = xyl_billboard_vk_view_count(*bb);
+    vkDeviceWaitIdle(a->device);
+    xyl_foliage_vk_destroy(b.leaves);
+    xyl_tess_vk_destroy(b.stems);
+    return r;
+}
+
+static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, double *gpu_ms,
+                       xyl_diag *d)
+{
     xyl_tess_vk *stems = NULL;
     xyl_foliage_vk *leaves = NULL;
+    xyl_billboard_vk *bb = NULL;
     VkCommandBuffer cb = VK_NULL_HANDLE;
-    xyl_result r = xyl_tess_vk_create_for_device(&sd, t->patterns, &stems, d);
-    if (r == XYL_OK) r = xyl_tess_vk_set_patches(stems, t->patches, d);
-    if (r == XYL_OK) r = xyl_foliage_vk_create(&ld, &leaves, d);
-    if (r == XYL_OK) r = xyl_foliage_vk_set_foliage(leaves, t->foliage, d);
-    if (r == XYL_OK)
-        r = xyl_foliage_vk_set_texture(leaves, t->leaf_texture, t->texture_width,
-                                       t->texture_height, d);
+    xyl_result r = t->billboard ? bake(a, t, &bb, d)
+                                : make_renderers(a, t, a->pass, a->samples, &stems, &leaves, d);
     if (r == XYL_OK) {
         VkCommandBufferAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
         ai.commandPool = a->pool;
@@ -367,11 +461,13 @@ static xyl_result draw(app *a, const xyl_cli_vk_tree *t, uint8_t *rgba, double *
         VkResult vr = vkAllocateCommandBuffers(a->device, &ai, &cb);
         if (vr != VK_SUCCESS) r = fail(d, vr, "vkAllocateCommandBuffers");
     }
-    if (r == XYL_OK) r = record(a, cb, stems, leaves, t, d);
+    if (r == XYL_OK) r = record(a, cb, stems, leaves, bb, t, d);
     if (r == XYL_OK) r = submit_and_read(a, cb, rgba, gpu_ms, d);
-    if (r == XYL_OK && !t->lods) r = xyl_foliage_vk_last_cut(leaves, NULL, 0, t->cut_leaves, d);
+    if (r == XYL_OK && !bb && !t->lods)
+        r = xyl_foliage_vk_last_cut(leaves, NULL, 0, t->cut_leaves, d);
     vkDeviceWaitIdle(a->device);
     if (cb) vkFreeCommandBuffers(a->device, a->pool, 1, &cb);
+    xyl_billboard_vk_destroy(bb);
     xyl_foliage_vk_destroy(leaves);
     xyl_tess_vk_destroy(stems);
     return r;

@@ -151,10 +151,11 @@ static const char usage_text[] =
     "                               within the pixel budget, adaptive the coarsest leaf within\n"
     "                               it per cluster (chosen on the GPU, GL only), full all of\n"
     "                               them, none bare stems, billboard the tree as a billboard\n"
-    "                               baked from it (GL only; --billboard kind, default cross;\n"
-    "                               --planes of a cross, 2..8, default 4; --billboard-size\n"
-    "                               texels per baked view, default 512; --billboard-error: its\n"
-    "                               image error over 20 views); impostor the octahedral\n"
+    "                               baked from it (GL and Vulkan; --billboard kind, default\n"
+    "                               cross; --planes of a cross, 2..8, default 4;\n"
+    "                               --billboard-size texels per baked view, default 512;\n"
+    "                               --billboard-error: its image error over 20 views, GL\n"
+    "                               only); impostor the octahedral\n"
     "                               billboard (--grid views per side, 2..32, default 8);\n"
     "                               --forest N: N instances of the tree on a jittered grid,\n"
     "                               each at the leaf level its distance allows (lod; with\n"
@@ -1050,6 +1051,7 @@ typedef struct render_job {
     xyl_foliage_view leaf_view;
     size_t leaves_drawn;
     bool gpu_timer_all;   /* gpu_ms times stems and leaves (else the stems only) */
+    bool gpu_timer_billboard; /* gpu_ms times the billboard drawn in the tree's place */
     float stem_width;     /* twice the skeleton's thickest node's radius: where a forest
                              leaves stems out */
 } render_job;
@@ -1065,6 +1067,15 @@ static void render_job_free(render_job *j)
     free(j->rgba);
     leaf_job_free(&j->leaves);
     free(j->lods);
+}
+
+/* A billboard kind as the render line names it. */
+static const char *billboard_name(int kind)
+{
+    return kind == XYL_BILLBOARD_SPHERICAL     ? "spherical (one side view, +Z)"
+           : kind == XYL_BILLBOARD_CYLINDRICAL ? "cylindrical (one side view, +Z)"
+           : kind == XYL_BILLBOARD_CROSS       ? "cross planes"
+                                               : "octahedral (one atlas, octahedral grid)";
 }
 
 /* The box of the stems and the leaves drawn with them. */
@@ -1348,13 +1359,8 @@ static xyl_result bake_billboard(const options *o, tree_gl *t, xyl_billboard_gl 
     double t0 = now_seconds();
     xyl_result r = xyl_billboard_gl_bake(&bd, bake_tree, t, bb, d);
     if (r == XYL_OK)
-        printf("billboard: %s%s, %u views of %u x %u texels, baked in %.1f ms\n",
-               bd.kind == XYL_BILLBOARD_SPHERICAL ? "spherical" :
-               bd.kind == XYL_BILLBOARD_CYLINDRICAL ? "cylindrical" :
-               bd.kind == XYL_BILLBOARD_CROSS ? "cross" : "octahedral",
-               bd.kind == XYL_BILLBOARD_CROSS ? " planes" :
-               bd.kind == XYL_BILLBOARD_OCTAHEDRAL ? " (one atlas, octahedral grid)" :
-                                                     " (one side view, +Z)",
+        printf("billboard: %s, %u views of %u x %u texels, baked in %.1f ms\n",
+               billboard_name((int)bd.kind),
                xyl_billboard_gl_view_count(*bb), bd.resolution, bd.resolution,
                (now_seconds() - t0) * 1e3);
     return r;
@@ -1617,7 +1623,7 @@ static xyl_result render_gl(const options *o, render_job *j, xyl_diag *d)
 
 #ifdef XYL_HAVE_VULKAN
 /* Stems and leaves into one target of the CLI's own device (render_vk.c), as an engine would. */
-static xyl_result render_vk_tree(render_job *j, xyl_diag *d)
+static xyl_result render_vk_tree(const options *o, render_job *j, xyl_diag *d)
 {
     uint32_t w = XYL_LEAF_TEXTURE_WIDTH, h = XYL_LEAF_TEXTURE_HEIGHT;
     uint8_t *tex = malloc((size_t)w * h * 4);
@@ -1637,20 +1643,38 @@ static xyl_result render_vk_tree(render_job *j, xyl_diag *d)
     t.leaf_texture = tex;
     t.texture_width = w;
     t.texture_height = h;
+    const render_options *ro = &o->render;
+    xyl_cli_vk_billboard bb;
+    memset(&bb, 0, sizeof bb);
+    if (ro->leaves == LEAVES_BILLBOARD) {
+        bb.kind = ro->impostor         ? XYL_BILLBOARD_OCTAHEDRAL
+                  : ro->billboard_kind ? ro->billboard_kind - 1
+                                       : XYL_BILLBOARD_CROSS;
+        bb.planes = bb.kind == XYL_BILLBOARD_CROSS ? (ro->planes ? ro->planes : 4) : 0;
+        bb.grid = bb.kind == XYL_BILLBOARD_OCTAHEDRAL ? ro->grid : 0;
+        bb.resolution = ro->billboard_size ? ro->billboard_size : 512;
+        tree_bounds(j, bb.lo, bb.hi);
+        memcpy(bb.eye, j->camera.eye, sizeof bb.eye);
+        t.billboard = &bb;
+    }
     char name[256] = "";
     double t0 = now_seconds();
     xyl_result r = xyl_cli_render_vk_tree(&t, j->rgba, name, &j->gpu_ms, d);
     j->render_ms = (now_seconds() - t0) * 1e3;
     j->gpu_timer_all = true;
+    j->gpu_timer_billboard = t.billboard != NULL;
     free(tex);
     if (r == XYL_OK) printf("device: %s (Vulkan)\n", name);
+    if (r == XYL_OK && t.billboard)
+        printf("billboard: %s, %u views of %u x %u texels, baked in %.1f ms (Vulkan)\n",
+               billboard_name(bb.kind), bb.views, bb.resolution, bb.resolution, bb.bake_ms);
     return r;
 }
 
-static xyl_result render_vk(render_job *j, xyl_diag *d)
+static xyl_result render_vk(const options *o, render_job *j, xyl_diag *d)
 {
     xyl_result r = xyl_tess_camera_matrix(&j->camera, XYL_TESS_CLIP_VULKAN, j->frame.view_proj, d);
-    if (r == XYL_OK && j->draw_leaves) return render_vk_tree(j, d);
+    if (r == XYL_OK && j->draw_leaves) return render_vk_tree(o, j, d);
     xyl_tess_vk *vk = NULL;
     xyl_tess_vk_desc vd = {0};
     if (r == XYL_OK) r = xyl_tess_vk_create(&vd, j->patterns, &vk, d);
@@ -1666,9 +1690,9 @@ static xyl_result render_vk(render_job *j, xyl_diag *d)
     return r;
 }
 #else
-static xyl_result render_vk(render_job *j, xyl_diag *d)
+static xyl_result render_vk(const options *o, render_job *j, xyl_diag *d)
 {
-    (void)j;
+    (void)o, (void)j;
     snprintf(d->message, sizeof d->message, "this xylem was built without the Vulkan backend");
     return XYL_ERR_UNSUPPORTED;
 }
@@ -1710,7 +1734,10 @@ static void print_render(const options *o, const render_job *j, const char *path
            j->drawn->quad_count, lo, hi, (unsigned long long)j->batches->triangles);
     printf("time: level selection %.3f ms, render %.3f ms (one frame, wall, readback included), "
            "GPU timer %.3f ms%s\n", j->select_ms, j->render_ms, j->gpu_ms,
-           !j->draw_leaves ? "" : j->gpu_timer_all ? " (stems and leaves)" : " (stems)");
+           !j->draw_leaves           ? ""
+           : j->gpu_timer_billboard ? " (the billboard)"
+           : j->gpu_timer_all       ? " (stems and leaves)"
+                                    : " (stems)");
     printf("wrote %s\n", path);
 }
 
@@ -1767,9 +1794,8 @@ static int cmd_render(const options *o)
     if (ro->frames || ro->screenshot)
         return usage_error("%s", "--frames and --screenshot are options of 'view'");
     bool billboard = ro->leaves == LEAVES_BILLBOARD;
-    if (billboard && ro->vulkan)
-        return usage_error("%s", "--foliage billboard and impostor are drawn with the GL backend "
-                                 "only");
+    if (ro->billboard_error && ro->vulkan)
+        return usage_error("%s", "--billboard-error renders with the GL backend only");
     if (!billboard && (ro->billboard_kind || ro->planes || ro->grid || ro->billboard_size ||
                        ro->billboard_error))
         return usage_error("%s", "--billboard, --planes, --grid, --billboard-size and "
@@ -1813,7 +1839,7 @@ static int cmd_render(const options *o)
     }
     if (!rc && r == XYL_OK) {
         fill_frame(&j, ro->variant, &j.frame);
-        r = ro->vulkan ? render_vk(&j, &d) : render_gl(o, &j, &d);
+        r = ro->vulkan ? render_vk(o, &j, &d) : render_gl(o, &j, &d);
     }
     if (!rc && r != XYL_OK) rc = report_backend(source, r, &d);
     if (!rc) {

@@ -73,20 +73,8 @@
 extern "C" {
 #endif
 
-#define XYL_BILLBOARD_MAX_PLANES 8
-#define XYL_BILLBOARD_MIN_RESOLUTION 8
-#define XYL_BILLBOARD_MAX_RESOLUTION 4096 /* and the driver's GL_MAX_TEXTURE_SIZE */
-#define XYL_BILLBOARD_MIN_GRID 2
-#define XYL_BILLBOARD_MAX_GRID 32
-#define XYL_BILLBOARD_DEFAULT_GRID 8
-#define XYL_BILLBOARD_MAX_ATLAS 16384 /* grid * resolution; and the driver's GL_MAX_TEXTURE_SIZE */
-
-typedef enum xyl_billboard_kind {
-    XYL_BILLBOARD_SPHERICAL = 0,
-    XYL_BILLBOARD_CYLINDRICAL = 1,
-    XYL_BILLBOARD_CROSS = 2,
-    XYL_BILLBOARD_OCTAHEDRAL = 3
-} xyl_billboard_kind;
+/* The kinds and limits (XYL_BILLBOARD_*, xyl_billboard_kind) are in xylem/xyl_foliage.h,
+ * shared with the Vulkan billboard (xylem/xyl_billboard_vk.h). */
 
 /* Draws the whole tree into the bound framebuffer (its viewport already set) with this
  * column-major world-to-clip matrix (GL clip convention) and light direction (towards the

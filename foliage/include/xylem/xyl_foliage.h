@@ -665,6 +665,23 @@ typedef struct xyl_fade_draws {
 XYL_API xyl_result xyl_fade_update(const xyl_fade_desc *desc, double distance,
                                    xyl_fade_state *state, xyl_fade_draws *out, xyl_diag *diag);
 
+/* ---- billboards: what the GL and Vulkan billboards share (xylem/xyl_billboard_gl.h,
+ * xylem/xyl_billboard_vk.h, docs/foliage.md "Billboards") ---- */
+#define XYL_BILLBOARD_MAX_PLANES 8
+#define XYL_BILLBOARD_MIN_RESOLUTION 8
+#define XYL_BILLBOARD_MAX_RESOLUTION 4096 /* and the driver's limit */
+#define XYL_BILLBOARD_MIN_GRID 2
+#define XYL_BILLBOARD_MAX_GRID 32
+#define XYL_BILLBOARD_DEFAULT_GRID 8
+#define XYL_BILLBOARD_MAX_ATLAS 16384 /* grid * resolution; and the driver's limit */
+
+typedef enum xyl_billboard_kind {
+    XYL_BILLBOARD_SPHERICAL = 0,
+    XYL_BILLBOARD_CYLINDRICAL = 1,
+    XYL_BILLBOARD_CROSS = 2,
+    XYL_BILLBOARD_OCTAHEDRAL = 3
+} xyl_billboard_kind;
+
 #ifdef __cplusplus
 }
 #endif
