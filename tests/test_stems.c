@@ -6,6 +6,7 @@
 #include "skel_overlap.h"
 #include "test_util.h"
 #include "mesh_internal.h"
+#include "stems_internal.h"
 #include "subdivide.h"
 
 /* Checked or not (docs/stems.md, "Checked joints"); st may be NULL. */
@@ -1185,6 +1186,64 @@ static uint32_t unmeshed_laterals(const xyl_skeleton *sk, const xyl_mesh *m)
     return count;
 }
 
+/* A later round of checked joints tests only the branches whose triangles changed and carries
+ * the last round's other pairs over (xyl__stems_joint_pairs): it must give the pairs of the
+ * full test exactly. b is a with some twigs moved; with `far`, one far out, which moves the
+ * mesh's box and with it the degenerate-area limit. */
+static void assert_round_pairs_match_the_full_test(const xyl_skeleton *a, bool far)
+{
+    xyl_skel_node *nodes = malloc(a->node_count * sizeof *nodes);
+    assert_non_null(nodes);
+    memcpy(nodes, a->nodes, a->node_count * sizeof *nodes);
+    bool *parent = calloc(a->node_count, sizeof *parent);
+    assert_non_null(parent);
+    for (size_t n = 0; n < a->node_count; ++n)
+        if (nodes[n].parent >= 0) parent[nodes[n].parent] = true;
+    size_t moved = 0;
+    for (size_t n = a->node_count; n-- > 0 && moved < 40;) {
+        if (parent[n] || n % 7 != 0) continue; /* every seventh tip */
+        /* far: ten times as far from the root as it was */
+        float s = far && moved == 0 ? 10.0f : 1.05f;
+        int32_t p = far && moved == 0 ? 0 : nodes[n].parent;
+        nodes[n].pos.x = nodes[p].pos.x + s * (nodes[n].pos.x - nodes[p].pos.x);
+        nodes[n].pos.y = nodes[p].pos.y + s * (nodes[n].pos.y - nodes[p].pos.y);
+        nodes[n].pos.z = nodes[p].pos.z + s * (nodes[n].pos.z - nodes[p].pos.z);
+        ++moved;
+    }
+    xyl_skeleton *b = skeleton_of(nodes, a->node_count);
+    xyl_mesh *ma = build(a, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    xyl_mesh *mb = build(b, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    const xyl_allocator alloc = {0};
+    uint64_t *pa = NULL, *pb = NULL, *pr = NULL;
+    size_t ca = 0, cb = 0, cr = 0;
+    assert_int_equal(xyl__mesh_intersecting_pairs(ma, &alloc, &pa, &ca, NULL), XYL_OK);
+    assert_int_equal(xyl__mesh_intersecting_pairs(mb, &alloc, &pb, &cb, NULL), XYL_OK);
+    assert_int_equal(xyl__stems_joint_pairs(b, ma, pa, ca, mb, &alloc, &pr, &cr, NULL), XYL_OK);
+    assert_true(moved > 0 && ca > 0);
+    assert_true(far == (xyl__mesh_area_tolerance(ma) != xyl__mesh_area_tolerance(mb)));
+    if (cr != cb) fail_msg("far %d: %zu pairs from the last round's, the full test %zu", far, cr, cb);
+    assert_memory_equal(pr, pb, cb * sizeof *pb);
+    print_message("  %zu twigs moved%s: %zu pairs before, %zu after, the same from the last "
+                  "round's\n", moved, far ? " (one far out)" : "", ca, cb);
+    xyl__free(&alloc, pa);
+    xyl__free(&alloc, pb);
+    xyl__free(&alloc, pr);
+    xyl_mesh_destroy(ma);
+    xyl_mesh_destroy(mb);
+    xyl_skeleton_destroy(b);
+    free(parent);
+    free(nodes);
+}
+
+static void a_later_round_finds_the_pairs_of_the_full_test(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = read_random_tree("random_binary_d10");
+    assert_round_pairs_match_the_full_test(sk, false);
+    assert_round_pairs_match_the_full_test(sk, true);
+    xyl_skeleton_destroy(sk);
+}
+
 static void random_trees_mesh_clean_joints_and_keep_their_laterals(void **state)
 {
     (void)state;
@@ -2203,6 +2262,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(presets_fold_no_more_than_measured_k7),
         cmocka_unit_test(presets_fold_no_more_than_measured_k8),
         cmocka_unit_test(hard_cases_fold_only_where_measured),
+        cmocka_unit_test(a_later_round_finds_the_pairs_of_the_full_test),
         cmocka_unit_test(random_trees_mesh_clean_joints_and_keep_their_laterals),
         cmocka_unit_test(crossing_roots_are_left_and_reported),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
