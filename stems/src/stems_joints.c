@@ -418,7 +418,7 @@ static xyl_result pairs_since(const xyl_mesh *p, const uint64_t *pp, size_t pcou
         r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory checking the joints");
         goto done;
     }
-    memcpy(all, fresh, nfresh * sizeof *all);
+    if (nfresh) memcpy(all, fresh, nfresh * sizeof *all);
     n = nfresh;
     for (size_t i = 0; i < pcount; ++i) {
         uint32_t t[2] = {(uint32_t)(pp[i] >> 32), (uint32_t)pp[i]};
