@@ -7,8 +7,12 @@ small and named after the difficulty it carries. Rerun after changing a case:
 """
 import math
 import os
+import random
 
 OUT = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "stems")
+# random trees: too large for every hard-case test at every k, and the construction alone
+# leaves pairs at their joints; tests/test_stems.c holds the default build to them
+OUT_RANDOM = os.path.join(os.path.dirname(__file__), "..", "tests", "data", "stems_random")
 
 
 class Skel:
@@ -28,13 +32,17 @@ class Skel:
             n = self.add(n, p, r0 + (r1 - r0) * t)
         return n
 
-    def write(self, name, comment):
-        path = os.path.join(OUT, name + ".skel")
+    def write(self, name, comment, origin=(0.0, 0.0, 0.0), out=OUT):
+        """Positions are written as origin + local (the .skel reader takes the first root's
+        position as the skeleton's origin)."""
+        path = os.path.join(out, name + ".skel")
         with open(path, "w") as f:
             f.write("xylem-skeleton 1\n# %s\n" % comment)
             f.write("nodes %d\nleaves 0\n" % len(self.nodes))
             for i, (parent, x, y, z, r) in enumerate(self.nodes):
-                f.write("n %d %d %.9g %.9g %.9g %.9g\n" % (i, parent, x, y, z, r))
+                fmt = "n %d %d %.9g %.9g %.9g %.9g\n" if origin == (0.0, 0.0, 0.0) else \
+                    "n %d %d %.17g %.17g %.17g %.9g\n"
+                f.write(fmt % (i, parent, x + origin[0], y + origin[1], z + origin[2], r))
             f.write("end\n")
 
 
@@ -60,8 +68,58 @@ def fork(name, comment, angles, r_parent=0.1, r_child=0.06, length=1.0, continue
     s.write(name, comment)
 
 
+def turned(d, theta_deg, phi):
+    """d turned by theta_deg away from itself, towards azimuth phi (radians) around it."""
+    a = [1.0, 0.0, 0.0] if abs(d[0]) < 0.9 else [0.0, 0.0, 1.0]
+    u = unit([d[1] * a[2] - d[2] * a[1], d[2] * a[0] - d[0] * a[2], d[0] * a[1] - d[1] * a[0]])
+    v = [d[1] * u[2] - d[2] * u[1], d[2] * u[0] - d[0] * u[2], d[0] * u[1] - d[1] * u[0]]
+    t = math.radians(theta_deg)
+    w = [math.cos(phi) * u[k] + math.sin(phi) * v[k] for k in range(3)]
+    return unit([math.cos(t) * d[k] + math.sin(t) * w[k] for k in range(3)])
+
+
+def random_tree(seed, depth, children, max_nodes, tip_radius=0.01, length=1.0):
+    """A seeded random tree, grown breadth first to `depth` forks or `max_nodes` nodes: each
+    node gets children(rng) children, each turned off its parent's direction by an angle drawn
+    from 0..170 degrees around a random azimuth, internodes 0.6..1.0 of their parent's; radii by
+    the pipe rule (a node's squared radius is the sum of its children's, tips tip_radius). Node
+    ids grow breadth first, so every parent precedes its children."""
+    rng = random.Random(seed)
+    pos, direc, par, level, kids = [[0.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]], [-1], [0], [[]]
+    step = [length]
+    queue, head = [0], 0
+    while head < len(queue):
+        n = queue[head]
+        head += 1
+        if level[n] >= depth:
+            continue
+        for c in range(children(rng)):
+            if len(pos) >= max_nodes:
+                break
+            d = turned(direc[n], rng.uniform(0.0, 170.0), rng.uniform(0.0, 2.0 * math.pi))
+            if n == 0:
+                d = [0.0, 1.0, 0.0] if c == 0 else d  # the trunk's first segment stands up
+            l = step[n] * rng.uniform(0.6, 1.0)
+            pos.append([pos[n][k] + d[k] * l for k in range(3)])
+            direc.append(d)
+            par.append(n)
+            level.append(level[n] + (0 if n == 0 else 1))
+            kids.append([])
+            step.append(l)
+            kids[n].append(len(pos) - 1)
+            queue.append(len(pos) - 1)
+    r2 = [0.0] * len(pos)
+    for n in range(len(pos) - 1, -1, -1):
+        r2[n] = sum(r2[c] for c in kids[n]) if kids[n] else tip_radius * tip_radius
+    s = Skel()
+    for n in range(len(pos)):
+        s.add(par[n], pos[n], math.sqrt(r2[n]))
+    return s
+
+
 def main():
     os.makedirs(OUT, exist_ok=True)
+    os.makedirs(OUT_RANDOM, exist_ok=True)
     cases = 0
 
     def done():
@@ -250,7 +308,25 @@ def main():
     binary(s, s.add(-1, [0, 0, 0], 0.1), [0, 0, 0], [0, 1, 0], 0.1, 7)
     s.write("binary_depth7", "a binary tree of depth 7 (127 forks)")
     done()
-    print("wrote %d skeletons to %s" % (cases, os.path.normpath(OUT)))
+
+    # seeded random trees: pipe-rule radii, fork angles spread over 0..170 degrees
+    two = lambda rng: 2
+    one_to_six = lambda rng: rng.randint(1, 6)
+    for name, seed, depth, children, max_nodes, origin, comment in [
+            ("random_binary_d10", 10, 10, two, 8000, (0.0, 0.0, 0.0),
+             "random binary tree, depth 10, pipe-rule radii, forks of 0..170 degrees"),
+            ("random_binary_d12", 12, 12, two, 8000, (0.0, 0.0, 0.0),
+             "random binary tree, depth 12 (capped at 8000 nodes), pipe-rule radii, forks of "
+             "0..170 degrees"),
+            ("random_1to6_d10", 16, 10, one_to_six, 6000, (0.0, 0.0, 0.0),
+             "random tree of 1..6 children per node, depth 10 (capped at 6000 nodes), pipe-rule "
+             "radii, forks of 0..170 degrees"),
+            ("random_binary_far", 21, 11, two, 8000, (1e5, 0.0, -1e5),
+             "random binary tree, depth 11, placed 1e5 units from the origin")]:
+        random_tree(seed, depth, children, max_nodes).write(name, comment, origin, OUT_RANDOM)
+        done()
+    print("wrote %d skeletons to %s and %s" % (cases, os.path.normpath(OUT),
+                                               os.path.normpath(OUT_RANDOM)))
 
 
 if __name__ == "__main__":

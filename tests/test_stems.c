@@ -6,6 +6,7 @@
 #include "skel_overlap.h"
 #include "test_util.h"
 #include "mesh_internal.h"
+#include "stems_internal.h"
 #include "subdivide.h"
 
 /* Checked or not (docs/stems.md, "Checked joints"); st may be NULL. */
@@ -624,9 +625,9 @@ static void check_intersections(const char *name, const xyl_skeleton *sk, void *
     xyl_stems_stats st;
     xyl_mesh *checked = build_with(sk, c->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH,
                                    XYL_JOINTS_CHECKED, &st);
-    if (st.builds != 1 || st.branches_dropped || st.joint_pairs_first)
-        fail_msg("%s k = %u: the check rebuilt (%u builds, %u branches left out, %zu pairs at "
-                 "joints)", name, c->k, st.builds, st.branches_dropped, st.joint_pairs_first);
+    if (st.builds != 1 || st.laterals_started_later || st.laterals_hidden || st.joint_pairs_first)
+        fail_msg("%s k = %u: the check rebuilt (%u builds, %u laterals hidden, %zu pairs at "
+                 "joints)", name, c->k, st.builds, st.laterals_hidden, st.joint_pairs_first);
     assert_same_mesh(m, checked, name);
     if (st.skeleton_pairs != t.pairs)
         fail_msg("%s k = %u: the check counts %zu pairs where the skeleton overlaps, the test %zu",
@@ -763,7 +764,10 @@ static void fold_count_sees_pillows_and_thin_wedges_not_cubes(void **state)
 /* Folds of the presets' meshes (normals more than 150 degrees apart across an edge): a ceiling
  * per preset and k = 3..8, unchecked (the construction alone) and checked (the default build),
  * measured when the count was introduced. A change may lower a ceiling, never raise one, and
- * every preset needs its row. The causes (where each fold lies) are printed for k = 4. */
+ * every preset needs its row. The causes (where each fold lies) are printed for k = 4. The
+ * checked column counts the folds of the branches the check keeps: two of its figures
+ * (abop-2.7-sympodial k = 6, faycal-leaves k = 8) rose by the folds of the subtrees it no longer
+ * leaves out, and stay below the construction's own. */
 static const struct {
     const char *name;
     size_t unchecked[6], checked[6];
@@ -778,9 +782,9 @@ static const struct {
     {"abop-1.28-stochastic", {106, 58, 41, 43, 57, 63}, {106, 58, 40, 45, 59, 64}},
     {"abop-1.31a", {217, 147, 95, 66, 103, 100}, {213, 136, 82, 62, 92, 102}},
     {"abop-2.6-monopodial", {218, 129, 66, 116, 126, 161}, {209, 132, 66, 114, 116, 156}},
-    {"abop-2.7-sympodial", {39, 24, 20, 13, 21, 17}, {38, 24, 28, 13, 18, 19}},
+    {"abop-2.7-sympodial", {39, 24, 20, 13, 21, 17}, {38, 24, 28, 14, 18, 19}},
     {"abop-2.8-ternary", {1129, 371, 222, 103, 418, 256}, {1093, 371, 222, 103, 413, 256}},
-    {"faycal-leaves", {79, 45, 32, 49, 44, 48}, {66, 49, 17, 36, 18, 27}},
+    {"faycal-leaves", {79, 45, 32, 49, 44, 48}, {66, 49, 17, 36, 18, 29}},
 };
 
 static size_t preset_fold_ceiling(const char *name, uint32_t k, bool checked)
@@ -1039,7 +1043,7 @@ static void presets_intersect_at_joints_no_more_than_measured_k8(void **state)
 
 /* Checked joints (the default; docs/stems.md, "Checked joints"): every preset's mesh is free of
  * intersecting pairs at joints, as this file's own classification (skel_overlap.h) judges them,
- * for k = 3..8. The laterals it starts later or leaves out are counted, and the faces kept
+ * for k = 3..8. The laterals it starts later or hides whole are counted, and the faces kept
  * printed. */
 static void assert_presets_free_of_joint_intersections(uint32_t k)
 {
@@ -1048,7 +1052,7 @@ static void assert_presets_free_of_joint_intersections(uint32_t k)
                       "sanitizers; k = 4 and 5 run here)\n", k);
         return;
     }
-    size_t first = 0, kept = 0, dropped = 0, later = 0, worst_i = 0, folds = 0;
+    size_t first = 0, kept = 0, hidden = 0, later = 0, worst_i = 0, folds = 0;
     double worst = 1.0;
     for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
         const char *name = xyl_lsystem_preset_name(i);
@@ -1072,8 +1076,9 @@ static void assert_presets_free_of_joint_intersections(uint32_t k)
         assert_int_equal(st.joint_pairs_left, 0);
         assert_int_equal(st.skeleton_pairs, t.overlap);
         assert_true(st.builds >= 1 && faces == st.faces_checked);
-        assert_true((st.branches_dropped + st.laterals_started_later == 0) == (st.builds == 1));
-        first += st.faces_first, kept += faces, dropped += st.branches_dropped;
+        assert_true((st.laterals_hidden + st.laterals_started_later == 0) == (st.builds == 1));
+        assert_true(st.laterals_started_later == 0 || st.lateral_shift_max > 0.0);
+        first += st.faces_first, kept += faces, hidden += st.laterals_hidden;
         later += st.laterals_started_later;
         if ((double)faces / (double)st.faces_first < worst)
             worst = (double)faces / (double)st.faces_first, worst_i = i;
@@ -1081,8 +1086,8 @@ static void assert_presets_free_of_joint_intersections(uint32_t k)
         xyl_skeleton_destroy(sk);
     }
     print_message("k = %u: no preset intersects at a joint; %zu laterals start later, %zu are "
-                  "left out, %.1f %% of the faces kept (fewest: %s, %.1f %%)\n", k, later, dropped,
-                  100.0 * (double)kept / (double)first, xyl_lsystem_preset_name(worst_i),
+                  "hidden whole, %.1f %% of the faces kept (fewest: %s, %.1f %%)\n", k, later,
+                  hidden, 100.0 * (double)kept / (double)first, xyl_lsystem_preset_name(worst_i),
                   100.0 * worst);
     print_message("k = %u checked: %zu folds in all\n", k, folds);
 }
@@ -1125,6 +1130,162 @@ static void presets_are_free_of_intersections_at_joints_k8(void **state)
 
 /* Two roots whose stems cross: both are roots' branches, which the check never moves, so the
  * pairs between them stay, and the build says so (stats and a warning) instead of failing. */
+/* ---- random trees ---------------------------------------------------------------------------- */
+
+/* Seeded random trees (tests/data/stems_random, scripts/make_hard_cases.py): pipe-rule radii,
+ * fork angles spread over 0..170 degrees, 4 000 to 8 000 nodes, one 1e5 units from the origin.
+ * The construction alone leaves thousands of pairs at their joints, so they are not hard cases
+ * for every test; here the default checked build is held to what it guarantees: a closed
+ * manifold without a pair at a joint (this file's own classification), a summary that matches
+ * the mesh, no lateral left out with what grows from it, and at least the faces it kept when
+ * measured (a floor: a change may raise one, never lower it). The goal is 99 % of the
+ * construction's faces; docs/stems.md, "Known limitations", says how far it is. */
+typedef struct random_floor {
+    const char *name;
+    uint32_t k;
+    size_t faces; /* kept by the checked build when measured */
+} random_floor;
+
+static const random_floor random_floors[] = {
+    {"random_binary_d10", 3, 8040},  {"random_binary_d10", 4, 10746},
+    {"random_binary_d10", 5, 9093},  {"random_binary_d10", 6, 12748},
+    {"random_binary_d10", 7, 9673},  {"random_binary_d10", 8, 13229},
+    {"random_binary_d12", 4, 19086}, {"random_binary_d12", 5, 16338},
+    {"random_1to6_d10", 4, 11146},   {"random_1to6_d10", 5, 6032},
+    {"random_binary_far", 4, 18814}, {"random_binary_far", 5, 6301},
+};
+
+static xyl_skeleton *read_random_tree(const char *name)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/stems_random/%s.skel", XYL_TEST_DATA, name);
+    xyl_skeleton *sk = NULL;
+    xyl_diag diag = {0};
+    if (xyl_skeleton_read_file(path, NULL, &sk, &diag) != XYL_OK)
+        fail_msg("%s: %s", name, diag.message);
+    return sk;
+}
+
+/* Lateral branches (those that fork from another branch) without a face in m. */
+static uint32_t unmeshed_laterals(const xyl_skeleton *sk, const xyl_mesh *m)
+{
+    bool *meshed = calloc(sk->branch_count, sizeof *meshed);
+    bool *lateral = calloc(sk->branch_count, sizeof *lateral);
+    assert_true(meshed && lateral);
+    for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f)
+        meshed[m->face_branches[f]] = true;
+    for (size_t n = 0; n < sk->node_count; ++n) {
+        int32_t p = sk->nodes[n].parent;
+        if (p >= 0 && sk->nodes[p].branch != sk->nodes[n].branch)
+            lateral[sk->nodes[n].branch] = true;
+    }
+    uint32_t count = 0;
+    for (uint32_t b = 0; b < sk->branch_count; ++b) count += lateral[b] && !meshed[b];
+    free(meshed);
+    free(lateral);
+    return count;
+}
+
+/* A later round of checked joints tests only the branches whose triangles changed and carries
+ * the last round's other pairs over (xyl__stems_joint_pairs): it must give the pairs of the
+ * full test exactly. b is a with some twigs moved; with `far`, one far out, which moves the
+ * mesh's box and with it the degenerate-area limit. */
+static void assert_round_pairs_match_the_full_test(const xyl_skeleton *a, bool far)
+{
+    xyl_skel_node *nodes = malloc(a->node_count * sizeof *nodes);
+    assert_non_null(nodes);
+    memcpy(nodes, a->nodes, a->node_count * sizeof *nodes);
+    bool *parent = calloc(a->node_count, sizeof *parent);
+    assert_non_null(parent);
+    for (size_t n = 0; n < a->node_count; ++n)
+        if (nodes[n].parent >= 0) parent[nodes[n].parent] = true;
+    size_t moved = 0;
+    for (size_t n = a->node_count; n-- > 0 && moved < 40;) {
+        if (parent[n] || n % 7 != 0) continue; /* every seventh tip */
+        /* far: ten times as far from the root as it was */
+        float s = far && moved == 0 ? 10.0f : 1.05f;
+        int32_t p = far && moved == 0 ? 0 : nodes[n].parent;
+        nodes[n].pos.x = nodes[p].pos.x + s * (nodes[n].pos.x - nodes[p].pos.x);
+        nodes[n].pos.y = nodes[p].pos.y + s * (nodes[n].pos.y - nodes[p].pos.y);
+        nodes[n].pos.z = nodes[p].pos.z + s * (nodes[n].pos.z - nodes[p].pos.z);
+        ++moved;
+    }
+    xyl_skeleton *b = skeleton_of(nodes, a->node_count);
+    xyl_mesh *ma = build(a, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    xyl_mesh *mb = build(b, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    const xyl_allocator alloc = {0};
+    uint64_t *pa = NULL, *pb = NULL, *pr = NULL;
+    size_t ca = 0, cb = 0, cr = 0;
+    assert_int_equal(xyl__mesh_intersecting_pairs(ma, &alloc, &pa, &ca, NULL), XYL_OK);
+    assert_int_equal(xyl__mesh_intersecting_pairs(mb, &alloc, &pb, &cb, NULL), XYL_OK);
+    assert_int_equal(xyl__stems_joint_pairs(b, ma, pa, ca, mb, &alloc, &pr, &cr, NULL), XYL_OK);
+    assert_true(moved > 0 && ca > 0);
+    assert_true(far == (xyl__mesh_area_tolerance(ma) != xyl__mesh_area_tolerance(mb)));
+    if (cr != cb) fail_msg("far %d: %zu pairs from the last round's, the full test %zu", far, cr, cb);
+    assert_memory_equal(pr, pb, cb * sizeof *pb);
+    print_message("  %zu twigs moved%s: %zu pairs before, %zu after, the same from the last "
+                  "round's\n", moved, far ? " (one far out)" : "", ca, cb);
+    xyl__free(&alloc, pa);
+    xyl__free(&alloc, pb);
+    xyl__free(&alloc, pr);
+    xyl_mesh_destroy(ma);
+    xyl_mesh_destroy(mb);
+    xyl_skeleton_destroy(b);
+    free(parent);
+    free(nodes);
+}
+
+static void a_later_round_finds_the_pairs_of_the_full_test(void **state)
+{
+    (void)state;
+    xyl_skeleton *sk = read_random_tree("random_binary_d10");
+    assert_round_pairs_match_the_full_test(sk, false);
+    assert_round_pairs_match_the_full_test(sk, true);
+    xyl_skeleton_destroy(sk);
+}
+
+static void random_trees_mesh_clean_joints_and_keep_their_laterals(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < sizeof random_floors / sizeof random_floors[0]; ++i) {
+        const random_floor *f = &random_floors[i];
+        if (SANITIZED && (f->k != 4 || strcmp(f->name, "random_binary_d10") != 0)) continue;
+        xyl_skeleton *sk = read_random_tree(f->name);
+        xyl_stems_stats st;
+        xyl_mesh *m = build_with(sk, f->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH,
+                                 XYL_JOINTS_CHECKED, &st);
+        char what[128];
+        snprintf(what, sizeof what, "%s k = %u", f->name, f->k);
+        assert_closed(m, sk, what);
+        so_tally t = joint_tally(sk, m);
+        if (t.joint)
+            fail_msg("%s: %zu intersecting pairs at joints (one on branches %u and %u)", what,
+                     t.joint, t.joint_branches[0], t.joint_branches[1]);
+        size_t faces = m->quad_count + m->triangle_count;
+        /* the summary is the mesh's */
+        assert_int_equal(st.faces_checked, faces);
+        assert_int_equal(st.joint_pairs_left, 0);
+        assert_int_equal(st.skeleton_pairs, t.overlap);
+        assert_int_equal(unmeshed_laterals(sk, m), st.laterals_hidden + st.laterals_inside);
+        assert_true(st.laterals_started_later == 0 || st.lateral_shift_max > 0.0);
+        assert_true(st.lateral_shift_sum >= st.lateral_shift_max);
+        xyl_mesh *plain = build_with(sk, f->k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH,
+                                     XYL_JOINTS_UNCHECKED, NULL);
+        assert_int_equal(st.faces_first, plain->quad_count + plain->triangle_count);
+        xyl_mesh_destroy(plain);
+        print_message("  %s: %zu of %zu faces kept (%.1f %%), %u builds, %zu pairs at joints "
+                      "found, %u laterals start later (at most %.3g), %u hidden whole, %u inside "
+                      "another branch\n",
+                      what, faces, st.faces_first, 100.0 * (double)faces / (double)st.faces_first,
+                      st.builds, st.joint_pairs_first, st.laterals_started_later,
+                      st.lateral_shift_max, st.laterals_hidden, st.laterals_inside);
+        if (faces < f->faces)
+            fail_msg("%s: %zu faces kept, fewer than the %zu measured", what, faces, f->faces);
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+}
+
 static void crossing_roots_are_left_and_reported(void **state)
 {
     (void)state;
@@ -1144,7 +1305,7 @@ static void crossing_roots_are_left_and_reported(void **state)
     assert_true(t.joint > 0);
     assert_int_equal(st.joint_pairs_left, t.joint);
     assert_int_equal(st.builds, 1);
-    assert_int_equal(st.laterals_started_later + st.branches_dropped, 0);
+    assert_int_equal(st.laterals_started_later + st.laterals_hidden, 0);
     assert_int_equal(diag.warning_count, 1);
     assert_non_null(strstr(diag.warning, "root"));
     assert_closed(m, sk, "crossing roots");
@@ -2147,6 +2308,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(presets_fold_no_more_than_measured_k7),
         cmocka_unit_test(presets_fold_no_more_than_measured_k8),
         cmocka_unit_test(hard_cases_fold_only_where_measured),
+        cmocka_unit_test(a_later_round_finds_the_pairs_of_the_full_test),
+        cmocka_unit_test(random_trees_mesh_clean_joints_and_keep_their_laterals),
         cmocka_unit_test(crossing_roots_are_left_and_reported),
         cmocka_unit_test(a_child_that_curls_back_keeps_its_tip),
         cmocka_unit_test(a_twig_of_one_segment_ends_at_its_tip),

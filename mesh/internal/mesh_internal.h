@@ -103,6 +103,17 @@ xyl_result xyl__mesh_split_seams(const xyl_mesh *m, const xyl_allocator *alloc, 
 xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         uint64_t **pairs, size_t *count, xyl_diag *diag);
 
+/* The area at or below which the intersection test skips a triangle as degenerate: a relative
+ * epsilon times the squared diagonal of the view's bounding box. */
+double xyl__mesh_area_tolerance(const xyl_mesh *m);
+
+/* The same, but only the pairs with at least one triangle marked (marked[t] != 0, one byte per
+ * triangle of the view): the hierarchy is built over every triangle, and only subtrees that
+ * hold a marked one are opened against each other. marked NULL: every pair. */
+xyl_result xyl__mesh_intersecting_pairs_marked(const xyl_mesh *mesh, const uint8_t *marked,
+                                               const xyl_allocator *alloc, uint64_t **pairs,
+                                               size_t *count, xyl_diag *diag);
+
 /* Bit c of a face's uv_wraps set: corner c's u is its vertex's u + 1. The bits a face of n
  * corners may use. */
 #define XYL__WRAP_BITS(n) ((uint8_t)((1u << (n)) - 1u))

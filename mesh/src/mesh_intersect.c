@@ -57,6 +57,8 @@ typedef struct tri_set {
     size_t total;        /* pairs found */
     bool out_of_memory;
     const xyl_allocator *alloc; /* of the scratch and the pairs */
+    const uint8_t *marked;      /* per triangle: pairs need one marked triangle; NULL: all */
+    uint8_t *node_marked;       /* with marked, per node: a marked triangle lies under it */
 } tri_set;
 
 typedef struct p2 {
@@ -299,7 +301,7 @@ static double box_size(const box *b)
 /* ---- triangles along a Morton curve --------------------------------------------------------- */
 
 /* Area tolerance from the bounding box of the vertices the view uses (as in mesh_check.c). */
-static double area_tolerance(const xyl_mesh *m)
+double xyl__mesh_area_tolerance(const xyl_mesh *m)
 {
     box b = box_empty();
     for (size_t k = 0; k < 3 * m->tri_view_count; ++k) box_add(&b, m->positions[m->tri_view[k]]);
@@ -364,7 +366,7 @@ static void sort_by_code(morton_entry *e, morton_entry *tmp, size_t n)
 static void order_triangles(tri_set *s, morton_entry *tmp)
 {
     const xyl_mesh *m = s->m;
-    double tol = area_tolerance(m);
+    double tol = xyl__mesh_area_tolerance(m);
     box all = box_empty();
     s->n = 0;
     for (uint32_t t = 0; t < m->tri_view_count; ++t) {
@@ -416,6 +418,11 @@ static uint32_t build(tri_set *s, size_t first, size_t count)
         for (size_t i = 0; i < count; ++i) box_merge(&nd->b, &s->boxes[first + i]);
         nd->right_or_first = (uint32_t)first;
         nd->count = (uint32_t)count;
+        if (s->marked) {
+            uint8_t any = 0;
+            for (size_t i = 0; i < count; ++i) any |= s->marked[s->order[first + i].id];
+            s->node_marked[me] = any != 0;
+        }
         return me;
     }
     size_t left_count = split_point(s, first, count);
@@ -425,6 +432,7 @@ static uint32_t build(tri_set *s, size_t first, size_t count)
     box_merge(&nd->b, &s->nodes[right].b);
     nd->right_or_first = right;
     nd->count = 0;
+    if (s->marked) s->node_marked[me] = s->node_marked[left] | s->node_marked[right];
     return me;
 }
 
@@ -472,6 +480,7 @@ static void record(tri_set *s, uint32_t i, uint32_t j)
 /* Tests positions x and y of the order (their boxes first). */
 static void test_pair(tri_set *s, size_t x, size_t y)
 {
+    if (s->marked && !s->marked[s->order[x].id] && !s->marked[s->order[y].id]) return;
     if (!boxes_overlap(&s->boxes[x], &s->boxes[y])) return;
     if (pair_intersects(s->m, s->order[x].id, s->order[y].id))
         record(s, s->order[x].id, s->order[y].id);
@@ -481,6 +490,7 @@ static void test_pair(tri_set *s, size_t x, size_t y)
 static void collide(tri_set *s, uint32_t a, uint32_t b)
 {
     const bvh_node *na = &s->nodes[a], *nb = &s->nodes[b];
+    if (s->marked && !s->node_marked[a] && !s->node_marked[b]) return;
     if (!boxes_overlap(&na->b, &nb->b)) return;
     if (na->count && nb->count) {
         for (uint32_t x = 0; x < na->count; ++x)
@@ -502,6 +512,7 @@ static void collide(tri_set *s, uint32_t a, uint32_t b)
 static void collide_self(tri_set *s, uint32_t a)
 {
     const bvh_node *na = &s->nodes[a];
+    if (s->marked && !s->node_marked[a]) return;
     if (na->count) {
         for (uint32_t x = 0; x < na->count; ++x)
             for (uint32_t y = x + 1; y < na->count; ++y)
@@ -537,6 +548,7 @@ static void tri_set_free(tri_set *s)
     xyl__free(s->alloc, s->boxes);
     xyl__free(s->alloc, s->nodes);
     xyl__free(s->alloc, s->pairs);
+    xyl__free(s->alloc, s->node_marked);
 }
 
 /* Finds every pair into s->pairs, sorted; false when memory ran out. tmp holds one entry per
@@ -554,18 +566,21 @@ static bool find_pairs(tri_set *s, morton_entry *tmp)
 
 /* Every intersecting pair of a valid mesh in one pass, into s->pairs (i << 32 | j, sorted; s->kept
  * of them); false when memory ran out, with nothing to free. Memory comes from alloc. */
-static bool all_pairs(const xyl_mesh *mesh, size_t capacity, const xyl_allocator *alloc,
-                      tri_set *out)
+static bool all_pairs(const xyl_mesh *mesh, const uint8_t *marked, size_t capacity,
+                      const xyl_allocator *alloc, tri_set *out)
 {
     size_t t = mesh->tri_view_count;
     tri_set s = {.m = mesh,
                  .capacity = capacity,
                  .alloc = alloc,
+                 .marked = marked,
                  .order = xyl__calloc(alloc, t, sizeof(morton_entry)),
                  .boxes = xyl__calloc(alloc, t, sizeof(box)),
-                 .nodes = xyl__calloc(alloc, t, 2 * sizeof(bvh_node))};
+                 .nodes = xyl__calloc(alloc, t, 2 * sizeof(bvh_node)),
+                 .node_marked = marked ? xyl__calloc(alloc, t, 2) : NULL};
     morton_entry *tmp = xyl__calloc(alloc, t, sizeof *tmp);
-    bool ok = s.order && s.boxes && s.nodes && tmp && find_pairs(&s, tmp);
+    bool ok = s.order && s.boxes && s.nodes && tmp && (!marked || s.node_marked) &&
+              find_pairs(&s, tmp);
     xyl__free(alloc, tmp);
     if (!ok) tri_set_free(&s);
     *out = s;
@@ -575,10 +590,17 @@ static bool all_pairs(const xyl_mesh *mesh, size_t capacity, const xyl_allocator
 xyl_result xyl__mesh_intersecting_pairs(const xyl_mesh *mesh, const xyl_allocator *alloc,
                                         uint64_t **pairs, size_t *count, xyl_diag *diag)
 {
+    return xyl__mesh_intersecting_pairs_marked(mesh, NULL, alloc, pairs, count, diag);
+}
+
+xyl_result xyl__mesh_intersecting_pairs_marked(const xyl_mesh *mesh, const uint8_t *marked,
+                                               const xyl_allocator *alloc, uint64_t **pairs,
+                                               size_t *count, xyl_diag *diag)
+{
     xyl_result r = validate(mesh, diag);
     if (r) return r;
     tri_set s;
-    if (!all_pairs(mesh, SIZE_MAX, alloc, &s))
+    if (!all_pairs(mesh, marked, SIZE_MAX, alloc, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
     *pairs = s.pairs; /* the caller frees it with xyl__free(alloc, .) */
@@ -598,7 +620,7 @@ xyl_result xyl_mesh_self_intersections(const xyl_mesh *mesh, const xyl_allocator
     xyl_result r = validate(mesh, diag);
     if (r) return r;
     tri_set s;
-    if (!all_pairs(mesh, capacity, alloc, &s))
+    if (!all_pairs(mesh, NULL, capacity, alloc, &s))
         return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1,
                          "out of memory for the self-intersection test");
     /* Written only now, so a failure leaves pairs and count untouched. */

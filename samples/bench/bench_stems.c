@@ -333,9 +333,9 @@ static int bench_variants(const options *o, const xyl_grammar *g, uint32_t depth
         }
         print_mesh_row(variants[i].label, segments_of(sk), j.vertices, j.triangles, &t);
         if (desc.joints == XYL_JOINTS_CHECKED)
-            printf("%-14s %u builds, %zu pairs at joints, %u laterals start later, %u left out, "
-                   "%zu of %zu faces kept\n", "", j.stats.builds, j.stats.joint_pairs_first,
-                   j.stats.laterals_started_later, j.stats.branches_dropped,
+            printf("%-14s %u builds, %zu pairs at joints, %u laterals start later, %u hidden "
+                   "whole, %zu of %zu faces kept\n", "", j.stats.builds, j.stats.joint_pairs_first,
+                   j.stats.laterals_started_later, j.stats.laterals_hidden,
                    j.stats.faces_checked, j.stats.faces_first);
     }
     xyl_skeleton_destroy(sk);

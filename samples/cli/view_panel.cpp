@@ -301,9 +301,9 @@ void stats_section(const view_params *p, const view_panel_info *info)
                 t->skeleton->branch_count, t->skeleton->leaf_count);
     ImGui::Text("mesh: %zu vertices, %zu quads, %zu triangles", t->mesh->vertex_count,
                 t->mesh->quad_count, t->mesh->triangle_count);
-    if (t->stems_stats.laterals_started_later || t->stems_stats.branches_dropped)
-        ImGui::Text("joints: %u laterals start later, %u left out", t->stems_stats.laterals_started_later,
-                    t->stems_stats.branches_dropped);
+    if (t->stems_stats.laterals_started_later || t->stems_stats.laterals_hidden)
+        ImGui::Text("joints: %u laterals start later, %u hidden whole", t->stems_stats.laterals_started_later,
+                    t->stems_stats.laterals_hidden);
     ImGui::Text("drawn: %llu triangles, %llu vertices, levels %u..%u", (unsigned long long)info->triangles,
                 (unsigned long long)info->vertices, info->level_lo, info->level_hi);
     if (info->leaves_drawn) {

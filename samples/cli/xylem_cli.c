@@ -127,7 +127,8 @@ static const char usage_text[] =
     "           [--foliage [foliage options]] --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
     "                               checked (default): laterals whose joints intersect\n"
-    "                               start later or are left out; --base open: no cap at the\n"
+    "                               start later or are hidden (not what grows from them);\n"
+    "                               --base open: no cap at the\n"
     "                               root (one boundary loop per root, for trees sunk into\n"
     "                               terrain); --foliage (.glb only): the\n"
     "                               leaves of 'foliage' too, in the same file\n"
@@ -973,6 +974,29 @@ static int cmd_foliage(const options *o)
     return rc;
 }
 
+/* What the joint check found, what it repaired and what the written mesh still has: the first
+ * build's pairs are not the output's. */
+static void print_joints(const xyl_stems_stats *st)
+{
+    if (st->joint_pairs_first == 0)
+        printf("joints: found no intersecting pair at a joint (1 build)\n");
+    else
+        printf("joints: found %zu intersecting pairs at joints in the construction; repaired in "
+               "%u builds: %u laterals start later (by %.4g at most, %.4g in all, along their "
+               "own skeletons), %u hidden whole (what grows from them kept); %zu of the "
+               "construction's %zu faces kept (%.1f %%)\n",
+               st->joint_pairs_first, st->builds, st->laterals_started_later,
+               st->lateral_shift_max, st->lateral_shift_sum, st->laterals_hidden,
+               st->faces_checked, st->faces_first,
+               st->faces_first ? 100.0 * (double)st->faces_checked / (double)st->faces_first
+                               : 100.0);
+    printf("joints: the written mesh has %zu intersecting pairs at joints%s and %zu where the "
+           "skeleton overlaps itself; %u laterals lie wholly inside another branch and are not "
+           "meshed\n",
+           st->joint_pairs_left, st->joint_pairs_left ? " (only a root could give way)" : "",
+           st->skeleton_pairs, st->laterals_inside);
+}
+
 static int cmd_mesh(const options *o)
 {
     if (!o->out) return usage_error("%s", "'mesh' needs --out FILE.glb or FILE.obj");
@@ -1006,14 +1030,7 @@ static int cmd_mesh(const options *o)
                "view)\n",
                source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
                m->tri_view_count);
-        if (desc.joints == XYL_JOINTS_CHECKED)
-            printf("joints: the first build had %zu intersecting pairs at joints; repaired: %u "
-                   "laterals start later, %u are left out (%zu of %zu faces kept), %u build%s; "
-                   "the written mesh has %zu pairs at joints and %zu where the skeleton overlaps "
-                   "itself\n",
-                   st.joint_pairs_first, st.laterals_started_later, st.branches_dropped,
-                   st.faces_checked, st.faces_first, st.builds, st.builds == 1 ? "" : "s",
-                   st.joint_pairs_left, st.skeleton_pairs);
+        if (desc.joints == XYL_JOINTS_CHECKED) print_joints(&st);
         if (d.warning_count) printf("warning: %s\n", d.warning);
         if (o->foliage.enabled) print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,

@@ -504,15 +504,19 @@ static xyl_result check_finite(const stems *s)
     return XYL_OK;
 }
 
-/* One mesh of the skeleton, with checked joints' levels per branch in drop (NULL: none). */
+/* One mesh of the skeleton, with checked joints' levels per branch in drop (NULL: none); with
+ * shift and hidden (per branch, or NULL) what the levels cost each raised lateral. */
 static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                             const uint8_t *drop, xyl_mesh **out, xyl_diag *diag)
+                             const uint32_t *drop, double *shift, uint8_t *hidden,
+                             xyl_mesh **out, xyl_diag *diag)
 {
     xyl_result r;
     stems s;
     memset(&s, 0, sizeof s);
     s.sk = skeleton;
     s.drop = drop;
+    s.shift = shift;
+    s.hidden = hidden;
     s.k = desc->sides ? desc->sides : 4;
     s.alloc = desc->alloc;
     s.diag = diag;
@@ -545,64 +549,127 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     return r;
 }
 
-/* Judges the intersecting pairs of mesh m (stems_joints.c): *t counts them, and drop has the
- * levels raised for those at joints. */
-static xyl_result judge_mesh(const xyl_skeleton *sk, const xyl_mesh *m, uint8_t *drop,
-                             const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag)
+/* One round's test: the intersecting pairs of mesh m (from those of the last round's mesh, if
+ * any), kept in *pairs for the next round; *t counts them, and drop has the levels raised for
+ * those at joints (stems_joints.c). */
+typedef struct round_pairs {
+    xyl_mesh *mesh;  /* the last round's mesh, or NULL */
+    uint64_t *pairs; /* its intersecting pairs */
+    size_t count;
+} round_pairs;
+
+static xyl_result judge_mesh(const xyl_skeleton *sk, xyl_mesh *m, round_pairs *last,
+                             uint32_t *drop, const xyl_allocator *alloc, xyl__joint_tally *t,
+                             xyl_diag *diag)
 {
     uint64_t *pairs = NULL;
     size_t count = 0;
-    xyl_result r = xyl__mesh_intersecting_pairs(m, alloc, &pairs, &count, diag);
+    xyl_result r = xyl__stems_joint_pairs(sk, last->mesh, last->pairs, last->count, m, alloc,
+                                          &pairs, &count, diag);
     if (!r) r = xyl__stems_judge_joints(sk, m, pairs, count, drop, alloc, t, diag);
-    xyl__free(alloc, pairs);
+    xyl_mesh_destroy(last->mesh);
+    xyl__free(alloc, last->pairs);
+    last->mesh = m;
+    last->pairs = pairs;
+    last->count = count;
     return r;
 }
 
+/* The stats of a checked build from its last plain mesh m: per branch its level (drop), how
+ * far a raised lateral moved (shift) and whether it has no node left (hidden). A lateral without
+ * faces that no level hid lies wholly inside another tube by its skeleton (the placement and the
+ * sibling merge leave it out). */
+static xyl_result count_laterals(const xyl_skeleton *sk, const xyl_mesh *m, const uint32_t *drop,
+                                 const double *shift, const uint8_t *hidden,
+                                 const xyl_allocator *alloc, xyl_stems_stats *st, xyl_diag *diag)
+{
+    const size_t nb = sk->branch_count, nf = m->quad_count + m->triangle_count;
+    uint8_t *meshed = xyl__calloc(alloc, nb ? nb : 1, 1);
+    uint8_t *lateral = xyl__calloc(alloc, nb ? nb : 1, 1);
+    if (!meshed || !lateral) {
+        xyl__free(alloc, meshed);
+        xyl__free(alloc, lateral);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    }
+    for (size_t f = 0; f < nf; ++f) meshed[m->face_branches[f]] = 1;
+    for (size_t n = 0; n < sk->node_count; ++n) {
+        const int32_t p = sk->nodes[n].parent;
+        if (p >= 0 && sk->nodes[p].branch != sk->nodes[n].branch) lateral[sk->nodes[n].branch] = 1;
+    }
+    for (size_t b = 0; b < nb; ++b) {
+        if (!lateral[b]) continue;
+        if (drop[b] && hidden[b]) {
+            ++st->laterals_hidden;
+        } else if (drop[b] && meshed[b]) {
+            ++st->laterals_started_later;
+            st->lateral_shift_sum += shift[b];
+            st->lateral_shift_max = fmax(st->lateral_shift_max, shift[b]);
+        } else if (!meshed[b]) {
+            ++st->laterals_inside;
+        }
+    }
+    xyl__free(alloc, meshed);
+    xyl__free(alloc, lateral);
+    return XYL_OK;
+}
+
 /* Checked joints (docs/stems.md): builds, tests the mesh for intersecting pairs, and for each
- * pair at a joint raises one lateral's level (stems_joints.c): it starts a node later, then
- * another, then is left out with all that grows from it; and builds again, until a mesh has no
- * pair at a joint. Each round raises at least one level, levels only rise, and a branch left
- * out has no faces to blame again, so this ends within XYL__JOINT_DROP rounds per lateral.
- * The test runs on the mesh before subdivision, at the skeleton's radii; a subdivided mesh is
- * then built once more with the same levels. */
+ * pair at a joint raises one lateral's level (stems_joints.c): it starts a node later than the
+ * placement would start it, then another, and so on; one with no node left is not meshed, and
+ * what grows from it grows from its fork. Then it builds again, until a mesh has no pair at a
+ * joint. Each round raises at least one level, levels only rise and none passes its branch's
+ * node count, so this ends. The test runs on the mesh before subdivision, at the skeleton's
+ * radii; a subdivided mesh is then built once more with the same levels. */
 static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                                 xyl_mesh **out, xyl_stems_stats *st, xyl_diag *diag)
 {
-    uint8_t *drop = xyl__calloc(&desc->alloc, skeleton->branch_count ? skeleton->branch_count : 1, 1);
-    if (!drop) return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    const size_t nb = skeleton->branch_count ? skeleton->branch_count : 1;
+    uint32_t *drop = xyl__calloc(&desc->alloc, nb, sizeof *drop);
+    double *shift = xyl__calloc(&desc->alloc, nb, sizeof *shift);
+    uint8_t *hidden = xyl__calloc(&desc->alloc, nb, 1);
+    xyl_mesh *m = NULL;
+    xyl_result r = XYL_OK;
+    if (!drop || !shift || !hidden)
+        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
     xyl_stems_desc plain = *desc;
     plain.subdivision = XYL_SUBDIVIDE_NONE;
-    xyl_mesh *m = NULL;
-    xyl_result r;
-    for (;;) {
-        r = build_once(skeleton, &plain, drop, &m, diag);
+    bool any = false; /* some level was raised */
+    round_pairs last = {NULL, NULL, 0};
+    while (!r) {
+        memset(shift, 0, nb * sizeof *shift);
+        memset(hidden, 0, nb);
+        r = build_once(skeleton, &plain, drop, shift, hidden, &m, diag);
         if (r) break;
         if (++st->builds == 1) st->faces_first = m->quad_count + m->triangle_count;
         xyl__joint_tally t;
-        r = judge_mesh(skeleton, m, drop, &desc->alloc, &t, diag);
-        if (r) break;
+        r = judge_mesh(skeleton, m, &last, drop, &desc->alloc, &t, diag);
+        if (r) {
+            m = NULL; /* last's now */
+            break;
+        }
         if (st->builds == 1) st->joint_pairs_first = t.joint;
         if (!t.marked) {
             st->joint_pairs_left = t.joint;
             st->skeleton_pairs = t.own;
             st->faces_checked = m->quad_count + m->triangle_count;
+            r = count_laterals(skeleton, m, drop, shift, hidden, &desc->alloc, st, diag);
+            last.mesh = NULL; /* m, handed out below */
             break;
         }
-        xyl_mesh_destroy(m);
-        m = NULL;
+        any = true;
+        m = NULL; /* kept in last for the next round */
     }
-    for (size_t b = 0; b < skeleton->branch_count; ++b) {
-        st->branches_dropped += drop[b] >= XYL__JOINT_DROP;
-        st->laterals_started_later += drop[b] && drop[b] < XYL__JOINT_DROP;
-    }
+    xyl_mesh_destroy(last.mesh);
+    xyl__free(&desc->alloc, last.pairs);
     if (!r && desc->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl_mesh_destroy(m);
         m = NULL;
-        bool any = st->branches_dropped || st->laterals_started_later;
-        r = build_once(skeleton, desc, any ? drop : NULL, &m, diag);
+        r = build_once(skeleton, desc, any ? drop : NULL, NULL, NULL, &m, diag);
         ++st->builds;
     }
     xyl__free(&desc->alloc, drop);
+    xyl__free(&desc->alloc, shift);
+    xyl__free(&desc->alloc, hidden);
     if (r) {
         xyl_mesh_destroy(m);
         return r;
@@ -625,7 +692,7 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     xyl_stems_stats st;
     memset(&st, 0, sizeof st);
     if (desc->joints == XYL_JOINTS_UNCHECKED) {
-        r = build_once(skeleton, desc, NULL, out, diag);
+        r = build_once(skeleton, desc, NULL, NULL, NULL, out, diag);
         st.builds = 1;
     } else {
         r = build_checked(skeleton, desc, out, &st, diag);

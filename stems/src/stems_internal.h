@@ -119,7 +119,11 @@ typedef struct stems {
     size_t ncones, cone_cap;
 
     double *tails; /* while indexing: per node, the box around its chain's tubes from it on */
-    const uint8_t *drop; /* per skeleton branch: checked joints' level (XYL__JOINT_DROP), or NULL */
+    const uint32_t *drop; /* per skeleton branch, or NULL: checked joints' level, the nodes a
+                             lateral hides at its start beyond those the placement hides */
+    double *shift;   /* with drop, per skeleton branch, or NULL: how far a raised lateral now
+                        starts beyond where the placement would start it, along its skeleton */
+    uint8_t *hidden; /* with shift: 1 where a raised lateral has no node left to mesh */
 } stems;
 
 /* Fills tails (6 per node: low and high corner) with the bounding box of each node's ball and
@@ -158,13 +162,9 @@ bool xyl__cones_clash(const xyl__stems_cone *a, const xyl__stems_cone *b);
 void xyl__closest_params(xyl__dvec3 p0, xyl__dvec3 p1, xyl__dvec3 q0, xyl__dvec3 q1, double *s,
                          double *t);
 
-/* Per skeleton branch, what checked joints ask of it (stems_joints.c): levels 1 ..
- * XYL__JOINT_DROP - 1 start the lateral that many nodes later than the placement would,
- * XYL__JOINT_DROP leaves it out with all that grows from it. */
 /* The most v grows along one segment, in circumferences (docs/stems.md, "Normals, UVs and
  * seams"). */
 #define XYL__STEMS_MAX_DV 65536.0
-#define XYL__JOINT_DROP 3
 
 /* How far a closed base's apex (k >= 5) lies inside the root ring, in ring radii: enough for
  * its faces to meet at an angle (a flat fan's coplanar faces sharing a vertex cannot be told
@@ -183,8 +183,19 @@ typedef struct xyl__joint_tally {
  * per skeleton branch) the level of a lateral blamed for each pair at a joint (stems_joints.c).
  * pairs: i << 32 | j triangle indices of m's triangulated view. Errors: XYL_ERR_OUT_OF_MEMORY. */
 xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
-                                   const uint64_t *pairs, size_t count, uint8_t *drop,
+                                   const uint64_t *pairs, size_t count, uint32_t *drop,
                                    const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag);
+
+/* Every intersecting pair of mesh m (as xyl__mesh_intersecting_pairs gives them: i << 32 | j,
+ * sorted, from alloc) for a round of checked joints. With the last round's mesh prev and its
+ * pairs, only triangles of branches whose triangles changed are tested (against all), and the
+ * last round's pairs between unchanged branches are carried over: the same pairs a full test
+ * finds, at a fraction of its cost when a round moves a few laterals. prev NULL: the full test.
+ * Errors: those of xyl__mesh_intersecting_pairs. */
+xyl_result xyl__stems_joint_pairs(const xyl_skeleton *sk, const xyl_mesh *prev,
+                                  const uint64_t *prev_pairs, size_t prev_count,
+                                  const xyl_mesh *m, const xyl_allocator *alloc, uint64_t **pairs,
+                                  size_t *count, xyl_diag *diag);
 
 /* ---- small inline functions of the mesher's files ------------------------------------------ */
 

@@ -221,12 +221,16 @@ static void judge_free(judge *j, const xyl_allocator *alloc)
     xyl__free(alloc, j->bumped);
 }
 
-/* Raises the level of blamed branch b (UINT32_MAX: none can go) once per round. */
-static void raise_level(judge *j, uint8_t *drop, uint32_t b, xyl__joint_tally *t)
+/* Raises the level of blamed branch b (UINT32_MAX: none can go) once per round: to 1, then
+ * doubled (1, 2, 4, ... nodes later), so a lateral that must move far takes a few rounds, not
+ * one per node; a level as high as the branch has nodes hides all of them, and goes no higher. */
+static void raise_level(judge *j, uint32_t *drop, uint32_t b, xyl__joint_tally *t)
 {
-    if (b == UINT32_MAX || j->bumped[b] || drop[b] >= XYL__JOINT_DROP) return;
+    if (b == UINT32_MAX || j->bumped[b]) return;
+    const uint32_t nodes = j->start[b + 1] - j->start[b];
+    if (drop[b] >= nodes) return;
     j->bumped[b] = 1;
-    ++drop[b];
+    drop[b] = drop[b] ? (drop[b] > nodes / 2 ? nodes : 2 * drop[b]) : 1;
     ++t->marked;
 }
 
@@ -234,7 +238,7 @@ static void raise_level(judge *j, uint8_t *drop, uint32_t b, xyl__joint_tally *t
  * branch are blamed one by one, by where they are. A blamed branch's level rises by one per
  * round, however many pairs blame it. */
 xyl_result xyl__stems_judge_joints(const xyl_skeleton *sk, const xyl_mesh *m,
-                                   const uint64_t *pairs, size_t count, uint8_t *drop,
+                                   const uint64_t *pairs, size_t count, uint32_t *drop,
                                    const xyl_allocator *alloc, xyl__joint_tally *t, xyl_diag *diag)
 {
     memset(t, 0, sizeof *t);
@@ -278,4 +282,179 @@ done:
     judge_free(&j, alloc);
     xyl__free(alloc, keys);
     return r;
+}
+
+/* ---- the pairs of a round, from the last round's ------------------------------------------ */
+
+/* A mesh's triangles and vertices by branch: branch b's triangles are tri[tstart[b] ..
+ * tstart[b + 1]) in view order, its vertices vert[vstart[b] ..) in index order; trank and vrank
+ * give each one's place in its branch's list. */
+typedef struct by_branch {
+    uint32_t *tstart, *tri, *trank, *vstart, *vert, *vrank;
+} by_branch;
+
+static void by_branch_free(by_branch *x, const xyl_allocator *alloc)
+{
+    xyl__free(alloc, x->tstart);
+    xyl__free(alloc, x->tri);
+    xyl__free(alloc, x->trank);
+    xyl__free(alloc, x->vstart);
+    xyl__free(alloc, x->vert);
+    xyl__free(alloc, x->vrank);
+}
+
+/* The branch of item i: vertex i's with keys (the mesh's branch ids), else triangle i's. */
+static uint32_t branch_of(const xyl_mesh *m, const uint32_t *keys, size_t i)
+{
+    return keys ? keys[i] : m->face_branches[face_of(m, (uint32_t)i)];
+}
+
+/* Counting sort of n items by branch (< nb) into start (nb + 2 entries), list and rank. */
+static void sort_by_branch(size_t n, size_t nb, const uint32_t *keys, const xyl_mesh *m,
+                           uint32_t *start, uint32_t *list, uint32_t *rank)
+{
+    for (size_t i = 0; i < n; ++i) ++start[branch_of(m, keys, i) + 2];
+    for (size_t b = 2; b < nb + 2; ++b) start[b] += start[b - 1];
+    for (size_t i = 0; i < n; ++i) list[start[branch_of(m, keys, i) + 1]++] = (uint32_t)i;
+    for (size_t b = 0; b < nb; ++b)
+        for (uint32_t k = start[b]; k < start[b + 1]; ++k) rank[list[k]] = k - start[b];
+}
+
+static bool by_branch_make(by_branch *x, const xyl_mesh *m, size_t nb, const xyl_allocator *alloc)
+{
+    size_t nt = m->tri_view_count, nv = m->vertex_count;
+    x->tstart = xyl__calloc(alloc, nb + 2, sizeof *x->tstart);
+    x->vstart = xyl__calloc(alloc, nb + 2, sizeof *x->vstart);
+    x->tri = xyl__alloc_array(alloc, nt ? nt : 1, sizeof *x->tri);
+    x->trank = xyl__alloc_array(alloc, nt ? nt : 1, sizeof *x->trank);
+    x->vert = xyl__alloc_array(alloc, nv ? nv : 1, sizeof *x->vert);
+    x->vrank = xyl__alloc_array(alloc, nv ? nv : 1, sizeof *x->vrank);
+    if (!x->tstart || !x->vstart || !x->tri || !x->trank || !x->vert || !x->vrank) return false;
+    sort_by_branch(nt, nb, NULL, m, x->tstart, x->tri, x->trank);
+    sort_by_branch(nv, nb, m->branch_ids, m, x->vstart, x->vert, x->vrank);
+    return true;
+}
+
+static bool same_position(xyl_vec3 a, xyl_vec3 b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+/* Per branch of m (clean[b] = 1) whether its triangles are those of the last round's mesh p,
+ * bit for bit: the same corners in the same order, each at the same position and the same
+ * vertex of the same branch (by its place among that branch's vertices, all of which are where
+ * they were). A pair of two such triangles intersects in m exactly when it did in p. */
+static void clean_branches(const xyl_mesh *p, const by_branch *bp, const xyl_mesh *m,
+                           const by_branch *bm, size_t nb, uint8_t *vclean, uint8_t *clean)
+{
+    for (size_t b = 0; b < nb; ++b) {
+        uint32_t n = bm->vstart[b + 1] - bm->vstart[b];
+        vclean[b] = n == bp->vstart[b + 1] - bp->vstart[b];
+        for (uint32_t i = 0; i < n && vclean[b]; ++i)
+            vclean[b] = same_position(p->positions[bp->vert[bp->vstart[b] + i]],
+                                      m->positions[bm->vert[bm->vstart[b] + i]]);
+    }
+    for (size_t b = 0; b < nb; ++b) {
+        uint32_t n = bm->tstart[b + 1] - bm->tstart[b];
+        clean[b] = n == bp->tstart[b + 1] - bp->tstart[b];
+        for (uint32_t i = 0; i < n && clean[b]; ++i) {
+            const uint32_t *cp = p->tri_view + 3 * (size_t)bp->tri[bp->tstart[b] + i];
+            const uint32_t *cm = m->tri_view + 3 * (size_t)bm->tri[bm->tstart[b] + i];
+            for (int q = 0; q < 3 && clean[b]; ++q)
+                clean[b] = p->branch_ids[cp[q]] == m->branch_ids[cm[q]] &&
+                           vclean[m->branch_ids[cm[q]]] && bp->vrank[cp[q]] == bm->vrank[cm[q]];
+        }
+    }
+}
+
+static int u64_compare(const void *pa, const void *pb)
+{
+    uint64_t a = *(const uint64_t *)pa, b = *(const uint64_t *)pb;
+    return a < b ? -1 : a > b;
+}
+
+/* Whether triangle t of m has at most the area a (the test skips triangles at or below an area
+ * set by the whole mesh's box, xyl__mesh_area_tolerance). */
+static bool area_at_most(const xyl_mesh *m, size_t t, double a)
+{
+    const uint32_t *v = m->tri_view + 3 * t;
+    xyl__dvec3 o = xyl__from_f3(m->positions[v[0]]);
+    xyl__dvec3 n = xyl__d3_cross(xyl__d3_sub(xyl__from_f3(m->positions[v[1]]), o),
+                                 xyl__d3_sub(xyl__from_f3(m->positions[v[2]]), o));
+    return 0.5 * xyl__d3_len(n) <= a;
+}
+
+/* Pairs of m: those of the last round between two clean branches, moved to m's triangle
+ * indices, and those the test finds with a triangle of a changed branch. Where the mesh's box,
+ * and with it the degenerate area, changed, a triangle near that area is tested again too. */
+static xyl_result pairs_since(const xyl_mesh *p, const uint64_t *pp, size_t pcount,
+                              const xyl_mesh *m, size_t nb, const xyl_allocator *alloc,
+                              uint64_t **pairs, size_t *count, xyl_diag *diag)
+{
+    const double tp = xyl__mesh_area_tolerance(p), tm = xyl__mesh_area_tolerance(m);
+    const double near = tp != tm ? 2.0 * fmax(tp, tm) : -1.0;
+    by_branch bp, bm;
+    memset(&bp, 0, sizeof bp);
+    memset(&bm, 0, sizeof bm);
+    uint8_t *vclean = xyl__calloc(alloc, nb ? nb : 1, 1);
+    uint8_t *clean = xyl__calloc(alloc, nb ? nb : 1, 1);
+    uint8_t *marked = xyl__calloc(alloc, m->tri_view_count ? m->tri_view_count : 1, 1);
+    uint64_t *fresh = NULL, *all = NULL;
+    size_t nfresh = 0, n = 0;
+    xyl_result r = XYL_OK;
+    if (!vclean || !clean || !marked || !by_branch_make(&bp, p, nb, alloc) ||
+        !by_branch_make(&bm, m, nb, alloc)) {
+        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory checking the joints");
+        goto done;
+    }
+    clean_branches(p, &bp, m, &bm, nb, vclean, clean);
+    for (size_t t = 0; t < m->tri_view_count; ++t)
+        marked[t] = !clean[m->face_branches[face_of(m, (uint32_t)t)]] ||
+                    (near >= 0.0 && area_at_most(m, t, near));
+    r = xyl__mesh_intersecting_pairs_marked(m, marked, alloc, &fresh, &nfresh, diag);
+    if (r) goto done;
+    all = xyl__alloc_array(alloc, nfresh + pcount ? nfresh + pcount : 1, sizeof *all);
+    if (!all) {
+        r = xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory checking the joints");
+        goto done;
+    }
+    if (nfresh) memcpy(all, fresh, nfresh * sizeof *all);
+    n = nfresh;
+    for (size_t i = 0; i < pcount; ++i) {
+        uint32_t t[2] = {(uint32_t)(pp[i] >> 32), (uint32_t)pp[i]};
+        uint32_t b0 = p->face_branches[face_of(p, t[0])], b1 = p->face_branches[face_of(p, t[1])];
+        if (!clean[b0] || !clean[b1]) continue; /* found again, or gone */
+        uint64_t u = bm.tri[bm.tstart[b0] + bp.trank[t[0]]];
+        uint64_t v = bm.tri[bm.tstart[b1] + bp.trank[t[1]]];
+        if (marked[u] || marked[v]) continue; /* found again */
+        all[n++] = u < v ? u << 32 | v : v << 32 | u;
+    }
+    xyl__sort(all, n, sizeof *all, u64_compare);
+done:
+    if (r) {
+        xyl__free(alloc, all);
+        all = NULL;
+        n = 0;
+    }
+    by_branch_free(&bp, alloc);
+    by_branch_free(&bm, alloc);
+    xyl__free(alloc, vclean);
+    xyl__free(alloc, clean);
+    xyl__free(alloc, marked);
+    xyl__free(alloc, fresh);
+    *pairs = all;
+    *count = n;
+    return r;
+}
+
+xyl_result xyl__stems_joint_pairs(const xyl_skeleton *sk, const xyl_mesh *prev,
+                                  const uint64_t *prev_pairs, size_t prev_count,
+                                  const xyl_mesh *m, const xyl_allocator *alloc, uint64_t **pairs,
+                                  size_t *count, xyl_diag *diag)
+{
+    *pairs = NULL;
+    *count = 0;
+    if (!prev) return xyl__mesh_intersecting_pairs(m, alloc, pairs, count, diag);
+    return pairs_since(prev, prev_pairs, prev_count, m, sk->branch_count, alloc, pairs, count,
+                       diag);
 }

@@ -324,13 +324,16 @@ static bool inside(const stems *s, const placing *pl, uint32_t x, uint32_t h, ui
 /* Hides the nodes of a chain of fork p (placed at h) from x on while they lie inside a tube,
  * and `extra` clear nodes more (checked joints: the lateral starts later, from the parent's
  * tube), recording each one's tube; *last and *in become the last hidden node and its tube
- * (unchanged if none is hidden). Returns the first node that is clear, or UINT32_MAX. */
+ * (unchanged if none is hidden), *clear the first node clear of every tube (UINT32_MAX if
+ * none). Returns the first node that is meshed, or UINT32_MAX. */
 static uint32_t hide_run(const stems *s, placing *pl, uint32_t x, uint32_t p, uint32_t h,
-                         uint32_t *last, uint32_t *in, uint32_t extra)
+                         uint32_t *last, uint32_t *in, uint32_t extra, uint32_t *clear)
 {
     uint32_t first = x, t;
+    *clear = UINT32_MAX;
     for (; x != UINT32_MAX; x = s->main[x]) {
         if (!inside(s, pl, x, h, &t)) {
+            if (*clear == UINT32_MAX) *clear = x;
             if (!extra) break;
             --extra, t = UINT32_MAX;
         }
@@ -355,6 +358,18 @@ static void hang(const stems *s, placing *pl, uint32_t c, uint32_t last, uint32_
     pl->parent_of[c] = (int32_t)at;
 }
 
+/* What checked joints cost lateral branch b, whose first clear node is `clear` and whose first
+ * meshed node is c (UINT32_MAX: none): how far along its own skeleton it now starts later, or
+ * that it is hidden whole. */
+static void record_shift(const stems *s, uint32_t b, uint32_t clear, uint32_t c)
+{
+    double d = 0.0;
+    for (uint32_t x = clear; x != c && s->main[x] != UINT32_MAX; x = s->main[x])
+        d += xyl__d3_len(xyl__d3_sub(pos_of(s, s->main[x]), pos_of(s, x)));
+    s->shift[b] = d;
+    s->hidden[b] = c == UINT32_MAX;
+}
+
 /* Places lateral i of node p at fork h (p itself, or the meshed node p is hidden at): hides its
  * nodes while they lie in the parent's tube or one placed before it, and hangs the first clear
  * one from the nearest node of the tube it left. Returns whether i moved. */
@@ -363,9 +378,10 @@ static bool place_lateral(const stems *s, uint32_t i, uint32_t p, uint32_t h, pl
     /* where it comes from: its fork, in the tube the fork is hidden in if it is */
     uint32_t last = p, in = pl->link[p] != UINT32_MAX ? pl->tube[p] : UINT32_MAX;
     /* checked joints (stems_joints.c) may have asked this lateral to start later */
-    uint32_t level = s->drop ? s->drop[s->sk->nodes[i].branch] : 0;
-    uint32_t extra = level < XYL__JOINT_DROP ? level : 0;
-    uint32_t c = hide_run(s, pl, i, p, h, &last, &in, extra);
+    const uint32_t branch = s->sk->nodes[i].branch;
+    uint32_t extra = s->drop ? s->drop[branch] : 0, clear;
+    uint32_t c = hide_run(s, pl, i, p, h, &last, &in, extra, &clear);
+    if (extra && s->shift && clear != UINT32_MAX) record_shift(s, branch, clear, c);
     if (c != UINT32_MAX) pl->placed[pl->nplaced++] = c;
     if (c == i && h == p) return false; /* leaves its parent at once */
     if (c != i) pl->parent_of[i] = -1;
@@ -382,7 +398,8 @@ static bool cut_crossings(const stems *s, uint32_t c, uint32_t p, uint32_t h, pl
     for (uint32_t x = s->main[c], t; x != UINT32_MAX; x = s->main[x]) {
         if (!inside(s, pl, x, h, &t)) continue;
         uint32_t first = x, last = x, in = t;
-        x = hide_run(s, pl, x, p, h, &last, &in, 0);
+        uint32_t clear;
+        x = hide_run(s, pl, x, p, h, &last, &in, 0, &clear);
         pl->parent_of[first] = -1;
         any = true;
         if (x == UINT32_MAX) break;

@@ -45,18 +45,6 @@ static bool has_sibling_laterals(const stems *s)
     return false;
 }
 
-/* Detaches every node of the branches marked in s->drop (never a root's: checked joints only
- * mark laterals), so that nothing of them or of what grows from them is meshed. */
-static bool drop_branches(const stems *s, int32_t *parent_of)
-{
-    const xyl_skel_node *nodes = s->sk->nodes;
-    bool any = false;
-    for (size_t i = 0; i < s->sk->node_count; ++i)
-        if (s->drop[nodes[i].branch] >= XYL__JOINT_DROP && nodes[i].parent >= 0)
-            parent_of[i] = -1, any = true;
-    return any;
-}
-
 /* Children of every node, indexed again after laterals inside their parent or a sibling were
  * moved, and again after laterals that came to hang from one node were merged (stems_merge.c),
  * so that the rest of the mesher sees the tree as meshed. One call site of index_children:
@@ -83,7 +71,6 @@ xyl_result xyl__stems_index_tree(stems *s)
             /* here moved says whether the placement moved laterals: one it moved may lie in
              * its new fork's tube, siblings or not */
             moved = (moved || has_sibling_laterals(s)) && xyl__stems_merge_siblings(s, parent_of);
-            if (s->drop && drop_branches(s, parent_of)) moved = true;
         }
     }
     xyl__free(&s->alloc, parent_of);

@@ -35,11 +35,14 @@ typedef enum xyl_normal_mode {
 typedef enum xyl_joint_check {
     XYL_JOINTS_CHECKED = 0,  /* default: the mesh is tested for intersecting triangle pairs; for
                                 each pair at a joint (every pair but those where the skeleton
-                                overlaps itself) a lateral starts a node later, a second, or at
-                                last is left out with all that grows from it, and the mesh is
-                                built again, until no pair at a joint is left. The test runs
-                                before subdivision, on the mesh at the skeleton's radii; a
-                                subdivided mesh makes the same changes */
+                                overlaps itself) a lateral starts a node later along its own
+                                skeleton, then 2, 4, 8 ..., and the mesh is built again (only
+                                what changed is tested again), until no pair at a joint is
+                                left. A lateral with no node left is not
+                                meshed, but what grows from it still is (from its fork): no
+                                subtree is left out. The test runs before subdivision, on the
+                                mesh at the skeleton's radii; a subdivided mesh makes the same
+                                changes */
     XYL_JOINTS_UNCHECKED = 1 /* the construction alone, without the test: faster
                                 (docs/BENCHMARKS.md); the presets then have pairs at joints */
 } xyl_joint_check;
@@ -61,11 +64,19 @@ typedef enum xyl_stems_base {
 /* What a checked build did (all 0 but builds when unchecked). Face counts are of the mesh
  * before subdivision. */
 typedef struct xyl_stems_stats {
-    uint32_t builds;           /* meshes built: 1, plus one per round of laterals left out,
-                                  plus one to subdivide */
-    uint32_t laterals_started_later; /* laterals that start a node or two further out */
-    uint32_t branches_dropped; /* laterals left out, with all that grows from them */
-    size_t faces_first;        /* faces of the first mesh built */
+    uint32_t builds;           /* meshes built: 1, plus one per round of repairs, plus one to
+                                  subdivide */
+    uint32_t laterals_started_later; /* meshed laterals that start one or more nodes further
+                                  along their own skeleton than the construction starts them */
+    uint32_t laterals_hidden;  /* laterals the check hid whole (every node): not meshed, but
+                                  their own laterals are, from their fork */
+    uint32_t laterals_inside;  /* laterals not meshed because the skeleton puts them wholly
+                                  inside another branch's tube (the construction's placement
+                                  and sibling merge leave them out, checked or not) */
+    double lateral_shift_max;  /* how far (skeleton units, along the lateral's own skeleton) the
+                                  check moved the start of the lateral it moved most */
+    double lateral_shift_sum;  /* the same, summed over laterals_started_later */
+    size_t faces_first;        /* faces of the first mesh built (the unchecked construction's) */
     size_t faces_checked;      /* faces of the mesh that passed, to compare */
     size_t joint_pairs_first;  /* intersecting pairs at joints in the first mesh */
     size_t joint_pairs_left;   /* in the mesh that passed: 0, unless only a root could give way
