@@ -216,6 +216,7 @@ typedef struct base_ctx {
     size_t roots;    /* roots checked */
     size_t skipped;  /* roots whose tree grows below their plane */
     bool keep;       /* subdivided: keep_control_points (else on the limit surface) */
+    float flare;     /* xyl_stems_desc.root_flare */
 } base_ctx;
 
 /* Every root's ring lies in the root's plane (at least k vertices within BASE_TOL r of it,
@@ -232,6 +233,7 @@ static void check_base(const char *name, const xyl_skeleton *sk, void *ctx)
     d.base = b->base;
     d.keep_control_points = b->keep;
     d.joints = XYL_JOINTS_UNCHECKED;
+    d.root_flare = b->flare;
     xyl_mesh *m = NULL;
     xyl_diag diag = {0};
     if (xyl_stems_build(sk, &d, &m, NULL, &diag) != XYL_OK) fail_msg("%s: %s", name, diag.message);
@@ -283,7 +285,7 @@ static void every_tree_stands_on_its_root_plane(void **state)
     for (uint32_t k = 3; k <= 8; ++k) {
         for (int open = 0; open < 2; ++open) {
             base_ctx b = {k, XYL_SUBDIVIDE_NONE, open ? XYL_STEMS_BASE_OPEN : XYL_STEMS_BASE_CLOSED,
-                          false, 0, 0, false};
+                          false, 0, 0, false, 0.0f};
             tu_for_each_hard_case(check_base, &b);
             assert_true(b.roots >= 40);
             if (k == 4 && !open)
@@ -302,6 +304,105 @@ static void every_tree_stands_on_its_root_plane(void **state)
     }
 }
 
+/* The widest reach from root i's axis (its plane's normal through it) of the root branch's
+ * vertices between heights lo and hi (in r) above the plane; *on_ring: vertices on the plane at
+ * `ring` r from the axis (within 1 %). */
+static double root_reach(const xyl_mesh *m, const xyl_skeleton *sk, uint32_t i, const double p[3],
+                         const double n[3], double lo, double hi, double ring, size_t *on_ring)
+{
+    const double r = sk->nodes[i].radius;
+    double widest = 0.0;
+    *on_ring = 0;
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        if (m->branch_ids[v] != sk->nodes[i].branch) continue;
+        double e[3] = {m->positions[v].x - p[0], m->positions[v].y - p[1],
+                       m->positions[v].z - p[2]};
+        double h = e[0] * n[0] + e[1] * n[1] + e[2] * n[2];
+        double side = sqrt(fmax(0.0, e[0] * e[0] + e[1] * e[1] + e[2] * e[2] - h * h));
+        if (fabs(h) <= BASE_TOL * r && fabs(side - ring * r) <= 0.01 * r) ++*on_ring;
+        if (h >= lo * r && h <= hi * r) widest = fmax(widest, side);
+    }
+    return widest / r;
+}
+
+/* A flared base (root_flare 1): closed, every root's ring on its plane at twice the root's
+ * radius (k vertices within 1 % of it), nothing of the root's branch below 4 r reaching further
+ * from its axis than that ring (or than without the flare, where the trunk leans out), and the
+ * flare gone further up: between 3 and 4 r the branch reaches at most 10 % further
+ * from the root's axis than without it (or than r, the trunks' radii only fall). Presets,
+ * k = 3..8. */
+static void check_flare(const char *name, const xyl_skeleton *sk, void *ctx)
+{
+    const uint32_t k = *(const uint32_t *)ctx;
+    xyl_stems_desc d = {0};
+    d.sides = k;
+    d.joints = XYL_JOINTS_UNCHECKED;
+    xyl_mesh *plain = NULL, *m = NULL;
+    xyl_diag diag = {0};
+    if (xyl_stems_build(sk, &d, &plain, NULL, &diag) != XYL_OK)
+        fail_msg("%s: %s", name, diag.message);
+    d.root_flare = 1.0f;
+    if (xyl_stems_build(sk, &d, &m, NULL, &diag) != XYL_OK) fail_msg("%s: %s", name, diag.message);
+    char what[160];
+    snprintf(what, sizeof what, "%s k=%u root_flare 1", name, k);
+    assert_closed(m, sk, what);
+    for (uint32_t i = 0; i < sk->node_count; ++i) {
+        double p[3], n[3];
+        if (sk->nodes[i].parent >= 0 || !root_plane(sk, i, p, n)) continue;
+        size_t on_ring, unused;
+        double widest = root_reach(m, sk, i, p, n, -BASE_TOL, 4.0, 2.0, &on_ring);
+        double widest_plain = root_reach(plain, sk, i, p, n, -BASE_TOL, 4.0, 2.0, &unused);
+        double up = root_reach(m, sk, i, p, n, 3.0, 4.0, 2.0, &unused);
+        double up_plain = root_reach(plain, sk, i, p, n, 3.0, 4.0, 2.0, &unused);
+        if (on_ring < k || widest > fmax(2.01, widest_plain + 0.01)) /* a trunk may lean out */
+            fail_msg("%s: root %u: %zu ring vertices at 2 r on its plane (k = %u), widest %.4g r",
+                     what, i, on_ring, k, widest);
+        if (up > 1.1 * fmax(up_plain, 1.0) + 0.02) /* the plain mesh may have no vertex there */
+            fail_msg("%s: root %u reaches %.4g r from its axis 3-4 r up, %.4g r without the "
+                     "flare", what, i, up, up_plain);
+    }
+    xyl_mesh_destroy(m);
+    xyl_mesh_destroy(plain);
+}
+
+static void a_flared_base_is_wider_closed_and_on_the_root_plane(void **state)
+{
+    (void)state;
+    for (uint32_t k = 3; k <= 8; ++k) {
+        base_ctx b = {k, XYL_SUBDIVIDE_NONE, XYL_STEMS_BASE_CLOSED, true, 0, 0, false, 1.0f};
+        for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+            const char *name = xyl_lsystem_preset_name(i);
+            xyl_skeleton *sk = grow_preset(name);
+            check_base(name, sk, &b);
+            check_flare(name, sk, &k);
+            if (k == 4)
+                for (int loop = 0; loop < 2; ++loop) {
+                    base_ctx s = {k, loop ? XYL_SUBDIVIDE_LOOP : XYL_SUBDIVIDE_CATMARK,
+                                  XYL_STEMS_BASE_CLOSED, true, 0, 0, false, 1.0f};
+                    check_base(name, sk, &s);
+                }
+            xyl_skeleton_destroy(sk);
+        }
+        assert_int_equal(b.skipped, 0);
+        b.whole_tree = false;
+        b.roots = 0;
+        tu_for_each_hard_case(check_base, &b);
+        assert_true(b.roots >= 40);
+    }
+    xyl_skeleton *sk = grow_preset("abop-2.8-ternary");
+    const float bad[] = {-0.5f, 8.5f, NAN};
+    for (size_t i = 0; i < 3; ++i) {
+        xyl_stems_desc d = {0};
+        d.root_flare = bad[i];
+        xyl_mesh *m = NULL;
+        xyl_diag diag = {0};
+        assert_int_equal(xyl_stems_build(sk, &d, &m, NULL, &diag), XYL_ERR_INVALID_ARGUMENT);
+        assert_null(m);
+        assert_non_null(strstr(diag.message, "root_flare"));
+    }
+    xyl_skeleton_destroy(sk);
+}
+
 /* Subdivided, an open base keeps its boundary loop in the root's plane (boundaries are sharp). */
 static void an_open_base_stays_on_the_root_plane_after_subdivision(void **state)
 {
@@ -309,12 +410,12 @@ static void an_open_base_stays_on_the_root_plane_after_subdivision(void **state)
     for (uint32_t k = 3; k <= 8; ++k) {
         for (int loop = 0; loop < 2; ++loop) {
             base_ctx b = {k, loop ? XYL_SUBDIVIDE_LOOP : XYL_SUBDIVIDE_CATMARK, XYL_STEMS_BASE_OPEN,
-                          false, 0, 0, false};
+                          false, 0, 0, false, 0.0f};
             tu_for_each_hard_case(check_base, &b);
             assert_true(b.roots >= 40);
         }
     }
-    base_ctx b = {4, XYL_SUBDIVIDE_CATMARK, XYL_STEMS_BASE_OPEN, true, 0, 0, false};
+    base_ctx b = {4, XYL_SUBDIVIDE_CATMARK, XYL_STEMS_BASE_OPEN, true, 0, 0, false, 0.0f};
     xyl_skeleton *sk = grow_preset("abop-2.8-ternary");
     check_base("abop-2.8-ternary", sk, &b);
     assert_int_equal(b.roots, 1);
@@ -332,7 +433,7 @@ static void a_closed_base_stays_on_the_root_plane_after_subdivision(void **state
     base_ctx b[CASES];
     for (int c = 0; c < CASES; ++c) {
         base_ctx one = {3 + (uint32_t)(c / 4), c & 2 ? XYL_SUBDIVIDE_LOOP : XYL_SUBDIVIDE_CATMARK,
-                        XYL_STEMS_BASE_CLOSED, false, 0, 0, c & 1};
+                        XYL_STEMS_BASE_CLOSED, false, 0, 0, c & 1, 0.0f};
         b[c] = one;
         tu_for_each_hard_case(check_base, &b[c]);
         assert_true(b[c].roots >= 40);
@@ -2321,6 +2422,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(thin_spokes_stay_separate_branches),
         cmocka_unit_test(branch_normals_keep_the_parent_cylindrical_at_a_joint),
         cmocka_unit_test(branch_normals_stay_radial_on_a_bend),
+        cmocka_unit_test(a_flared_base_is_wider_closed_and_on_the_root_plane),
         cmocka_unit_test(subdivision_limit_keeps_the_skeleton_radius),
         cmocka_unit_test(subdivided_vertices_sit_on_the_limit_surface),
         cmocka_unit_test(subdivision_limit_follows_a_bent_branch),

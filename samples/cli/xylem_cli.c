@@ -123,7 +123,7 @@ static const char usage_text[] =
     "                               grow the branch skeleton and write it\n"
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
-    "           [--joints checked|unchecked] [--base closed|open]\n"
+    "           [--joints checked|unchecked] [--base closed|open] [--root-flare F]\n"
     "           [--foliage [foliage options]] --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
     "                               checked (default): laterals whose joints intersect\n"
@@ -388,6 +388,11 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
         if (strcmp(val, "closed") == 0) m->base = XYL_STEMS_BASE_CLOSED;
         else if (strcmp(val, "open") == 0) m->base = XYL_STEMS_BASE_OPEN;
         else return usage_error("--base takes closed or open, not '%s'", val);
+    } else if (strcmp(opt, "--root-flare") == 0) {
+        double f;
+        if (!parse_double(val, &f) || !(f >= 0.0) || f > XYL_STEMS_MAX_ROOT_FLARE)
+            return usage_error("--root-flare takes a number from 0 to 8, not '%s'", val);
+        m->root_flare = (float)f;
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
     } else if (strcmp(opt, "--mesh") == 0) {

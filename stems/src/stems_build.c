@@ -169,6 +169,10 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
         (unsigned)d->joints > XYL_JOINTS_UNCHECKED || (unsigned)d->base > XYL_STEMS_BASE_OPEN)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "unknown normal mode, scheme, joint check or base");
+    if (!(d->root_flare >= 0.0f && d->root_flare <= XYL_STEMS_MAX_ROOT_FLARE))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "root_flare must be 0..%g, not %g", (double)XYL_STEMS_MAX_ROOT_FLARE,
+                         (double)d->root_flare);
     return XYL_OK;
 }
 
@@ -530,6 +534,7 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     s.inflate = inflate ? 1.0 / limit_mean_radius(s.k) : 1.0;
     s.limit_centres = inflate;
     s.open_base = desc->base == XYL_STEMS_BASE_OPEN;
+    s.root_flare = desc->root_flare;
     r = build_all(&s);
     if (!r) r = check_finite(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)

@@ -88,6 +88,7 @@ typedef struct stems {
     uint32_t apex[2];   /* the domed caps' apexes of the branch being built (root, tip), or
                            UINT32_MAX (k < 5, no root cap) */
     bool open_base;     /* roots get no cap (XYL_STEMS_BASE_OPEN) */
+    double root_flare;  /* xyl_stems_desc.root_flare */
     stems_base *bases;  /* each capped root ring, whose k edges subdivision keeps as creases
                            (docs/stems.md, "The base") */
     size_t nbase, bcap;

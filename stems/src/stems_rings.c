@@ -481,6 +481,70 @@ static void square_root_ring(stems *s, const stems_fork_span *spans, size_t nspa
     ring->tangent = t;
 }
 
+/* Root flare (docs/stems.md, "Root flare"): rings at these multiples of the root's radius up
+ * the first segment carry the flare's curve, where the segment has room for them. */
+static const double flare_rings[] = {0.35, 0.8, 1.4, 2.2, 3.3};
+#define FLARE_RINGS (sizeof flare_rings / sizeof flare_rings[0])
+
+/* Widens a root's rings by 1 + flare e^(-d / r0) (d: distance from the root along the ring
+ * centres), after adding rings where the curve needs them: in the first gap between rings that
+ * follows the root's own fork rings (a root forking at its base keeps those), at the distances
+ * of flare_rings past the gap's start, where the gap has room clear of its end ring (two of its
+ * radii) and of its first half's end. Fork spans after the added rings move with them. */
+static xyl_result flare_root(stems *s, stems_fork_span *spans, size_t nspans)
+{
+    if (!(s->root_flare > 0.0) || s->nrings < 2) return XYL_OK;
+    const double r0 = s->rings[0].radius;
+    if (!(r0 > 0.0)) return XYL_OK;
+    const size_t g = nspans && spans[0].lo == 0 ? spans[0].hi : 0; /* the gap g -> g + 1 */
+    if (g + 1 < s->nrings) {
+        const stems_ring a = s->rings[g], b = s->rings[g + 1];
+        double from = 0.0; /* distance of ring g from the root */
+        for (size_t i = 1; i <= g; ++i)
+            from += xyl__d3_len(xyl__d3_sub(s->rings[i].centre, s->rings[i - 1].centre));
+        xyl__dvec3 t;
+        double len = xyl__d3_len(xyl__d3_sub(b.centre, a.centre));
+        double at[FLARE_RINGS];
+        size_t add = 0;
+        if (xyl__d3_normalize_ok(xyl__d3_sub(b.centre, a.centre), &t))
+            for (size_t j = 0; j < FLARE_RINGS; ++j) {
+                double d = flare_rings[j] * r0 - from; /* past ring g */
+                if (d >= 0.25 * r0 && d <= 0.5 * len && d <= len - 2.0 * fmax(b.radius, r0))
+                    at[add++] = d;
+            }
+        if (add) {
+            if (!xyl__grow(&s->alloc, (void **)&s->rings, &s->rcap, s->nrings, s->nrings + add,
+                           sizeof *s->rings))
+                return xyl__stems_oom(s);
+            memmove(s->rings + g + 1 + add, s->rings + g + 1,
+                    (s->nrings - g - 1) * sizeof *s->rings);
+            for (size_t j = 0; j < add; ++j) {
+                double w = at[j] / len;
+                stems_ring *rg = &s->rings[g + 1 + j];
+                const stems_ring *prev = &s->rings[g + j];
+                memset(rg, 0, sizeof *rg);
+                rg->first = rg->band = UINT32_MAX;
+                rg->centre = xyl__d3_add(a.centre, xyl__d3_scale(t, at[j]));
+                rg->tangent = t;
+                rg->radius = a.radius + w * (b.radius - a.radius);
+                rg->u = transport(prev->u, prev->centre, prev->tangent, rg->centre, t);
+                rg->v = a.v + w * (b.v - a.v);
+            }
+            s->nrings += add;
+            for (size_t f = 0; f < nspans; ++f)
+                if (spans[f].lo > g) spans[f].lo += add, spans[f].hi += add;
+        }
+    }
+    double d = 0.0;
+    for (size_t i = 0; i < s->nrings; ++i) {
+        if (i) d += xyl__d3_len(xyl__d3_sub(s->rings[i].centre, s->rings[i - 1].centre));
+        double grow = s->root_flare * exp(-d / r0);
+        if (grow < 1e-6) break;
+        s->rings[i].radius *= 1.0 + grow;
+    }
+    return XYL_OK;
+}
+
 xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *from)
 {
     uint32_t branch = s->sk->nodes[start].branch;
@@ -515,6 +579,7 @@ xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *f
     size_t nspans = 0;
     r = branch_rings(s, dir, spans, &nspans);
     if (!r && !from) square_root_ring(s, spans, nspans);
+    if (!r && !from) r = flare_root(s, spans, nspans);
     if (!r && s->limit_centres) limit_centres(s);
     if (!r) r = emit_rings(s, from ? 1 : 0, branch);
     if (!r && !xyl__stems_reserve(s, s->nv + 2, s->nq + s->k)) /* the caps */

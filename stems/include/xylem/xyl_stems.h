@@ -86,6 +86,8 @@ typedef struct xyl_stems_stats {
                                   own overlaps explain */
 } xyl_stems_stats;
 
+#define XYL_STEMS_MAX_ROOT_FLARE 8.0f /* the widest base: 9 times the root's radius */
+
 typedef struct xyl_stems_desc {
     uint32_t sides;               /* ring sides k, 3..32; default (0): 4. Even k gives quads
                                      only; odd k one triangle per cap and per bridge */
@@ -100,6 +102,12 @@ typedef struct xyl_stems_desc {
                                      surface (see xyl_subdivide_desc) */
     xyl_joint_check joints;
     xyl_stems_base base;          /* default: closed, flat on the root's plane */
+    float root_flare;             /* default (0): none. A flared trunk base: each root's first
+                                     ring is (1 + root_flare) times the root's radius, easing
+                                     back to the skeleton's radius up the trunk as
+                                     e^(-d / r) (d the distance from the root, r its radius),
+                                     with rings added in the first segment to carry the curve;
+                                     0..8 (docs/stems.md, "Root flare") */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_stems_desc;
