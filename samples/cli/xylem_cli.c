@@ -344,7 +344,8 @@ static int parse_render_option(render_options *r, const char *opt, const char *v
                                "'%s'", val);
         r->forest = u;
     } else if (strcmp(opt, "--fade") == 0) {
-        if (!parse_double(val, &r->fade) || !(r->fade >= 0.0) || r->fade > XYL_FOREST_MAX_FADE)
+        /* 4: XYL_FOREST_MAX_FADE, whose header needs the GL backend */
+        if (!parse_double(val, &r->fade) || !(r->fade >= 0.0) || r->fade > 4.0)
             return usage_error("--fade takes a share of the switch distance from 0 to 4, not "
                                "'%s'", val);
         r->has_fade = true;
@@ -1091,6 +1092,7 @@ static void render_job_free(render_job *j)
     free(j->lods);
 }
 
+#if defined(XYL_HAVE_GL) || defined(XYL_HAVE_VULKAN)
 /* A billboard kind as the render line names it. */
 static const char *billboard_name(int kind)
 {
@@ -1099,6 +1101,7 @@ static const char *billboard_name(int kind)
            : kind == XYL_BILLBOARD_CROSS       ? "cross planes"
                                                : "octahedral (one atlas, octahedral grid)";
 }
+#endif
 
 /* The box of the stems and the leaves drawn with them. */
 static void tree_bounds(const render_job *j, float lo[3], float hi[3])
