@@ -265,6 +265,7 @@ static struct {
     char dir[64];                /* in.skel, and out/ for the files the writers make */
     char skel_path[96], out_dir[80], out_path[96];
     xyl_mesh *mesh;              /* a stem mesh with UV seams */
+    xyl_stems_lods *lods;        /* a chain of stem LODs of skeleton */
     size_t obj_size, glb_size;   /* its files' sizes */
     unsigned char *buffer;       /* room for either */
     xyl_tess_patches *patches;
@@ -334,6 +335,11 @@ static int setup(void **state)
     xyl_stems_desc sd = {0};
     sd.joints = XYL_JOINTS_UNCHECKED;
     assert_int_equal(xyl_stems_build(in.skeleton, &sd, &in.mesh, NULL, NULL), XYL_OK);
+    xyl_stems_lod_desc ld = {0};
+    ld.stems = sd;
+    ld.max_lods = 3;
+    assert_int_equal(xyl_stems_lods_build(in.skeleton, &ld, &in.lods, NULL), XYL_OK);
+    assert_true(in.lods->lod_count >= 2); /* a glTF file with MSFT_lod */
     assert_int_equal(xyl_mesh_write_memory(in.mesh, XYL_MESH_FORMAT_OBJ, NULL, NULL, 0,
                                            &in.obj_size), XYL_OK);
     assert_int_equal(xyl_mesh_write_memory(in.mesh, XYL_MESH_FORMAT_GLB, NULL, NULL, 0,
@@ -378,6 +384,7 @@ static int teardown(void **state)
     xyl_tess_patterns_destroy(in.patterns);
     xyl_tess_patches_destroy(in.patches);
     xyl_mesh_destroy(in.mesh);
+    xyl_stems_lods_destroy(in.lods);
     free(in.buffer);
     free(in.skel_text);
     xyl_skeleton_destroy(in.crowded);
@@ -561,6 +568,66 @@ static xyl_result stems_catmark(const xyl_allocator *a)
     return stems_build(a, in.skeleton, 4, XYL_JOINTS_UNCHECKED, XYL_SUBDIVIDE_CATMARK);
 }
 #endif
+
+/* ---- twig pruning and stem LODs -------------------------------------------------------------- */
+
+static xyl_result skeleton_prune(const xyl_allocator *a)
+{
+    xyl_skeleton_prune_desc d = {*a};
+    xyl_skeleton *sk = UNTOUCHED;
+    xyl_skeleton_prune_stats st = {5, 5, 5.0f, 5};
+    xyl_diag diag = {0};
+    /* half the trunk's width: some twigs go, and their leaves move */
+    xyl_result r = xyl_skeleton_prune(in.skeleton, in.skeleton->nodes[0].radius, &d, &sk, &st,
+                                      &diag);
+    if (r == XYL_OK) assert_true(st.nodes_removed > 0);
+    else assert_int_equal(st.nodes_removed, 5);
+    return skeleton_done(r, sk);
+}
+
+static xyl_result stems_lods(const xyl_allocator *a)
+{
+    xyl_stems_lod_desc d = {0};
+    d.stems.joints = XYL_JOINTS_UNCHECKED;
+    d.stems.alloc = *a;
+    d.max_lods = 3;
+    xyl_stems_lods *c = UNTOUCHED;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_stems_lods_build(in.skeleton, &d, &c, &diag);
+    if (r == XYL_OK) xyl_stems_lods_destroy(c);
+    else assert_ptr_equal(c, UNTOUCHED);
+    return r;
+}
+
+/* Count, then fill; a failed pass leaves *size alone. */
+static xyl_result stems_lods_glb_memory(const xyl_allocator *a)
+{
+    size_t size = 3;
+    xyl_diag diag = {0};
+    xyl_result r = xyl_stems_lods_write_glb_memory(in.lods, a, NULL, 0, &size, &diag);
+    if (r != XYL_OK) {
+        assert_int_equal(size, 3);
+        return r;
+    }
+    bool was = watching; /* the caller's buffer is not the call's memory */
+    watching = false;
+    unsigned char *buf = malloc(size);
+    watching = was;
+    assert_non_null(buf);
+    size_t again = 3;
+    r = xyl_stems_lods_write_glb_memory(in.lods, a, buf, size, &again, &diag);
+    assert_int_equal(again, r == XYL_OK ? size : 3);
+    watching = false;
+    free(buf);
+    watching = was;
+    return r;
+}
+
+static xyl_result stems_lods_glb_file(const xyl_allocator *a)
+{
+    xyl_diag diag = {0};
+    return file_written(xyl_stems_lods_write_glb_file(in.lods, in.out_path, a, &diag));
+}
 
 /* ---- meshes --------------------------------------------------------------------------------- */
 
@@ -873,6 +940,10 @@ static const walk_case cases[] = {
 #if defined(XYL_HAVE_OPENSUBDIV)
     {"xyl_stems_build (Catmull-Clark)", stems_catmark, true, true},
 #endif
+    {"xyl_skeleton_prune", skeleton_prune, false, true},
+    {"xyl_stems_lods_build", stems_lods, false, true},
+    {"xyl_stems_lods_write_glb_memory", stems_lods_glb_memory, false, true},
+    {"xyl_stems_lods_write_glb_file", stems_lods_glb_file, false, true},
     {"xyl_mesh_create", mesh_create, false, true},
     {"xyl_mesh_check", mesh_check, false, true},
     {"xyl_mesh_self_intersections", mesh_self_intersections, false, true},

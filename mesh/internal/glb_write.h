@@ -53,7 +53,8 @@ xyl_vec3 xyl__glb_unit_normal(xyl_vec3 n);
 
 /* ---- the document --------------------------------------------------------------------------- */
 
-#define XYL__GLB_MAX_VIEWS 16
+/* Five views a mesh: room for the stem LOD chain's 12 meshes (XYL_STEMS_LOD_MAX). */
+#define XYL__GLB_MAX_VIEWS 64
 
 typedef void (*xyl__glb_emit_fn)(const void *ctx, xyl__sink *s);
 
@@ -137,6 +138,9 @@ xyl_result xyl__glb_mesh_add(const xyl_mesh *m, const xyl_allocator *alloc, xyl_
                              xyl__glb_mesh *out, xyl_diag *diag);
 /* {"name":"stems","primitives":[...]}: the glTF mesh of a non-empty part. */
 void xyl__glb_mesh_json(const xyl__glb_mesh *p, xyl__sink *s);
+/* The same without its closing brace, for a writer that adds members (the LOD chain's
+ * "extras"). */
+void xyl__glb_mesh_json_open(const xyl__glb_mesh *p, xyl__sink *s);
 void xyl__glb_mesh_free(xyl__glb_mesh *p);
 
 #endif

@@ -270,6 +270,12 @@ xyl_result xyl__glb_mesh_add(const xyl_mesh *m, const xyl_allocator *alloc, xyl_
 
 void xyl__glb_mesh_json(const xyl__glb_mesh *p, sink *s)
 {
+    xyl__glb_mesh_json_open(p, s);
+    xyl__put_str(s, "}");
+}
+
+void xyl__glb_mesh_json_open(const xyl__glb_mesh *p, sink *s)
+{
     static const char *const keys[] = {("{\"name\":\"stems\",\"primitives\":[{\"attributes\":{"
                                         "\"POSITION\":"),
                                        ",\"NORMAL\":", ",\"TEXCOORD_0\":", ",\"_BRANCH_ID\":",
@@ -280,7 +286,7 @@ void xyl__glb_mesh_json(const xyl__glb_mesh *p, sink *s)
     }
     xyl__put_str(s, ",\"mode\":");
     xyl__put_uint(s, XYL__GL_TRIANGLES);
-    xyl__put_str(s, "}]}");
+    xyl__put_str(s, "}]");
 }
 
 void xyl__glb_mesh_free(xyl__glb_mesh *p)

@@ -135,6 +135,48 @@ XYL_API xyl_result xyl_skeleton_write_file(const xyl_skeleton *skeleton, const c
                                            xyl_skel_format format, const xyl_allocator *alloc,
                                            xyl_diag *diag);
 
+/* ---- twig pruning ----------------------------------------------------------------------------
+ *
+ * A coarser skeleton at a known world error, for stem LODs (xyl_stems_lods_build in
+ * xyl_stems.h): every subtree thinner than a width goes.
+ *
+ *     xyl_skeleton *coarse = NULL;
+ *     xyl_skeleton_prune_stats st;
+ *     xyl_skeleton_prune(s, 0.02f, NULL, &coarse, &st, &diag);  // twigs under 2 cm wide go
+ *     // st.max_removed_width: the world error of the coarse tree
+ */
+
+typedef struct xyl_skeleton_prune_desc {
+    xyl_allocator alloc; /* the pruned skeleton and the call's scratch; default: malloc */
+} xyl_skeleton_prune_desc;
+
+typedef struct xyl_skeleton_prune_stats {
+    size_t nodes_removed;
+    size_t subtrees_removed;  /* removed nodes whose parent stays: the cuts */
+    float max_removed_width;  /* the largest diameter 2 r of a removed node, world units; 0 when
+                                 nothing was removed. Below min_width: the pruned tree's world
+                                 error (a removed twig is at most this wide) */
+    size_t leaves_moved;      /* leaves whose node was removed, now hanging from its nearest
+                                 kept ancestor */
+} xyl_skeleton_prune_stats;
+
+/* A new skeleton without every node whose whole subtree (the node and all its descendants) has
+ * a largest diameter 2 r below min_width, except that every root keeps its root node and the
+ * next node of its branch (its child of largest radius, first on ties): the trunk is never
+ * removed, though the thin tail of any branch, the trunk's included, is. The kept nodes keep
+ * their order, positions and radii (parents renumbered, branch ids and orders derived again);
+ * every leaf is kept where it was, one hanging from a removed node now hanging from its nearest
+ * kept ancestor, so the foliage of the pruned tree is the same. The origin and clamped_forks are
+ * carried over. min_width 0 removes nothing (a copy). desc may be NULL (the default allocator);
+ * stats may be NULL, else filled on success. Time and memory O(nodes + leaves).
+ * Errors: XYL_ERR_INVALID_ARGUMENT (NULL skeleton or out; min_width NaN, infinite or negative),
+ * XYL_ERR_NON_FINITE and XYL_ERR_INVALID_SKELETON (a caller-built view that breaks the
+ * skeleton's invariants, as xyl_skeleton_create), XYL_ERR_OUT_OF_MEMORY. On failure *out and
+ * *stats are untouched and nothing is left allocated. */
+XYL_API xyl_result xyl_skeleton_prune(const xyl_skeleton *skeleton, float min_width,
+                                      const xyl_skeleton_prune_desc *desc, xyl_skeleton **out,
+                                      xyl_skeleton_prune_stats *stats, xyl_diag *diag);
+
 #ifdef __cplusplus
 }
 #endif

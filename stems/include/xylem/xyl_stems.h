@@ -123,6 +123,100 @@ typedef struct xyl_stems_desc {
 XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                                    xyl_mesh **out, xyl_stems_stats *stats, xyl_diag *diag);
 
+/* ---- stem LODs: a chain of meshes for growing world errors --------------------------------
+ *
+ * From one skeleton, a sequence of closed stem meshes that drop ever thicker twigs
+ * (xyl_skeleton_prune): LOD 0 pruned at a first budget E0 (0: nothing pruned), each next LOD at
+ * the budget times a factor, until max_lods LODs are made or the trunk alone is left. A LOD
+ * that would prune nothing more than the one before it, or would have no fewer faces, is
+ * skipped (the budget grows on). An instance draws the coarsest LOD whose world error stays
+ * under its pixel budget (xyl_stems_lods_pick; docs/stems.md, "Stem LODs").
+ *
+ *     xyl_stems_lod_desc ld = {0};                   // zero = 8 LODs, E0 = 0, factor 2
+ *     xyl_stems_lods *chain = NULL;
+ *     xyl_stems_lods_build(skeleton, &ld, &chain, &diag);
+ *     uint32_t lod;
+ *     xyl_stems_lods_pick(chain, xyl_stems_pixel_world(d, fovy, height), 0.5f, &lod, NULL);
+ *     draw(chain->lods[lod].mesh);
+ *     xyl_stems_lods_destroy(chain);
+ */
+
+#define XYL_STEMS_LOD_MAX 12 /* LODs in one chain at most */
+
+typedef struct xyl_stems_lod_desc {
+    xyl_stems_desc stems;  /* how every LOD is meshed (xyl_stems_build); its alloc is the
+                              chain's too */
+    uint32_t max_lods;     /* 1..XYL_STEMS_LOD_MAX; default (0): 8 */
+    float first_budget;    /* E0, LOD 0's prune width, world units, finite, >= 0; default (0):
+                              nothing pruned */
+    float factor;          /* each LOD's budget over the one before, finite, > 1; default (0):
+                              2. From a budget of 0 the next is factor times the thinnest
+                              node's diameter 2 r */
+} xyl_stems_lod_desc;
+
+typedef struct xyl_stems_lod {
+    xyl_mesh *mesh;          /* closed, owned by the chain (xyl_stems_build's guarantees) */
+    float budget;            /* the prune width: every subtree thinner than this was removed,
+                                world units */
+    float error;             /* the measured world error: the widest removed node's diameter
+                                2 r (< budget; 0 when nothing was removed), world units */
+    size_t node_count;       /* of the pruned skeleton */
+    uint32_t branch_count;   /* of the pruned skeleton */
+    size_t face_count;       /* quads + triangles of the mesh */
+    size_t nodes_removed, subtrees_removed; /* xyl_skeleton_prune_stats */
+    xyl_stems_stats stats;   /* what xyl_stems_build did for this LOD */
+} xyl_stems_lod;
+
+typedef struct xyl_stems_lods {
+    const xyl_stems_lod *lods; /* finest first: budgets, errors grow and face counts fall
+                                  strictly along the chain */
+    uint32_t lod_count;        /* >= 1 */
+    bool trunk_only;           /* the last LOD has no lateral left: the chain ends there */
+    float center[3];           /* a sphere around LOD 0's mesh (the coarser ones lie inside
+                                  it), in the skeleton's local coordinates: d for
+                                  xyl_stems_pixel_world is the eye's distance to it */
+    float radius;
+} xyl_stems_lods;
+
+/* Builds the chain. desc may be NULL (defaults). Deterministic. Errors: XYL_ERR_INVALID_ARGUMENT
+ * (NULL skeleton or out; max_lods over XYL_STEMS_LOD_MAX; first_budget or factor NaN, infinite,
+ * negative, or a factor in (0, 1]), those of xyl_skeleton_prune and xyl_stems_build (diag says
+ * which LOD), XYL_ERR_OUT_OF_MEMORY. On failure *out is untouched and nothing is left
+ * allocated. diag keeps the first warning of any LOD's build. */
+XYL_API xyl_result xyl_stems_lods_build(const xyl_skeleton *skeleton,
+                                        const xyl_stems_lod_desc *desc, xyl_stems_lods **out,
+                                        xyl_diag *diag);
+/* NULL is fine. */
+XYL_API void xyl_stems_lods_destroy(xyl_stems_lods *lods);
+
+/* The world size of one pixel at distance d from the eye: 2 d tan(fovy / 2) / viewport_height,
+ * the formula xyl_foliage_pick uses, with its defaults (fovy 0: 0.8 rad, viewport_height 0:
+ * 1080 px), so that stems and leaves picked for the same eye match. d is the distance from the
+ * eye to the chain's sphere (|eye - center| - radius), clamped at 0 inside it. */
+XYL_API double xyl_stems_pixel_world(double d, float fovy, uint32_t viewport_height);
+
+/* The coarsest LOD whose error is at most error_px pixels of pixel_world world units each:
+ * lods[i].error <= error_px * pixel_world (error_px 0: 0.5 px, foliage's default). Never
+ * coarser for a smaller pixel_world; 0 gives LOD 0 when its error is 0. Allocates nothing.
+ * Errors: XYL_ERR_INVALID_ARGUMENT (NULL chain or lod, an empty chain, pixel_world or error_px
+ * negative), XYL_ERR_NON_FINITE (NaN; pixel_world may be +inf: the coarsest); *lod is then
+ * untouched. */
+XYL_API xyl_result xyl_stems_lods_pick(const xyl_stems_lods *lods, double pixel_world,
+                                       float error_px, uint32_t *lod, xyl_diag *diag);
+
+/* The chain as one glTF 2.0 binary: a mesh per LOD (each as xyl_mesh_write_file writes one, with
+ * extras {"lod": i, "error_world": e}) on a node of its own, LOD 0's node naming the coarser
+ * ones' in the MSFT_lod extension (docs/stems.md, "Stem LODs"), the scene showing LOD 0.
+ * Count-then-fill as xyl_mesh_write_memory (buffer NULL: *needed = the size), or to path as
+ * xyl_mesh_write_file (atomically; alloc NULL: the default allocator). Errors: those of the
+ * mesh writers, XYL_ERR_INVALID_ARGUMENT (NULL chain, lod_count 0 or over XYL_STEMS_LOD_MAX). */
+XYL_API xyl_result xyl_stems_lods_write_glb_memory(const xyl_stems_lods *lods,
+                                                   const xyl_allocator *alloc, void *buffer,
+                                                   size_t capacity, size_t *needed,
+                                                   xyl_diag *diag);
+XYL_API xyl_result xyl_stems_lods_write_glb_file(const xyl_stems_lods *lods, const char *path,
+                                                 const xyl_allocator *alloc, xyl_diag *diag);
+
 #ifdef __cplusplus
 }
 #endif
