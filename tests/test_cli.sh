@@ -144,6 +144,22 @@ done
 fc=$(grep -c '^f ' "$tmp/closed.obj"); fo=$(grep -c '^f ' "$tmp/open.obj")
 [ "$fo" -eq $((fc - 1)) ] && passed=$((passed + 1)) || { failed=$((failed + 1)); echo "FAIL: open base has $fo faces, closed $fc"; }
 expect 64 "bad base" -- "$XYLEM" mesh --base flat --out "$tmp/x.glb"
+# Stem LODs: one .glb, or one .obj per LOD, each LOD's budget, error, nodes and faces printed.
+expect 0 "stem LODs .glb" -- "$XYLEM" mesh --preset abop-2.8-ternary --lods 4 --out "$tmp/lods.glb"
+contains "4 stem LODs" "the LOD count"
+contains "lod  budget        error         nodes    faces" "the LOD table"
+contains "wrote $tmp/lods.glb (4 LODs, MSFT_lod)" "one file for the chain"
+expect 0 "stem LODs .obj" -- "$XYLEM" mesh --preset abop-1.24a --lods 3 --lod-error 0.05 --out "$tmp/lods.obj"
+for i in 0 1 2; do
+    [ -s "$tmp/lods-lod$i.obj" ] && ok || bad "no lods-lod$i.obj"
+done
+f0=$(grep -c '^f ' "$tmp/lods-lod0.obj"); f2=$(grep -c '^f ' "$tmp/lods-lod2.obj")
+[ "$f2" -lt "$f0" ] && ok || bad "LOD 2 has $f2 faces, LOD 0 $f0"
+expect 64 "no LODs" -- "$XYLEM" mesh --lods 0 --out "$tmp/x.glb"
+expect 64 "too many LODs" -- "$XYLEM" mesh --lods 13 --out "$tmp/x.glb"
+expect 64 "negative LOD error" -- "$XYLEM" mesh --lods 2 --lod-error -1 --out "$tmp/x.glb"
+expect 64 "LOD error without LODs" -- "$XYLEM" mesh --lod-error 1 --out "$tmp/x.glb"
+expect 64 "LODs with foliage" -- "$XYLEM" mesh --lods 2 --foliage --out "$tmp/x.glb"
 expect 64 "mesh needs --out" -- "$XYLEM" mesh
 expect 64 "skeleton and preset" -- "$XYLEM" mesh --skeleton "$data/stems/spokes_8.skel" --preset abop-1.24a --out "$tmp/x.glb"
 expect 66 "missing skeleton" -- "$XYLEM" mesh --skeleton "$tmp/none.skel" --out "$tmp/x.glb"

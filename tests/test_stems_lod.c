@@ -320,7 +320,13 @@ static void every_preset_gets_a_chain_of_closed_coarser_lods(void **state)
         /* LOD 0 at budget 0 is the finest mesh itself */
         xyl_mesh *fine = NULL;
         assert_int_equal(xyl_stems_build(s, NULL, &fine, NULL, NULL), XYL_OK);
+        const xyl_mesh *l0 = c->lods[0].mesh;
         assert_int_equal(c->lods[0].face_count, fine->quad_count + fine->triangle_count);
+        assert_int_equal(l0->vertex_count, fine->vertex_count);
+        assert_int_equal(l0->quad_count, fine->quad_count);
+        assert_memory_equal(l0->positions, fine->positions, fine->vertex_count * sizeof(xyl_vec3));
+        assert_memory_equal(l0->normals, fine->normals, fine->vertex_count * sizeof(xyl_vec3));
+        assert_memory_equal(l0->quads, fine->quads, 4 * fine->quad_count * sizeof(uint32_t));
         assert_true(c->lods[0].error == 0.0f && c->lods[0].budget == 0.0f);
         xyl_mesh_destroy(fine);
         print_message("%-22s %u LODs, faces", name, c->lod_count);

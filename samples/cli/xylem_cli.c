@@ -98,6 +98,9 @@ typedef struct options {
     const char *skeleton_path;
     const char *mesh_path;
     xyl_stems_desc stems;
+    uint32_t lods;           /* mesh --lods N: a chain of stem LODs (0: one mesh) */
+    float lod_error;         /* mesh --lod-error E0: the finest LOD's prune width */
+    bool has_lod_error;
     const char *out;
     bool has_seed, has_depth, merge;
     uint64_t seed;
@@ -124,14 +127,18 @@ static const char usage_text[] =
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
     "           [--joints checked|unchecked] [--base closed|open] [--root-flare F]\n"
-    "           [--foliage [foliage options]] --out FILE.glb|FILE.obj\n"
+    "           [--foliage [foliage options]] [--lods N [--lod-error E0]]\n"
+    "           --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
     "                               checked (default): laterals whose joints intersect\n"
     "                               start later or are hidden (not what grows from them);\n"
     "                               --base open: no cap at the\n"
     "                               root (one boundary loop per root, for trees sunk into\n"
     "                               terrain); --foliage (.glb only): the\n"
-    "                               leaves of 'foliage' too, in the same file\n"
+    "                               leaves of 'foliage' too, in the same file; --lods N:\n"
+    "                               up to N stem LODs, twigs thinner than E0 (default 0),\n"
+    "                               2 E0, 4 E0 ... pruned (one .glb with MSFT_lod, or\n"
+    "                               FILE-lodI.obj each)\n"
     "  foliage  [source | --skeleton FILE.skel | --leaf-mesh FILE.obj] [--seed N] [--sectors N]\n"
     "           [--aspect A | --leaf-template FILE.obj] [--cost hidalgo|viewpoint]\n"
     "           [--leaf-texture FILE.png] [--table FILE.csv] --out FILE.glb\n"
@@ -394,6 +401,16 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
         if (!parse_double(val, &f) || !(f >= 0.0) || f > XYL_STEMS_MAX_ROOT_FLARE)
             return usage_error("--root-flare takes a number from 0 to 8, not '%s'", val);
         m->root_flare = (float)f;
+    } else if (strcmp(opt, "--lods") == 0) {
+        if (!parse_u64(val, XYL_STEMS_LOD_MAX, &u) || u < 1)
+            return usage_error("--lods takes a whole number from 1 to 12, not '%s'", val);
+        o->lods = (uint32_t)u;
+    } else if (strcmp(opt, "--lod-error") == 0) {
+        double e;
+        if (!parse_double(val, &e) || !(e >= 0.0) || e > 1e30)
+            return usage_error("--lod-error takes a width in world units >= 0, not '%s'", val);
+        o->lod_error = (float)e;
+        o->has_lod_error = true;
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
     } else if (strcmp(opt, "--mesh") == 0) {
@@ -1003,6 +1020,65 @@ static void print_joints(const xyl_stems_stats *st)
            st->skeleton_pairs, st->laterals_inside);
 }
 
+/* FILE.obj -> FILE-lodI.obj (malloc'd). */
+static char *lod_path(const char *out, uint32_t i)
+{
+    size_t stem = strlen(out) - 4, n = stem + 32;
+    char *p = malloc(n);
+    if (p) snprintf(p, n, "%.*s-lod%u.obj", (int)stem, out, i);
+    return p;
+}
+
+static int write_lods(const xyl_stems_lods *c, const char *out)
+{
+    if (ends_with(out, ".glb")) {
+        xyl_diag d = {0};
+        int rc = written(out, xyl_stems_lods_write_glb_file(c, out, NULL, &d), &d);
+        if (!rc) printf("wrote %s (%u LODs, MSFT_lod)\n", out, c->lod_count);
+        return rc;
+    }
+    for (uint32_t i = 0; i < c->lod_count; ++i) {
+        char *path = lod_path(out, i);
+        if (!path) return report(out, XYL_ERR_OUT_OF_MEMORY, &(xyl_diag){0});
+        int rc = write_mesh(c->lods[i].mesh, path);
+        if (!rc) printf("wrote %s\n", path);
+        free(path);
+        if (rc) return rc;
+    }
+    return 0;
+}
+
+/* mesh --lods: the chain, what each LOD holds, and its file(s). */
+static int mesh_lods(const options *o, const xyl_skeleton *sk, const char *source, double t1)
+{
+    xyl_stems_lod_desc ld = {0};
+    ld.stems = o->stems; /* the one place the CLI's mesher options reach the chain */
+    ld.max_lods = o->lods;
+    ld.first_budget = o->lod_error;
+    xyl_stems_lods *c = NULL;
+    xyl_diag d = {0};
+    xyl_result r = xyl_stems_lods_build(sk, &ld, &c, &d);
+    if (r) return report(source, r, &d);
+    double t2 = now_seconds();
+    printf("%s: %zu nodes -> %u stem LODs%s\n", source, sk->node_count, c->lod_count,
+           c->trunk_only ? " (the last is the trunk alone)" : "");
+    printf("  lod  budget        error         nodes    faces   removed subtrees\n");
+    for (uint32_t i = 0; i < c->lod_count; ++i) {
+        const xyl_stems_lod *l = &c->lods[i];
+        printf("  %3u  %-12.6g  %-12.6g  %6zu  %7zu  %7zu\n", i, (double)l->budget,
+               (double)l->error, l->node_count, l->face_count, l->subtrees_removed);
+    }
+    printf("  sphere: centre (%g, %g, %g), radius %g (skeleton coordinates)\n",
+           (double)c->center[0], (double)c->center[1], (double)c->center[2], (double)c->radius);
+    if (d.warning_count) printf("warning: %s\n", d.warning);
+    int rc = write_lods(c, o->out);
+    if (!rc)
+        printf("time: LOD chain %.3f ms, write %.3f ms\n", (t2 - t1) * 1e3,
+               (now_seconds() - t2) * 1e3);
+    xyl_stems_lods_destroy(c);
+    return rc;
+}
+
 static int cmd_mesh(const options *o)
 {
     if (!o->out) return usage_error("%s", "'mesh' needs --out FILE.glb or FILE.obj");
@@ -1012,6 +1088,17 @@ static int cmd_mesh(const options *o)
         return usage_error("--foliage writes stems and leaves to a .glb, not '%s'", o->out);
     if (o->skeleton_path && (o->preset || o->grammar_path))
         return usage_error("%s", "give --skeleton or a grammar source, not both");
+    if (o->lods && o->foliage.enabled)
+        return usage_error("%s", "--lods writes the stem LODs alone; drop --foliage");
+    if (o->has_lod_error && !o->lods) return usage_error("%s", "--lod-error needs --lods N");
+    if (o->lods) {
+        xyl_skeleton *sk = NULL;
+        const char *source = NULL;
+        int rc = load_skeleton(o, &sk, &source);
+        if (!rc) rc = mesh_lods(o, sk, source, now_seconds());
+        xyl_skeleton_destroy(sk);
+        return rc;
+    }
     double t0 = now_seconds();
     xyl_skeleton *sk = NULL;
     xyl_mesh *m = NULL;
