@@ -1,7 +1,7 @@
 /* bench_stems: meshing throughput of xyl_stems_build on L-system trees from 10^3 to 10^6
  * segments, the whole pipeline (derive + turtle + mesh) on the same trees, and the npm package
  * `@dgreenheck/ez-tree` (samples/bench/eztree_bench.mjs) on trees of comparable triangle counts
- * in the same run.
+ * in the same run, and the chain of stem LODs (xyl_stems_lods_build) against the finest mesh.
  *
  *   bench_stems [--quick] [--no-peer] [--repeats N] [--peer-script PATH] [--node PATH]
  *
@@ -39,6 +39,7 @@
 #define TARGET_VERTEX_RATE 1e7
 #define TARGET_SUBDIVISION_RATIO 10.0 /* pre-subdivision time over the plain mesh time */
 #define SUBDIVISION_TARGET_DEPTH 15   /* the ratio target holds from this depth up */
+#define TARGET_LOD_RATIO 3.0          /* the whole stem LOD chain over the finest mesh */
 
 /* ABOP figure 2.7 (Aono & Kunii's sympodial tree, the preset abop-2.7-sympodial) with every
  * internode drawn as four segments, as real branches are several segments long, and a light
@@ -395,6 +396,87 @@ static int bench_subdivision(const options *o, const xyl_grammar *g, const uint3
     return failures;
 }
 
+/* ---- the stem LOD chain -------------------------------------------------------------------- */
+
+typedef struct lods_job {
+    const xyl_skeleton *sk;
+    xyl_stems_lod_desc desc;
+    uint32_t lods;
+    size_t faces[XYL_STEMS_LOD_MAX];
+    float errors[XYL_STEMS_LOD_MAX];
+} lods_job;
+
+static xyl_result lods_once(void *ctx, double *seconds, xyl_diag *diag)
+{
+    lods_job *j = ctx;
+    xyl_stems_lods *c = NULL;
+    double t0 = now_s();
+    xyl_result r = xyl_stems_lods_build(j->sk, &j->desc, &c, diag);
+    *seconds = now_s() - t0;
+    if (r) return r;
+    j->lods = c->lod_count;
+    for (uint32_t i = 0; i < c->lod_count; ++i) {
+        j->faces[i] = c->lods[i].face_count;
+        j->errors[i] = c->lods[i].error;
+    }
+    xyl_stems_lods_destroy(c);
+    return XYL_OK;
+}
+
+/* The whole chain (defaults: up to 8 LODs, E0 = 0, factor 2) against the finest mesh alone:
+ * joints unchecked (as the ladder) on the deepest tree of the ladder, and checked (the
+ * library's default, about 100x slower) on the variants' tree, as the variants time it.
+ * *worst: the larger ratio (0: not measured). */
+static int bench_lods(const options *o, const xyl_grammar *g, uint32_t deepest, uint32_t middle,
+                      double *worst)
+{
+    static const struct {
+        const char *label;
+        xyl_joint_check joints;
+    } checks[] = {{"unchecked", XYL_JOINTS_UNCHECKED}, {"checked", XYL_JOINTS_CHECKED}};
+    *worst = 0.0;
+    int failures = 0;
+    printf("\n== stem LODs: xyl_stems_lods_build (up to 8 LODs, E0 = 0, budgets x2) against "
+           "xyl_stems_build, k = 4 ==\n");
+    printf("%-10s %6s %10s %12s %12s %7s %4s  %s\n", "joints", "depth", "segments", "finest ms",
+           "chain ms", "x finest", "N", "faces (error) per LOD");
+    for (size_t i = 0; i < sizeof checks / sizeof checks[0]; ++i) {
+        uint32_t depth = checks[i].joints == XYL_JOINTS_CHECKED ? middle : deepest;
+        xyl_diag diag = {0};
+        xyl_skeleton *sk = NULL;
+        xyl_result r = grow(g, depth, &sk, &diag);
+        if (r) {
+            report_error("grow", r, &diag);
+            ++failures;
+            continue;
+        }
+        xyl_stems_desc desc = {0};
+        desc.joints = checks[i].joints;
+        mesh_job mj = {0};
+        timing fine = {0}, chain = {0};
+        lods_job lj = {0};
+        lj.sk = sk;
+        lj.desc.stems = desc;
+        r = measure_mesh(o, sk, &desc, &mj, &fine, &diag);
+        if (!r) r = measure(o, repeats_for(o, segments_of(sk)), lods_once, &lj, &chain, &diag);
+        if (r) {
+            report_error(checks[i].label, r, &diag);
+            xyl_skeleton_destroy(sk);
+            ++failures;
+            continue;
+        }
+        double ratio = chain.median_s / fine.median_s;
+        if (ratio > *worst) *worst = ratio;
+        printf("%-10s %6u %10zu %12.3f %12.3f %7.2f %4d ", checks[i].label, depth,
+               segments_of(sk), fine.median_s * 1e3, chain.median_s * 1e3, ratio, chain.samples);
+        for (uint32_t k = 0; k < lj.lods; ++k)
+            printf(" %zu (%.3g)", lj.faces[k], (double)lj.errors[k]);
+        printf("\n");
+        xyl_skeleton_destroy(sk);
+    }
+    return failures;
+}
+
 static void bench_pipeline(const uint32_t *depths, size_t n, const size_result *by_depth)
 {
     printf("\n== pipeline: derive + turtle + mesh (k = 4), grammar parsed once ==\n");
@@ -668,7 +750,7 @@ static void print_vertex_target(const options *o, const uint32_t *depths, size_t
 
 static void print_targets(const options *o, const uint32_t *depths, size_t n,
                           const size_result *by_depth, const peer_summary *peer,
-                          double subdivision_ratio)
+                          double subdivision_ratio, double lod_ratio)
 {
     printf("\n== targets ==\n");
     for (int pipe = 0; pipe < 2; ++pipe) {
@@ -688,6 +770,11 @@ static void print_targets(const options *o, const uint32_t *depths, size_t n,
     else printf("%s (highest %.1fx)\n", subdivision_ratio <= TARGET_SUBDIVISION_RATIO ? "MET"
                                                                                 : "NOT MET",
                 subdivision_ratio);
+    printf("<= %.0fx the finest mesh for the whole stem LOD chain: ",
+           TARGET_LOD_RATIO);
+    if (lod_ratio == 0.0) printf("not measured\n");
+    else printf("%s (highest %.2fx)%s\n", lod_ratio <= TARGET_LOD_RATIO ? "MET" : "NOT MET",
+                lod_ratio, o->quick ? " [--quick sizes]" : "");
 }
 
 int main(int argc, char **argv)
@@ -725,6 +812,8 @@ int main(int argc, char **argv)
     double subdivision_ratio = 0.0;
     failures += bench_subdivision(&o, g, depths, n, by_depth, &subdivision_ratio);
     failures += bench_variants(&o, g, o.quick ? MIDDLE_QUICK : MIDDLE_FULL);
+    double lod_ratio = 0.0;
+    failures += bench_lods(&o, g, depths[n - 1], o.quick ? MIDDLE_QUICK : MIDDLE_FULL, &lod_ratio);
     bench_pipeline(depths, n, by_depth);
 
     peer_summary peer = {0, 0.0, 0.0, false, 0};
@@ -732,7 +821,7 @@ int main(int argc, char **argv)
     else printf("\n== peer: skipped (--no-peer) ==\n");
     failures += peer.failures;
 
-    print_targets(&o, depths, n, by_depth, &peer, subdivision_ratio);
+    print_targets(&o, depths, n, by_depth, &peer, subdivision_ratio, lod_ratio);
     xyl_grammar_destroy(g);
     if (failures) printf("\n%d failure(s)\n", failures);
     return failures ? 1 : 0;

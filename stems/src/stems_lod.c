@@ -228,6 +228,10 @@ xyl_result xyl_stems_lods_pick(const xyl_stems_lods *lods, double pixel_world, f
 
 /* ---- glTF ---------------------------------------------------------------------------------- */
 
+/* Five views a mesh (POSITION, NORMAL, TEXCOORD_0, _BRANCH_ID, indices): the document must
+ * hold a full chain's. */
+_Static_assert(5 * XYL_STEMS_LOD_MAX <= XYL__GLB_MAX_VIEWS, "a GLB of the longest chain");
+
 typedef struct lod_doc {
     const xyl_stems_lods *chain;
     xyl__glb_mesh parts[XYL_STEMS_LOD_MAX];

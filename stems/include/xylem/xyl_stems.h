@@ -196,11 +196,11 @@ XYL_API void xyl_stems_lods_destroy(xyl_stems_lods *lods);
 XYL_API double xyl_stems_pixel_world(double d, float fovy, uint32_t viewport_height);
 
 /* The coarsest LOD whose error is at most error_px pixels of pixel_world world units each:
- * lods[i].error <= error_px * pixel_world (error_px 0: 0.5 px, foliage's default). Never
- * coarser for a smaller pixel_world; 0 gives LOD 0 when its error is 0. Allocates nothing.
+ * lods[i].error <= error_px * pixel_world (error_px 0: 0.5 px, foliage's default); LOD 0 when
+ * none is. Never coarser for a smaller pixel_world: 0 (the eye inside the sphere) gives LOD 0,
+ * +inf the coarsest. Allocates nothing.
  * Errors: XYL_ERR_INVALID_ARGUMENT (NULL chain or lod, an empty chain, pixel_world or error_px
- * negative), XYL_ERR_NON_FINITE (NaN; pixel_world may be +inf: the coarsest); *lod is then
- * untouched. */
+ * negative), XYL_ERR_NON_FINITE (a NaN, an infinite error_px); *lod is then untouched. */
 XYL_API xyl_result xyl_stems_lods_pick(const xyl_stems_lods *lods, double pixel_world,
                                        float error_px, uint32_t *lod, xyl_diag *diag);
 
