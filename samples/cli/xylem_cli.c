@@ -1062,7 +1062,7 @@ static int mesh_lods(const options *o, const xyl_skeleton *sk, const char *sourc
     double t2 = now_seconds();
     printf("%s: %zu nodes -> %u stem LODs%s\n", source, sk->node_count, c->lod_count,
            c->trunk_only ? " (the last is the trunk alone)" : "");
-    printf("  lod  budget        error         nodes    faces   removed subtrees\n");
+    printf("  lod  budget        error         nodes    faces  subtrees cut\n");
     for (uint32_t i = 0; i < c->lod_count; ++i) {
         const xyl_stems_lod *l = &c->lods[i];
         printf("  %3u  %-12.6g  %-12.6g  %6zu  %7zu  %7zu\n", i, (double)l->budget,
