@@ -1695,15 +1695,9 @@ static double parent_normal_error(const xyl_mesh *m, uint32_t parent_branch, dou
 static double bent_normal_error(uint32_t k, double deg)
 {
     enum { NODES = 16 };
-    const double step = deg * 3.14159265358979323846 / 180.0, big = 1.0 / (2.0 * sin(step / 2.0));
-    xyl_skel_node n[NODES];
-    memset(n, 0, sizeof n);
-    for (int i = 0; i < NODES; ++i) {
-        n[i].pos = (xyl_vec3){(float)(big * cos(step * i)), (float)(big * sin(step * i)), 0.0f};
-        n[i].radius = 0.25f;
-        n[i].parent = i - 1;
-    }
-    xyl_skeleton *sk = skeleton_of(n, NODES);
+    const double step = deg * 3.14159265358979323846 / 180.0;
+    double big;
+    xyl_skeleton *sk = tu_bent_tube(NODES, deg, 0.25, &big);
     xyl_mesh *m = build(sk, k, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
     double worst = 0.0;
     for (size_t v = 0; v < m->vertex_count; ++v) {

@@ -144,20 +144,9 @@ static void cylinder_mid_edge_error_matches_analytic_table(void **state)
 static double bent_tube_worst(uint32_t k, xyl_tess_variant variant, double deg, double *mean)
 {
     enum { NODES = 24 };
-    const double r = 0.25, step = deg * PI / 180.0, big_r = 1.0 / (2.0 * sin(step / 2.0));
-    xyl_skel_node n[NODES];
-    memset(n, 0, sizeof n);
-    for (int i = 0; i < NODES; ++i) {
-        double a = step * i;
-        n[i].pos = (xyl_vec3){(float)(big_r * cos(a)), (float)(big_r * sin(a)), 0.0f};
-        n[i].radius = (float)r;
-        n[i].parent = i - 1;
-    }
-    xyl_skeleton_desc skd = {0};
-    skd.nodes = n;
-    skd.node_count = NODES;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&skd, &sk, NULL), XYL_OK);
+    const double r = 0.25, step = deg * PI / 180.0;
+    double big_r;
+    xyl_skeleton *sk = tu_bent_tube(NODES, deg, r, &big_r);
     xyl_stems_desc sd = {0};
     sd.sides = k;
     xyl_mesh *m = NULL;
