@@ -5,6 +5,7 @@
 #include "fold_count.h"
 #include "skel_overlap.h"
 #include "test_util.h"
+#include "tip_reach.h"
 #include "mesh_internal.h"
 #include "stems_internal.h"
 #include "subdivide.h"
@@ -982,6 +983,88 @@ static void presets_fold_no_more_than_measured_k8(void **state)
 {
     (void)state;
     assert_preset_folds_within_ceilings(8);
+}
+
+/* ---- tips (tip_reach.h) ------------------------------------------------------------------ */
+
+/* The measure itself: a tip beyond a stem's cap is outside, a thin tip deep in it inside, the
+ * stem's own tip reached. */
+static void tip_reach_sees_tips_outside_and_inside(void **state)
+{
+    (void)state;
+    xyl_skel_node a[2] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0}};
+    xyl_skeleton *ska = skeleton_of(a, 2);
+    xyl_mesh *m = build(ska, 6, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
+    tr_tally own = tr_measure(ska, m, 1.0);
+    assert_int_equal(own.tips, 1);
+    assert_int_equal(own.reached, 1);
+    xyl_skel_node b[3] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0},
+                          {{0, 1.5f, 0}, 0.1f, 1, 0, 0}};
+    xyl_skeleton *skb = skeleton_of(b, 3);
+    tr_tally out = tr_measure(skb, m, 1.0);
+    assert_int_equal(out.outside, 1);
+    print_message("a tip 0.5 beyond the stem's: %.4f r outside\n", out.worst_out);
+    assert_true(out.worst_out > 4.7 && out.worst_out < 4.8); /* 0.5 beyond a dome 0.025 high */
+    assert_int_equal(out.worst_node, 2);
+    xyl_skel_node c[2] = {{{0, 0.2f, 0}, 0.01f, -1, 0, 0}, {{0, 0.5f, 0}, 0.01f, 0, 0, 0}};
+    xyl_skeleton *skc = skeleton_of(c, 2);
+    tr_tally in = tr_measure(skc, m, 1.0);
+    assert_int_equal(in.inside, 1);
+    assert_int_equal(in.outside, 0);
+    xyl_skeleton_destroy(skc);
+    xyl_skeleton_destroy(skb);
+    xyl_mesh_destroy(m);
+    xyl_skeleton_destroy(ska);
+}
+
+/* Skeleton tips more than their radius outside the default build's mesh (k = 4), per preset:
+ * twigs whose geometry stops short of where the skeleton ends, so leaves at their tips hang in
+ * the air (docs/stems.md, "Tips"). Measured when this test was added; a change may lower a
+ * ceiling, never raise one, and every preset needs its row. */
+static const struct {
+    const char *name;
+    size_t at_most;
+} preset_tip_ceilings[] = {
+    {"abop-1.24a", 232},          {"abop-1.24b", 222},     {"abop-1.24c", 65},
+    {"abop-1.24d", 0},            {"abop-1.24e", 0},       {"abop-1.24f", 22},
+    {"abop-1.25-bush", 0},        {"abop-1.28-stochastic", 27}, {"abop-1.31a", 55},
+    {"abop-2.6-monopodial", 86},  {"abop-2.7-sympodial", 11}, {"abop-2.8-ternary", 0},
+    {"faycal-leaves", 12},
+};
+
+static void presets_leave_no_more_tips_outside_than_measured(void **state)
+{
+    (void)state;
+    size_t total = 0, tips = 0, one_segment = 0;
+    for (size_t i = 0; i < xyl_lsystem_preset_count(); ++i) {
+        const char *name = xyl_lsystem_preset_name(i);
+        size_t ceiling = SIZE_MAX;
+        for (size_t j = 0; j < sizeof preset_tip_ceilings / sizeof preset_tip_ceilings[0]; ++j)
+            if (strcmp(preset_tip_ceilings[j].name, name) == 0)
+                ceiling = preset_tip_ceilings[j].at_most;
+        if (ceiling == SIZE_MAX) fail_msg("preset %s has no row in preset_tip_ceilings", name);
+        xyl_skeleton *sk = grow_preset(name);
+        xyl_mesh *m = build_with(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH,
+                                 XYL_JOINTS_CHECKED, NULL);
+        tr_tally t = tr_measure(sk, m, 1.0);
+        size_t single = tr_one_segment_laterals_outside(sk, m, 1.0);
+        print_message("  %-20s %5zu tips: %5zu within r of the surface, %4zu further inside, "
+                      "%4zu further outside (worst %.2f r, node %d; %zu of them one-segment "
+                      "laterals not meshed)\n",
+                      name, t.tips, t.reached, t.inside, t.outside, t.worst_out, t.worst_node,
+                      single);
+        if (t.outside > ceiling)
+            fail_msg("%s: %zu tips more than r outside the mesh, more than %zu (worst node %d)",
+                     name, t.outside, ceiling, t.worst_node);
+        if (t.outside < ceiling)
+            print_message("  %s: %zu tips outside, below its ceiling %zu\n", name, t.outside,
+                          ceiling);
+        total += t.outside, tips += t.tips, one_segment += single;
+        xyl_mesh_destroy(m);
+        xyl_skeleton_destroy(sk);
+    }
+    print_message("k = 4 checked: %zu of %zu tips more than r outside the mesh, %zu of them "
+                  "one-segment laterals not meshed\n", total, tips, one_segment);
 }
 
 /* Hard cases: none folds at k = 3..8 (straight stems, tapers, simple forks, spokes, kinks up to
@@ -2396,6 +2479,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k7),
         cmocka_unit_test(presets_are_free_of_intersections_at_joints_k8),
         cmocka_unit_test(fold_count_sees_pillows_and_thin_wedges_not_cubes),
+        cmocka_unit_test(tip_reach_sees_tips_outside_and_inside),
+        cmocka_unit_test(presets_leave_no_more_tips_outside_than_measured),
         cmocka_unit_test(presets_fold_no_more_than_measured_k3),
         cmocka_unit_test(presets_fold_no_more_than_measured_k4),
         cmocka_unit_test(presets_fold_no_more_than_measured_k5),
