@@ -95,8 +95,9 @@ typedef struct xyl_stems_stats {
 #define XYL_STEMS_MAX_ROOT_FLARE 8.0f /* the widest base: 9 times the root's radius */
 
 typedef struct xyl_stems_desc {
-    uint32_t sides;               /* ring sides k, 3..32; default (0): 4. Even k gives quads
-                                     only; odd k one triangle per cap and per bridge */
+    uint32_t sides;               /* ring sides k, 3..32; default (0): 4; with error_world the
+                                     most any branch gets. Even k gives quads only; odd k one
+                                     triangle per cap and per bridge */
     xyl_normal_mode normals;
     xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
     bool keep_control_radius;     /* default false: before subdivision, rings are inflated so
