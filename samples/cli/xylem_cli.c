@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -124,13 +125,16 @@ static const char usage_text[] =
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
     "           [--joints checked|unchecked] [--base closed|open] [--root-flare F]\n"
+    "           [--error-world E [--sides-refined]]\n"
     "           [--foliage [foliage options]] --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
     "                               checked (default): laterals whose joints intersect\n"
     "                               start later or are hidden (not what grows from them);\n"
     "                               --base open: no cap at the\n"
     "                               root (one boundary loop per root, for trees sunk into\n"
-    "                               terrain); --foliage (.glb only): the\n"
+    "                               terrain); --error-world E: each branch gets the\n"
+    "                               fewest sides (3..K) whose radial error is at most E\n"
+    "                               (skeleton units); --foliage (.glb only): the\n"
     "                               leaves of 'foliage' too, in the same file\n"
     "  foliage  [source | --skeleton FILE.skel | --leaf-mesh FILE.obj] [--seed N] [--sectors N]\n"
     "           [--aspect A | --leaf-template FILE.obj] [--cost hidalgo|viewpoint]\n"
@@ -394,6 +398,11 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
         if (!parse_double(val, &f) || !(f >= 0.0) || f > XYL_STEMS_MAX_ROOT_FLARE)
             return usage_error("--root-flare takes a number from 0 to 8, not '%s'", val);
         m->root_flare = (float)f;
+    } else if (strcmp(opt, "--error-world") == 0) {
+        double e;
+        if (!parse_double(val, &e) || !(e >= 0.0) || !(e <= FLT_MAX))
+            return usage_error("--error-world takes a finite number, 0 or above, not '%s'", val);
+        m->error_world = (float)e;
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
     } else if (strcmp(opt, "--mesh") == 0) {
@@ -478,6 +487,10 @@ static int parse_options(int argc, char **argv, options *o)
         }
         if (strcmp(opt, "--wireframe") == 0) {
             o->render.wireframe = true;
+            continue;
+        }
+        if (strcmp(opt, "--sides-refined") == 0) {
+            o->stems.sides_refined = true;
             continue;
         }
         if (strcmp(opt, "--foliage") == 0 && strcmp(argv[1], "render") == 0) {
@@ -1003,6 +1016,16 @@ static void print_joints(const xyl_stems_stats *st)
            st->skeleton_pairs, st->laterals_inside);
 }
 
+/* How many branch tubes got each ring sides under --error-world. */
+static void print_sides(const xyl_stems_stats *st, const xyl_stems_desc *desc)
+{
+    printf("sides: error %g (%s):", (double)desc->error_world,
+           desc->sides_refined ? "refined arcs" : "ring sagitta");
+    for (uint32_t k = 3; k <= 32; ++k)
+        if (st->branches_by_sides[k]) printf(" %u branches k=%u", st->branches_by_sides[k], k);
+    printf("; %u laterals clamped to their parent's sides\n", st->sides_clamped);
+}
+
 static int cmd_mesh(const options *o)
 {
     if (!o->out) return usage_error("%s", "'mesh' needs --out FILE.glb or FILE.obj");
@@ -1037,6 +1060,7 @@ static int cmd_mesh(const options *o)
                source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
                m->tri_view_count);
         if (desc.joints == XYL_JOINTS_CHECKED) print_joints(&st);
+        if (desc.error_world > 0.0f) print_sides(&st, &desc);
         if (d.warning_count) printf("warning: %s\n", d.warning);
         if (o->foliage.enabled) print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,
