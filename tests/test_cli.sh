@@ -478,7 +478,7 @@ else
   [ "$n" -eq 0 ] && ok || bad "panel=0 still draws a panel ($n of $total pixels)"
 
   # only the stages below a change regrow
-  expect 0 "view regrows stage by stage" -- xview "$XYLEM" view --frames 1 --size 320x240 --set leaves=0 --set sides=6 --set level=3 --set depth=3 --set variant=circle --set leaves=1 --set root_flare=2 --set base=open
+  expect 0 "view regrows stage by stage" -- xview "$XYLEM" view --frames 1 --size 320x240 --set leaves=0 --set sides=6 --set level=3 --set depth=3 --set variant=circle --set leaves=1 --set root_flare=2 --set base=open --set error_world=0.5
   grep -q '^sides=6: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "sides regrows stems and patches only"
   contains "level=3: regrew nothing" "a level regrows nothing"
   grep -q '^depth=3: regrew derive .*, turtle .*, stems .*, patches [0-9.]* ms$' "$tmp/out" && ok || bad "depth does not parse again"
@@ -486,6 +486,7 @@ else
   grep -q '^leaves=1: regrew foliage [0-9.]* ms$' "$tmp/out" && ok || bad "leaves grow on the kept skeleton"
   grep -q '^root_flare=2: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "root_flare regrows stems and patches only"
   grep -q '^base=open: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "base regrows stems and patches only"
+  grep -q '^error_world=0.5: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "error_world regrows stems and patches only"
 
   # a scripted sequence ends with the tree the CLI builds from the same parameters
   expect 0 "view --set sequence, exports" -- xview "$XYLEM" view --preset abop-2.6-monopodial --frames 1 --size 320x240 --set leaves=0 --set depth=7 --set sides=3 --set define.r2=0.7 --set angle=30 --set tropism=0,-1,0,0.2 --set sides=6 --set radius_exponent=2.5 --set subdivide=catmark --set root_flare=1.5 --set export="$tmp/s.lsys" --set export="$tmp/s.skel" --set export="$tmp/s.glb" --set export="$tmp/s.png"

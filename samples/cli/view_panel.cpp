@@ -165,7 +165,13 @@ bool stems_section(view_params *p)
 {
     bool changed = false;
     int sides = p->stems.sides ? (int)p->stems.sides : 4;
-    if (ImGui::SliderInt("ring sides", &sides, 3, 32)) p->stems.sides = (uint32_t)sides, changed = true;
+    if (ImGui::SliderInt(p->stems.error_world > 0 ? "most ring sides" : "ring sides", &sides, 3, 32))
+        p->stems.sides = (uint32_t)sides, changed = true;
+    /* 0 is off: every branch gets the sides above; else each branch the fewest within it */
+    changed |= ImGui::SliderFloat("sides error (world)", &p->stems.error_world, 0.0f, 10.0f,
+                                  p->stems.error_world > 0 ? "%.4g" : "off",
+                                  ImGuiSliderFlags_Logarithmic);
+    if (p->stems.error_world > 0) changed |= ImGui::Checkbox("error of refined arcs", &p->stems.sides_refined);
     static const char *const subdiv[] = {"none", "Catmull-Clark", "Loop"};
     static const char *const normals[] = {"per branch", "smooth"};
     static const char *const joints[] = {"checked", "unchecked"};
