@@ -34,7 +34,7 @@ void main()
 {
     uvec4 inst = tc_instance;
     vec3 c[4], n[4], a[4];
-    xyl_load_patch(inst.x, c, n, a);
+    xyl_load_patch(inst.x, xyl_frame.variant, c, n, a);
     vec3 tc = gl_TessCoord;
     vec3 pos, nrm;
     uint e;

@@ -10,7 +10,7 @@ layout(location = 1) out vec3 v_normal;
 void main()
 {
     vec3 c[4], n[4], a[4];
-    xyl_load_patch(in_instance.x, c, n, a);
+    xyl_load_patch(in_instance.x, xyl_frame.variant, c, n, a);
     uint i = in_lattice & 0xffu;
     uint j = (in_lattice >> XYL_TESS_PATTERN_SHIFT_J) & 0xffu;
     vec3 pos, nrm;

@@ -19,12 +19,15 @@ layout(std430, binding = XYL_TESS_BINDING_OFFSETS) readonly buffer xyl_offset_bu
 };
 #endif
 
-void xyl_load_patch(uint index, out vec3 c[4], out vec3 n[4], out vec3 a[4])
+// A patch's corners. Only the arc rule reads the corners' axes, so the other variants (a uniform
+// branch) skip their decoding, a cosine and a sine per corner per lattice vertex.
+void xyl_load_patch(uint index, uint variant, out vec3 c[4], out vec3 n[4], out vec3 a[4])
 {
+    bool axes = variant == uint(XYL_TESS_VARIANT_ARC);
     for (int k = 0; k < 4; ++k) {
         c[k] = xyl_patches[index].p[k].xyz;
         vec4 nk = xyl_patches[index].n[k];
         n[k] = nk.xyz;
-        a[k] = xyl_tess_axis(nk.xyz, nk.w);
+        a[k] = axes ? xyl_tess_axis(nk.xyz, nk.w) : vec3(0.0);
     }
 }

@@ -7,6 +7,7 @@
  *
  *   ./fuzz_skel -max_total_time=60 new_corpus/ tests/data/skel
  */
+#include <float.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -93,12 +94,13 @@ static void check_seams(const xyl_mesh *m)
 /* Every skeleton the reader accepts must mesh into a closed oriented manifold with one sphere
  * per root: the mesher's guarantee holds by construction, whatever the geometry. (Degenerate
  * faces are allowed here: random radii and coincident nodes can make faces below the tolerance.) */
-static void check_mesh(const xyl_skeleton *sk, uint32_t sides)
+static void check_mesh(const xyl_skeleton *sk, uint32_t sides, float error_world)
 {
     if (sk->node_count > 512) return;
     xyl_stems_desc d;
     memset(&d, 0, sizeof d);
     d.sides = sides;
+    d.error_world = error_world;
     xyl_mesh *m = NULL;
     xyl_result r = xyl_stems_build(sk, &d, &m, NULL, NULL);
     if (r == XYL_ERR_LIMIT_EXCEEDED) return;
@@ -132,7 +134,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     check(xyl_skeleton_read_text(text, len, &desc, &back, &diag) == XYL_OK);
     check_same(sk, back);
     check_obj(sk);
-    check_mesh(sk, 3 + (uint32_t)(size % 6));
+    check_mesh(sk, 3 + (uint32_t)(size % 6), 0.0f);
+    /* ring sides per branch: a budget that gives the widest branch 8 sides and thinner ones
+     * fewer, down to 3 (docs/stems.md, "Ring sides per branch") */
+    float widest = 0.0f;
+    for (size_t i = 0; i < sk->node_count; ++i)
+        widest = sk->nodes[i].radius > widest ? sk->nodes[i].radius : widest;
+    float budget = widest * (0.02f + 0.07f * (float)(size % 5));
+    if (budget > 0.0f && budget <= FLT_MAX) check_mesh(sk, 8, budget);
     free(text);
     xyl_skeleton_destroy(back);
     xyl_skeleton_destroy(sk);

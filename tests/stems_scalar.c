@@ -6,6 +6,7 @@
 #define XYL_NO_SIMD 1
 #define XYL__STEMS_SHARED static
 #define xyl_stems_build xyl__stems_build_scalar
+#define xyl_stems_ring_error xyl__stems_ring_error_scalar
 #include "stems_fork.c"
 #include "stems_normals.c"
 #include "stems_rings.c"

@@ -494,19 +494,22 @@ else
   [ "$n" -eq 0 ] && ok || bad "panel=0 still draws a panel ($n of $total pixels)"
 
   # only the stages below a change regrow
-  expect 0 "view regrows stage by stage" -- xview "$XYLEM" view --frames 1 --size 320x240 --set leaves=0 --set sides=6 --set level=3 --set depth=3 --set variant=circle --set leaves=1
+  expect 0 "view regrows stage by stage" -- xview "$XYLEM" view --frames 1 --size 320x240 --set leaves=0 --set sides=6 --set level=3 --set depth=3 --set variant=circle --set leaves=1 --set root_flare=2 --set base=open --set error_world=0.5
   grep -q '^sides=6: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "sides regrows stems and patches only"
   contains "level=3: regrew nothing" "a level regrows nothing"
   grep -q '^depth=3: regrew derive .*, turtle .*, stems .*, patches [0-9.]* ms$' "$tmp/out" && ok || bad "depth does not parse again"
   grep -q '^variant=circle: regrew patches [0-9.]* ms$' "$tmp/out" && ok || bad "the handle rule rebuilds the patches only"
   grep -q '^leaves=1: regrew foliage [0-9.]* ms$' "$tmp/out" && ok || bad "leaves grow on the kept skeleton"
+  grep -q '^root_flare=2: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "root_flare regrows stems and patches only"
+  grep -q '^base=open: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "base regrows stems and patches only"
+  grep -q '^error_world=0.5: regrew stems [0-9.]* ms, patches [0-9.]* ms$' "$tmp/out" && ok || bad "error_world regrows stems and patches only"
 
   # a scripted sequence ends with the tree the CLI builds from the same parameters
-  expect 0 "view --set sequence, exports" -- xview "$XYLEM" view --preset abop-2.6-monopodial --frames 1 --size 320x240 --set leaves=0 --set depth=7 --set sides=3 --set define.r2=0.7 --set angle=30 --set tropism=0,-1,0,0.2 --set sides=6 --set radius_exponent=2.5 --set subdivide=catmark --set export="$tmp/s.lsys" --set export="$tmp/s.skel" --set export="$tmp/s.glb" --set export="$tmp/s.png"
+  expect 0 "view --set sequence, exports" -- xview "$XYLEM" view --preset abop-2.6-monopodial --frames 1 --size 320x240 --set leaves=0 --set depth=7 --set sides=3 --set define.r2=0.7 --set angle=30 --set tropism=0,-1,0,0.2 --set sides=6 --set radius_exponent=2.5 --set subdivide=catmark --set root_flare=1.5 --set export="$tmp/s.lsys" --set export="$tmp/s.skel" --set export="$tmp/s.glb" --set export="$tmp/s.png"
   grep -q '^#define r2 0.7 ' "$tmp/s.lsys" && grep -q '^#depth 7' "$tmp/s.lsys" && grep -q '^#angle 30' "$tmp/s.lsys" && grep -q '^#tropism 0 -1 0 0.2' "$tmp/s.lsys" && ok || bad "the .lsys lacks the tuned values"
   expect 0 "CLI skeleton of the tuned grammar" -- "$XYLEM" skeleton --grammar "$tmp/s.lsys" --radius-exponent 2.5 --out "$tmp/c.skel"
   cmp -s "$tmp/s.skel" "$tmp/c.skel" && ok || bad "the viewer's skeleton differs from the CLI's"
-  expect 0 "CLI mesh of the tuned grammar" -- "$XYLEM" mesh --grammar "$tmp/s.lsys" --radius-exponent 2.5 --sides 6 --subdivide catmark --out "$tmp/c.glb"
+  expect 0 "CLI mesh of the tuned grammar" -- "$XYLEM" mesh --grammar "$tmp/s.lsys" --radius-exponent 2.5 --sides 6 --subdivide catmark --root-flare 1.5 --out "$tmp/c.glb"
   cmp -s "$tmp/s.glb" "$tmp/c.glb" && ok || bad "the viewer's mesh differs from the CLI's"
   png_magic "$tmp/s.png" && ok || bad "export=FILE.png wrote no PNG"
   expect 0 "view exports leaves with the stems" -- xview "$XYLEM" view --preset abop-2.8-ternary --frames 1 --size 320x240 --set depth=4 --set leaves=1 --set leaf_aspect=0.3 --set export="$tmp/l.glb"

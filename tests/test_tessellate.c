@@ -144,20 +144,9 @@ static void cylinder_mid_edge_error_matches_analytic_table(void **state)
 static double bent_tube_worst(uint32_t k, xyl_tess_variant variant, double deg, double *mean)
 {
     enum { NODES = 24 };
-    const double r = 0.25, step = deg * PI / 180.0, big_r = 1.0 / (2.0 * sin(step / 2.0));
-    xyl_skel_node n[NODES];
-    memset(n, 0, sizeof n);
-    for (int i = 0; i < NODES; ++i) {
-        double a = step * i;
-        n[i].pos = (xyl_vec3){(float)(big_r * cos(a)), (float)(big_r * sin(a)), 0.0f};
-        n[i].radius = (float)r;
-        n[i].parent = i - 1;
-    }
-    xyl_skeleton_desc skd = {0};
-    skd.nodes = n;
-    skd.node_count = NODES;
-    xyl_skeleton *sk = NULL;
-    assert_int_equal(xyl_skeleton_create(&skd, &sk, NULL), XYL_OK);
+    const double r = 0.25, step = deg * PI / 180.0;
+    double big_r;
+    xyl_skeleton *sk = tu_bent_tube(NODES, deg, r, &big_r);
     xyl_stems_desc sd = {0};
     sd.sides = k;
     xyl_mesh *m = NULL;
@@ -193,6 +182,74 @@ static double bent_tube_worst(uint32_t k, xyl_tess_variant variant, double deg, 
     xyl_mesh_destroy(m);
     xyl_skeleton_destroy(sk);
     return worst;
+}
+
+/* The stem mesher's refined error model (xyl_stems_ring_error, which error_world is held to)
+ * against what the CPU reference evaluator draws: a straight tube of radius r meshed at k sides,
+ * every band patch away from the caps evaluated on a 64 x 8 grid with the circle and the arc
+ * rule; the worst radial error must match the model within 2 % of it (the model samples the
+ * exact cubic, the evaluator runs in float) plus 2e-6 r of float rounding. */
+static void ring_error_model_matches_the_refined_tube(void **state)
+{
+    (void)state;
+    enum { NODES = 6 };
+    const double r = 0.5;
+    xyl_skel_node n[NODES];
+    memset(n, 0, sizeof n);
+    for (int i = 0; i < NODES; ++i) {
+        n[i].pos = (xyl_vec3){0.0f, (float)i, 0.0f};
+        n[i].radius = (float)r;
+        n[i].parent = i - 1;
+    }
+    xyl_skeleton_desc skd = {0};
+    skd.nodes = n;
+    skd.node_count = NODES;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&skd, &sk, NULL), XYL_OK);
+    for (uint32_t k = 3; k <= 8; ++k) {
+        xyl_stems_desc sd = {0};
+        sd.sides = k;
+        xyl_mesh *m = NULL;
+        assert_int_equal(xyl_stems_build(sk, &sd, &m, NULL, NULL), XYL_OK);
+        double model = 0.0, sag = 0.0;
+        assert_int_equal(xyl_stems_ring_error(k, true, &model), XYL_OK);
+        assert_int_equal(xyl_stems_ring_error(k, false, &sag), XYL_OK);
+        const xyl_tess_variant rules[] = {XYL_TESS_CIRCLE, XYL_TESS_ARC};
+        for (int v = 0; v < 2; ++v) {
+            xyl_tess_patches_desc pd = {0};
+            pd.variant = rules[v];
+            xyl_tess_patches *tp = NULL;
+            assert_int_equal(xyl_tess_patches_create(m, &pd, &tp, NULL), XYL_OK);
+            double worst = 0.0;
+            size_t patches = 0;
+            for (size_t f = 0; f < tp->quad_count; ++f) {
+                const xyl_tess_patch *p = &tp->records[f];
+                bool band = true;
+                for (int c = 0; c < 4; ++c)
+                    if (p->p[c][1] < 0.5f || p->p[c][1] > NODES - 1.5f ||
+                        fabs(hypot(p->p[c][0], p->p[c][2]) - r) > 1e-6)
+                        band = false;
+                if (!band) continue;
+                patches++;
+                for (int i = 0; i <= 64; ++i)
+                    for (int j = 0; j <= 8; ++j) {
+                        float pos[3], nrm[3];
+                        xyl_tess_eval(p, rules[v], (float)i / 64.0f, (float)j / 8.0f, pos, nrm);
+                        worst = fmax(worst, fabs(hypot(pos[0], pos[2]) - r) / r);
+                    }
+            }
+            assert_true(patches >= k);
+            print_message("k = %u %s: worst radial error %.6f %% of r, model %.6f %% (sagitta "
+                          "%.4f %%)\n", k, v ? "arc" : "circle", 100 * worst, 100 * model,
+                          100 * sag);
+            if (fabs(worst - model) > 0.02 * model + 2e-6)
+                fail_msg("k = %u: the evaluator's worst %.7f against the model's %.7f", k, worst,
+                         model);
+            xyl_tess_patches_destroy(tp);
+        }
+        xyl_mesh_destroy(m);
+    }
+    xyl_skeleton_destroy(sk);
 }
 
 /* The circle rule draws the line along a bent tube's flank straight between rings (its normals
@@ -901,6 +958,7 @@ int main(void)
         cmocka_unit_test(planar_quads_stay_planar_and_bilinear),
         cmocka_unit_test(planar_triangles_stay_planar_and_linear),
         cmocka_unit_test(cylinder_mid_edge_error_matches_analytic_table),
+        cmocka_unit_test(ring_error_model_matches_the_refined_tube),
         cmocka_unit_test(circle_handle_reduces_to_pn_for_flat_edges),
         cmocka_unit_test(arc_rule_follows_a_bent_tube),
         cmocka_unit_test(adaptive_levels_keep_shared_edges_bit_identical),

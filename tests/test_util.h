@@ -193,4 +193,27 @@ static inline xyl_mesh *tu_tree_mesh(uint32_t depth, uint32_t sides, xyl_subdivi
     return m;
 }
 
+/* A bent tube: `count` nodes of radius r on a circle in the xy plane, a unit apart, turning `deg`
+ * degrees each (node i at angle i * deg around the origin). *bend_radius gets the circle's
+ * radius, 1 / (2 sin(deg / 2)). */
+static inline xyl_skeleton *tu_bent_tube(int count, double deg, double r, double *bend_radius)
+{
+    const double step = deg * 3.14159265358979323846 / 180.0, big = 1.0 / (2.0 * sin(step / 2.0));
+    xyl_skel_node *n = calloc((size_t)count, sizeof *n);
+    assert_non_null(n);
+    for (int i = 0; i < count; ++i) {
+        n[i].pos = (xyl_vec3){(float)(big * cos(step * i)), (float)(big * sin(step * i)), 0.0f};
+        n[i].radius = (float)r;
+        n[i].parent = i - 1;
+    }
+    xyl_skeleton_desc skd = {0};
+    skd.nodes = n;
+    skd.node_count = (size_t)count;
+    xyl_skeleton *sk = NULL;
+    assert_int_equal(xyl_skeleton_create(&skd, &sk, NULL), XYL_OK);
+    free(n);
+    *bend_radius = big;
+    return sk;
+}
+
 #endif

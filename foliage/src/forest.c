@@ -247,10 +247,37 @@ static uint32_t faded_level(const xyl__forest_choice_species *s, uint32_t lv, fl
     return lv;
 }
 
+/* Offers instance i at squared distance d2 to the heap of the nearest (xyl__forest_near). */
+static void near_offer(xyl__forest_near *h, uint32_t i, float d2)
+{
+    uint32_t m = h->max, n = h->count;
+    if (n == m && !(d2 < h->key[0])) return;
+    uint32_t at = n < m ? n++ : 0; /* push, or replace the farthest (the root) */
+    if (at) { /* sift up */
+        while (at && h->key[(at - 1) / 2] < d2) {
+            h->index[at] = h->index[(at - 1) / 2], h->key[at] = h->key[(at - 1) / 2];
+            at = (at - 1) / 2;
+        }
+    } else if (n == m && m > 1) { /* sift down from the root */
+        for (;;) {
+            uint32_t c = 2 * at + 1;
+            if (c >= n) break;
+            if (c + 1 < n && h->key[c + 1] > h->key[c]) ++c;
+            if (!(h->key[c] > d2)) break;
+            h->index[at] = h->index[c], h->key[at] = h->key[c];
+            at = c;
+        }
+    }
+    h->index[at] = i, h->key[at] = d2;
+    h->count = n;
+}
+
 size_t xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
                           uint16_t *bucket, uint16_t *fine_bucket, uint8_t *share,
-                          uint32_t *counts)
+                          uint32_t *counts, xyl__forest_near *near)
 {
+    if (near) near->count = 0;
+    bool gather = near && near->max > 0;
     /* four interleaved histograms: consecutive instances mostly fall into one bucket, and one
      * counter incremented back to back would chain every store to the next load */
     enum { LANES = 4 };
@@ -286,6 +313,7 @@ size_t xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst
         uint32_t b = sp * XYL__FOREST_BUCKETS_PER_SPECIES + lv;
         bucket[i] = seen ? (uint16_t)b : UINT16_MAX;
         lanes[i & (LANES - 1)][b] += seen;
+        if (gather && seen && lv < s->level_count) near_offer(near, (uint32_t)i, d2);
         if (c->fade) {
             q = seen ? q : 0;
             share[i] = (uint8_t)q;

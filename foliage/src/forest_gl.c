@@ -609,45 +609,14 @@ static void count_stats(const xyl_forest_gl *f, const uint32_t *counts, size_t t
     st->visible -= twice;
 }
 
-/* The per_leaf visible instances nearest the eye at a leaf level (not a billboard) leave their
- * buckets (both, when fading) for f->near, ordered by species: a max-heap on the squared
- * distance to the sphere's centre keeps the nearest. Returns the instances taken out of the
- * fade's doubled ones. */
-static size_t pick_near(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, bool fade,
-                        uint32_t *counts)
+_Static_assert(XYL__FOREST_NEAR_MAX == XYL_FOREST_MAX_PER_LEAF, "the choice's heap holds per_leaf");
+
+/* The nearest instances the choice gathered (h) leave their buckets (both, when fading) for
+ * f->near, ordered by species. Returns the instances taken out of the fade's doubled ones. */
+static size_t take_near(xyl_forest_gl *f, const xyl__forest_near *h, bool fade, uint32_t *counts)
 {
-    uint32_t heap[XYL_FOREST_MAX_PER_LEAF];
-    float key[XYL_FOREST_MAX_PER_LEAF];
-    uint32_t m = fr->per_leaf, n = 0;
-    for (size_t i = 0; i < f->count; ++i) {
-        uint32_t b = f->bucket[i];
-        if (b == UINT16_MAX) continue;
-        const species *sp = &f->species[b / XYL__FOREST_BUCKETS_PER_SPECIES];
-        if (b % XYL__FOREST_BUCKETS_PER_SPECIES >= sp->plan.level_count) continue;
-        const xyl_forest_instance *x = &f->instances[i];
-        float scale = (float)((x->bits >> 24) + 1u) * (1.0f / 64.0f);
-        float dx = fr->eye[0] - x->position[0], dz = fr->eye[2] - x->position[2];
-        float dy = fr->eye[1] - (x->position[1] + sp->center_y * scale);
-        float d2 = dx * dx + dy * dy + dz * dz;
-        if (n == m && !(d2 < key[0])) continue;
-        uint32_t at = n < m ? n++ : 0; /* push, or replace the farthest (the root) */
-        if (at) { /* sift up */
-            while (at && key[(at - 1) / 2] < d2) {
-                heap[at] = heap[(at - 1) / 2], key[at] = key[(at - 1) / 2];
-                at = (at - 1) / 2;
-            }
-        } else if (n == m && m > 1) { /* sift down from the root */
-            for (;;) {
-                uint32_t c = 2 * at + 1;
-                if (c >= n) break;
-                if (c + 1 < n && key[c + 1] > key[c]) ++c;
-                if (!(key[c] > d2)) break;
-                heap[at] = heap[c], key[at] = key[c];
-                at = c;
-            }
-        }
-        heap[at] = (uint32_t)i, key[at] = d2;
-    }
+    uint32_t heap[XYL_FOREST_MAX_PER_LEAF], n = h->count;
+    memcpy(heap, h->index, n * sizeof *heap);
     size_t twice = 0;
     for (uint32_t k = 0; k < n; ++k) {
         uint32_t i = heap[k];
@@ -681,10 +650,12 @@ static void choose_sort(xyl_forest_gl *f, const xyl_forest_gl_frame *fr, const r
     c.cull = !fr->no_cull && xyl__forest_cone(rs->leaf.view_proj, c.axis, &c.inv_sin, &c.cos2);
     c.full = fr->mode == XYL_FOREST_FULL;
     c.fade = !c.full && fr->fade > 0.0f;
+    xyl__forest_near near;
+    near.max = fr->per_leaf && !c.full ? fr->per_leaf : 0;
     size_t twice = xyl__forest_choose(&c, f->instances, f->count, f->bucket, f->fine_bucket,
-                                      f->share, counts);
+                                      f->share, counts, &near);
     f->near_count = 0;
-    if (fr->per_leaf && !c.full) twice -= pick_near(f, fr, c.fade, counts);
+    if (near.count) twice -= take_near(f, &near, c.fade, counts);
     uint32_t total = f->species_count * XYL__FOREST_BUCKETS_PER_SPECIES;
     xyl__forest_sort(f->instances, f->count, f->bucket, f->fine_bucket, c.fade ? f->share : NULL,
                      counts, total, offsets, f->sorted);

@@ -74,6 +74,17 @@ typedef struct xyl__forest_choice {
     bool fade;              /* cross-fades over the species' bands instead of hysteresis */
 } xyl__forest_choice;
 
+/* The visible instances nearest the eye at a leaf level (not a billboard), gathered during the
+ * choice: a max-heap on the squared distance from the eye to the instance's sphere centre,
+ * index[0] the farthest kept. Ties keep the earlier instance. */
+#define XYL__FOREST_NEAR_MAX 64 /* = XYL_FOREST_MAX_PER_LEAF (xyl_forest_gl.h) */
+typedef struct xyl__forest_near {
+    uint32_t max;   /* how many to keep, <= XYL__FOREST_NEAR_MAX; 0: none */
+    uint32_t count; /* out: how many were kept */
+    uint32_t index[XYL__FOREST_NEAR_MAX];
+    float key[XYL__FOREST_NEAR_MAX];
+} xyl__forest_near;
+
 /* The LOD byte of an instance in the sorted, uploaded copy (never of the stored one): 0 draws
  * every pixel; otherwise bits 0..6 hold q in 1..63 and bit 7 the side: the finer level's copy
  * keeps the dither thresholds [q / 64, 1), the coarser one's (bit 7 set) [0, q / 64)
@@ -86,10 +97,11 @@ typedef struct xyl__forest_choice {
  * instance inside a band also gets the finer level's bucket in fine_bucket[i] and the coarser
  * level's share q (1..63, in 64ths) in share[i] (0: drawn at one level; fine_bucket is then
  * not written), and is counted in both buckets; without, fine_bucket and share may be NULL.
- * Returns the visible instances drawn at two levels. */
+ * near (may be NULL) gathers the nearest visible instances at leaf levels in the same pass;
+ * they stay in their buckets. Returns the visible instances drawn at two levels. */
 size_t xyl__forest_choose(const xyl__forest_choice *c, xyl_forest_instance *inst, size_t n,
                           uint16_t *bucket, uint16_t *fine_bucket, uint8_t *share,
-                          uint32_t *counts);
+                          uint32_t *counts, xyl__forest_near *near);
 
 /* The visible instances copied into sorted, bucket after bucket, with the LOD byte of each
  * copy replaced by its fade (XYL__FOREST_FADE_COARSE; 0 without one): sorted holds up to the

@@ -26,6 +26,7 @@ const ImVec4 kRed(0.85f, 0.1f, 0.1f, 1.0f);
 bool combo(const char *label, int *value, const char *const *names, int count)
 {
     bool changed = false;
+    if (*value < 0 || *value >= count) *value = 0; /* never index past the names */
     if (ImGui::BeginCombo(label, names[*value])) {
         for (int i = 0; i < count; ++i)
             if (ImGui::Selectable(names[i], i == *value)) *value = i, changed = true;
@@ -164,7 +165,13 @@ bool stems_section(view_params *p)
 {
     bool changed = false;
     int sides = p->stems.sides ? (int)p->stems.sides : 4;
-    if (ImGui::SliderInt("ring sides", &sides, 3, 32)) p->stems.sides = (uint32_t)sides, changed = true;
+    if (ImGui::SliderInt(p->stems.error_world > 0 ? "most ring sides" : "ring sides", &sides, 3, 32))
+        p->stems.sides = (uint32_t)sides, changed = true;
+    /* 0 is off: every branch gets the sides above; else each branch the fewest within it */
+    changed |= ImGui::SliderFloat("sides error (world)", &p->stems.error_world, 0.0f, 10.0f,
+                                  p->stems.error_world > 0 ? "%.4g" : "off",
+                                  ImGuiSliderFlags_Logarithmic);
+    if (p->stems.error_world > 0) changed |= ImGui::Checkbox("error of refined arcs", &p->stems.sides_refined);
     static const char *const subdiv[] = {"none", "Catmull-Clark", "Loop"};
     static const char *const normals[] = {"per branch", "smooth"};
     static const char *const joints[] = {"checked", "unchecked"};
@@ -172,16 +179,22 @@ bool stems_section(view_params *p)
     if (combo("subdivision", &s, subdiv, 3)) p->stems.subdivision = (xyl_subdivision)s, changed = true;
     if (combo("normals", &nm, normals, 2)) p->stems.normals = (xyl_normal_mode)nm, changed = true;
     if (combo("joints", &j, joints, 2)) p->stems.joints = (xyl_joint_check)j, changed = true;
+    static const char *const bases[] = {"closed", "open"};
+    int b = (int)p->stems.base;
+    if (combo("base", &b, bases, 2)) p->stems.base = (xyl_stems_base)b, changed = true;
+    changed |= ImGui::SliderFloat("root flare", &p->stems.root_flare, 0.0f, XYL_STEMS_MAX_ROOT_FLARE,
+                                  "%.2f");
     return changed;
 }
 
 bool refinement_section(view_params *p)
 {
     bool changed = false;
-    static const char *const variants[] = {"PN (1/3)", "rounded (1/2)", "circle-exact"};
+    static const char *const variants[] = {"PN (1/3)", "rounded (1/2)", "circle-exact",
+                                           "arc (along the branch)"};
     static const char *const paths[] = {"instanced", "hardware (TCS/TES)"};
     int v = (int)p->variant, path = p->path == XYL_TESS_PATH_HARDWARE;
-    if (combo("edge handles", &v, variants, 3)) p->variant = (xyl_tess_variant)v, changed = true;
+    if (combo("edge handles", &v, variants, XYL_TESS_VARIANT_COUNT)) p->variant = (xyl_tess_variant)v, changed = true;
     if (combo("path", &path, paths, 2)) p->path = path ? XYL_TESS_PATH_HARDWARE : XYL_TESS_PATH_INSTANCED;
     int level = (int)p->level;
     ImGui::SliderInt("fixed level", &level, 0, 64, level ? "%d" : "adaptive");

@@ -426,6 +426,18 @@ static int set_tree(view_params *p, const char *name, const char *v, char *err, 
     } else if (!strcmp(name, "joints")) {
         if ((c = choice(v, joints)) < 0) return bad(err, cap, "joints takes checked or unchecked, not '%s'", v);
         p->stems.joints = (xyl_joint_check)c;
+    } else if (!strcmp(name, "error_world")) {
+        if (!number(v, 0.0, 1e30, &x)) return bad(err, cap, "error_world takes a number >= 0 (0: every branch gets sides), not '%s'", v);
+        p->stems.error_world = (float)x;
+    } else if (!strcmp(name, "sides_refined")) {
+        if (!flag(v, &p->stems.sides_refined)) return bad(err, cap, "sides_refined takes 0 or 1, not '%s'", v);
+    } else if (!strcmp(name, "base")) {
+        static const char *const bases[] = {"closed", "open", NULL};
+        if ((c = choice(v, bases)) < 0) return bad(err, cap, "base takes closed or open, not '%s'", v);
+        p->stems.base = (xyl_stems_base)c;
+    } else if (!strcmp(name, "root_flare")) {
+        if (!number(v, 0.0, XYL_STEMS_MAX_ROOT_FLARE, &x)) return bad(err, cap, "root_flare takes a number in [0, 8], not '%s'", v);
+        p->stems.root_flare = (float)x;
     } else if (!strcmp(name, "leaves")) {
         if (!flag(v, &p->leaves)) return bad(err, cap, "leaves takes 0 or 1, not '%s'", v);
     } else if (!strcmp(name, "foliage")) {

@@ -118,7 +118,8 @@ static bool turtle_changed(const xyl_turtle_desc *a, const xyl_turtle_desc *b)
 static bool stems_changed(const xyl_stems_desc *a, const xyl_stems_desc *b)
 {
     return a->sides != b->sides || a->normals != b->normals || a->subdivision != b->subdivision ||
-           a->joints != b->joints;
+           a->joints != b->joints || a->base != b->base || a->root_flare != b->root_flare ||
+           a->error_world != b->error_world || a->sides_refined != b->sides_refined;
 }
 
 static bool foliage_changed(const view_params *a, const view_params *b)

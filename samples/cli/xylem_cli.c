@@ -7,6 +7,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -127,6 +128,7 @@ static const char usage_text[] =
     "  mesh     [source | --skeleton FILE.skel] [skeleton options] [--sides K]\n"
     "           [--subdivide none|catmark|loop] [--normals branch|smooth]\n"
     "           [--joints checked|unchecked] [--base closed|open] [--root-flare F]\n"
+    "           [--error-world E [--sides-refined]]\n"
     "           [--foliage [foliage options]] [--lods N [--lod-error E0]]\n"
     "           --out FILE.glb|FILE.obj\n"
     "                               wrap the skeleton in one closed quad mesh and write it;\n"
@@ -134,7 +136,9 @@ static const char usage_text[] =
     "                               start later or are hidden (not what grows from them);\n"
     "                               --base open: no cap at the\n"
     "                               root (one boundary loop per root, for trees sunk into\n"
-    "                               terrain); --foliage (.glb only): the\n"
+    "                               terrain); --error-world E: each branch gets the\n"
+    "                               fewest sides (3..K) whose radial error is at most E\n"
+    "                               (skeleton units); --foliage (.glb only): the\n"
     "                               leaves of 'foliage' too, in the same file; --lods N:\n"
     "                               up to N stem LODs, twigs thinner than E0 (default 0),\n"
     "                               2 E0, 4 E0 ... pruned (one .glb with MSFT_lod, or\n"
@@ -411,6 +415,11 @@ static int parse_mesh_option(options *o, const char *opt, const char *val)
             return usage_error("--lod-error takes a width in world units >= 0, not '%s'", val);
         o->lod_error = (float)e;
         o->has_lod_error = true;
+    } else if (strcmp(opt, "--error-world") == 0) {
+        double e;
+        if (!parse_double(val, &e) || !(e >= 0.0) || !(e <= FLT_MAX))
+            return usage_error("--error-world takes a finite number, 0 or above, not '%s'", val);
+        m->error_world = (float)e;
     } else if (strcmp(opt, "--skeleton") == 0) {
         o->skeleton_path = val;
     } else if (strcmp(opt, "--mesh") == 0) {
@@ -495,6 +504,10 @@ static int parse_options(int argc, char **argv, options *o)
         }
         if (strcmp(opt, "--wireframe") == 0) {
             o->render.wireframe = true;
+            continue;
+        }
+        if (strcmp(opt, "--sides-refined") == 0) {
+            o->stems.sides_refined = true;
             continue;
         }
         if (strcmp(opt, "--foliage") == 0 && strcmp(argv[1], "render") == 0) {
@@ -1079,6 +1092,16 @@ static int mesh_lods(const options *o, const xyl_skeleton *sk, const char *sourc
     return rc;
 }
 
+/* How many branch tubes got each ring sides under --error-world. */
+static void print_sides(const xyl_stems_stats *st, const xyl_stems_desc *desc)
+{
+    printf("sides: error %g (%s):", (double)desc->error_world,
+           desc->sides_refined ? "refined arcs" : "ring sagitta");
+    for (uint32_t k = 3; k <= 32; ++k)
+        if (st->branches_by_sides[k]) printf(" %u branches k=%u", st->branches_by_sides[k], k);
+    printf("; %u laterals clamped to their parent's sides\n", st->sides_clamped);
+}
+
 static int cmd_mesh(const options *o)
 {
     if (!o->out) return usage_error("%s", "'mesh' needs --out FILE.glb or FILE.obj");
@@ -1124,6 +1147,7 @@ static int cmd_mesh(const options *o)
                source, sk->node_count, m->vertex_count, m->quad_count, m->triangle_count,
                m->tri_view_count);
         if (desc.joints == XYL_JOINTS_CHECKED) print_joints(&st);
+        if (desc.error_world > 0.0f) print_sides(&st, &desc);
         if (d.warning_count) printf("warning: %s\n", d.warning);
         if (o->foliage.enabled) print_foliage(j.foliage, source);
         printf("time: skeleton %.3f ms, mesh %.3f ms, write %.3f ms\n", (t1 - t0) * 1e3,

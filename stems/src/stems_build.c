@@ -82,35 +82,54 @@ static void ring_bound(const stems *s, size_t *rings, size_t *chains)
     size_t n = s->sk->node_count, r = 16, c = 0;
     for (size_t i = 0; i < n; ++i) {
         size_t laterals = s->child_start[i + 1] - s->child_start[i] - (s->main[i] != UINT32_MAX);
-        r += 1 + (laterals ? xyl__stems_fork_extra_rings(s, laterals) + laterals : 0);
+        r += 1 + (laterals ? xyl__stems_fork_extra_rings(s->per_band_min, laterals) + laterals : 0);
         c += laterals + (s->sk->nodes[i].parent < 0);
     }
     *rings = r + c;
     *chains = c;
 }
 
-static xyl_result build_all(stems *s)
+static double limit_mean_radius(uint32_t k);
+
+/* The tables of rings of k sides: directions, texture u, the alignment step, the inflation
+ * (inflate: before subdivision, else 1). */
+static void fill_sides(stems_sides *t, uint32_t k, bool inflate)
+{
+    for (uint32_t j = 0; j < k; ++j) {
+        double a = 2.0 * XYL__PI * (double)j / (double)k;
+        t->cos_a[j] = cos(a);
+        t->sin_a[j] = sin(a);
+        t->u_of[j] = (float)((double)j / (double)k);
+    }
+    t->align_cos = cos(0.005 * 2.0 * XYL__PI / (double)k);
+    t->inflate = inflate ? 1.0 / limit_mean_radius(k) : 1.0;
+}
+
+static xyl_result build_all(stems *s, bool inflate)
 {
     xyl_result r = xyl__stems_index_tree(s);
-    for (uint32_t j = 0; j < s->k; ++j) {
-        double a = 2.0 * XYL__PI * (double)j / (double)s->k;
-        s->cos_a[j] = cos(a);
-        s->sin_a[j] = sin(a);
-        s->u_of[j] = (float)((double)j / (double)s->k);
+    /* every k a branch can get: kmax alone, or 3..kmax with an error budget */
+    const uint32_t kmin = s->branch_sides ? 3 : s->kmax;
+    s->per_band_min = UINT32_MAX;
+    for (uint32_t k = kmin; k <= s->kmax; ++k) {
+        fill_sides(&s->tab[k], k, inflate);
+        uint32_t per_band = k / xyl__stems_strip(k);
+        if (per_band < s->per_band_min) s->per_band_min = per_band;
     }
-    s->align_cos = cos(0.005 * 2.0 * XYL__PI / (double)s->k);
+    xyl__stems_set_sides(s, s->kmax);
     /* reserving once avoids regrowth copies; a tight bound keeps the footprint small, so the
      * allocator can hand the same pages back on the next build instead of fresh ones */
     size_t rings = 0, chains = 0;
     if (!r) ring_bound(s, &rings, &chains);
-    if (!r && !xyl__stems_reserve(s, rings * s->k + 2 * chains, (rings + chains) * s->k))
+    if (!r && !xyl__stems_reserve(s, rings * s->kmax + 2 * chains, (rings + chains) * s->kmax))
         r = xyl__stems_oom(s);
     for (size_t i = 0; i < s->sk->node_count && !r; ++i) {
         if (s->sk->nodes[i].parent >= 0) continue;
-        r = xyl__stems_build_branch(s, (uint32_t)i, NULL);
+        uint32_t k = s->branch_sides ? s->branch_sides[s->sk->nodes[i].branch] : s->kmax;
+        r = xyl__stems_build_branch(s, (uint32_t)i, NULL, k);
         while (!r && s->npending) {
             stems_pending p = s->pending[--s->npending];
-            r = xyl__stems_build_branch(s, p.node, &p.bridge);
+            r = xyl__stems_build_branch(s, p.node, &p.bridge, p.k);
         }
         if (!r && (uint64_t)s->nv > s->max_vertices)
             r = xyl__fail(s->diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
@@ -173,6 +192,10 @@ static xyl_result check_desc(const xyl_skeleton *sk, const xyl_stems_desc *d, xy
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "root_flare must be 0..%g, not %g", (double)XYL_STEMS_MAX_ROOT_FLARE,
                          (double)d->root_flare);
+    if (!(d->error_world >= 0.0f && isfinite(d->error_world)))
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "error_world must be 0 (off) or a finite radial error budget above 0, "
+                         "not %g", (double)d->error_world);
     return XYL_OK;
 }
 
@@ -251,22 +274,24 @@ static void free_state(stems *s)
 static xyl_result base_creases(stems *s, uint32_t **pairs, size_t *count)
 {
     *pairs = NULL;
-    *count = s->nbase * s->k;
+    *count = 0;
+    for (size_t b = 0; b < s->nbase; ++b) *count += s->bases[b].k;
     if (*count == 0) return XYL_OK;
     *pairs = xyl__alloc_array(&s->alloc, *count, 2 * sizeof **pairs);
     if (!*pairs) return xyl__stems_oom(s);
     uint32_t *p = *pairs;
     for (size_t b = 0; b < s->nbase; ++b)
-        for (uint32_t j = 0; j < s->k; ++j) {
+        for (uint32_t j = 0, k = s->bases[b].k; j < k; ++j) {
             *p++ = s->bases[b].first + j;
-            *p++ = s->bases[b].first + (j + 1 < s->k ? j + 1 : 0);
+            *p++ = s->bases[b].first + (j + 1 < k ? j + 1 : 0);
         }
     return XYL_OK;
 }
 
 /* A refined vertex's place on the creased root rings: 0 for none, else 1 + its slot (ring b's
- * vertex point j at 2 k b + j, its edge point from j to j + 1 at 2 k b + k + j); PENDING marks a
- * vertex next to one vertex point so far (1 + that slot below it). */
+ * vertex point j at 2 K b + j, its edge point from j to j + 1 at 2 K b + K + j, K = kmax, j
+ * below ring b's own k); PENDING marks a vertex next to one vertex point so far (1 + that slot
+ * below it). */
 #define BASE_PENDING 0x80000000u
 
 /* Tags the refined vertices of the creased root rings in tag (0 elsewhere): the vertex points
@@ -275,9 +300,10 @@ static xyl_result base_creases(stems *s, uint32_t **pairs, size_t *count)
  * points (a vertex point's sides all lead to edge points of its own edges). */
 static void tag_base_rings(const stems *s, const xyl__mesh_arrays *a, uint32_t *tag)
 {
-    const uint32_t k = s->k;
+    const uint32_t k = s->kmax;
     for (size_t b = 0; b < s->nbase; ++b)
-        for (uint32_t j = 0; j < k; ++j) tag[s->bases[b].first + j] = (uint32_t)(2 * k * b + j) + 1;
+        for (uint32_t j = 0; j < s->bases[b].k; ++j)
+            tag[s->bases[b].first + j] = (uint32_t)(2 * k * b + j) + 1;
     for (size_t f = 0; f < a->quad_count + a->triangle_count; ++f) {
         const bool quad = f < a->quad_count;
         const int n = quad ? 4 : 3;
@@ -296,9 +322,9 @@ static void tag_base_rings(const stems *s, const xyl__mesh_arrays *a, uint32_t *
                 if (!(*w & BASE_PENDING) || (*w & ~BASE_PENDING) == t) continue;
                 const uint32_t p = (*w & ~BASE_PENDING) - 1, q = t - 1; /* two vertex points */
                 if (p / (2 * k) != q / (2 * k)) continue;
-                const uint32_t jp = p % (2 * k), jq = q % (2 * k);
-                const uint32_t lo = (jp + 1) % k == jq ? jp : (jq + 1) % k == jp ? jq : k;
-                if (lo < k) *w = p - jp + k + lo + 1;
+                const uint32_t jp = p % (2 * k), jq = q % (2 * k), kb = s->bases[p / (2 * k)].k;
+                const uint32_t lo = (jp + 1) % kb == jq ? jp : (jq + 1) % kb == jp ? jq : kb;
+                if (lo < kb) *w = p - jp + k + lo + 1;
             }
         }
     }
@@ -313,14 +339,16 @@ static const uint32_t *arrays_face(const xyl__mesh_arrays *a, size_t f, int *n)
 }
 
 /* Whether refined ring points of slots p and q are neighbours along their ring's crease (a
- * vertex point j and the edge point of (j - 1, j) or (j, j + 1)). */
-static bool along_crease(uint32_t k, uint32_t p, uint32_t q)
+ * vertex point j and the edge point of (j - 1, j) or (j, j + 1)); slots of stride k (kmax), the
+ * ring of kb sides. */
+static bool along_crease(const stems *s, uint32_t p, uint32_t q)
 {
+    const uint32_t k = s->kmax;
     if (p / (2 * k) != q / (2 * k)) return false;
-    uint32_t jp = p % (2 * k), jq = q % (2 * k);
+    uint32_t jp = p % (2 * k), jq = q % (2 * k), kb = s->bases[p / (2 * k)].k;
     if ((jp < k) == (jq < k)) return false;
     uint32_t j = jp < k ? jp : jq, e = (jp < k ? jq : jp) - k;
-    return e == j || (e + 1) % k == j;
+    return e == j || (e + 1) % kb == j;
 }
 
 /* The band-side normal of ring point u (slot su) from its faces (face[0..m)): the faces split
@@ -353,14 +381,14 @@ static bool band_normal(const stems *s, const xyl__mesh_arrays *a, const uint32_
             for (int x = 0; x < 2; ++x) {
                 const uint32_t w = wi[x], tw = tag[w];
                 if (w != wj[1 - x]) continue;
-                if (tw && !(tw & BASE_PENDING) && along_crease(s->k, su, tw - 1)) continue;
+                if (tw && !(tw & BASE_PENDING) && along_crease(s, su, tw - 1)) continue;
                 const int from = fan[j], to = fan[i];
                 for (int z = 0; z < m; ++z)
                     if (fan[z] == from) fan[z] = to;
             }
         }
     for (int i = 0; i < m; ++i) sum[fan[i]] = xyl__d3_add(sum[fan[i]], fn[i]);
-    const xyl__dvec3 up = s->bases[su / (2 * s->k)].up;
+    const xyl__dvec3 up = s->bases[su / (2 * s->kmax)].up;
     int cap = -1, fans = 0;
     double lowest = INFINITY;
     for (int i = 0; i < m; ++i) {
@@ -382,7 +410,7 @@ static bool band_normal(const stems *s, const xyl__mesh_arrays *a, const uint32_
  * shaded or PN-refined base wants the band's. */
 static xyl_result base_ring_normals(stems *s, xyl__mesh_arrays *a)
 {
-    const size_t slots = 2 * (size_t)s->k * s->nbase, nf = a->quad_count + a->triangle_count;
+    const size_t slots = 2 * (size_t)s->kmax * s->nbase, nf = a->quad_count + a->triangle_count;
     uint32_t *tag = xyl__calloc(&s->alloc, a->vertex_count ? a->vertex_count : 1, sizeof *tag);
     uint32_t *start = xyl__calloc(&s->alloc, slots + 1, sizeof *start);
     uint32_t *vertex = xyl__calloc(&s->alloc, slots, sizeof *vertex);
@@ -502,7 +530,7 @@ static xyl_result check_finite(const stems *s)
         return xyl__fail(s->diag, XYL_ERR_NON_FINITE, 0, 0, (int64_t)v,
                          "the stem mesher: vertex %zu (branch %u) leaves the float range: the "
                          "skeleton's positions plus its radii%s pass %g there",
-                         v, s->vbranch[v], s->inflate != 1.0 ? " (inflated for subdivision)" : "",
+                         v, s->vbranch[v], s->limit_centres ? " (inflated for subdivision)" : "",
                          (double)FLT_MAX);
     }
     return XYL_OK;
@@ -511,8 +539,9 @@ static xyl_result check_finite(const stems *s)
 /* One mesh of the skeleton, with checked joints' levels per branch in drop (NULL: none); with
  * shift and hidden (per branch, or NULL) what the levels cost each raised lateral. */
 static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                             const uint32_t *drop, double *shift, uint8_t *hidden,
-                             xyl_mesh **out, xyl_diag *diag)
+                             const uint8_t *branch_sides, const uint32_t *drop, double *shift,
+                             uint8_t *hidden, xyl_mesh **out, xyl_stems_stats *st,
+                             xyl_diag *diag)
 {
     xyl_result r;
     stems s;
@@ -521,7 +550,8 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     s.drop = drop;
     s.shift = shift;
     s.hidden = hidden;
-    s.k = desc->sides ? desc->sides : 4;
+    s.kmax = desc->sides ? desc->sides : 4;
+    s.branch_sides = branch_sides;
     s.alloc = desc->alloc;
     s.diag = diag;
     s.max_vertices = desc->limits.max_vertices ? desc->limits.max_vertices : XYL__MESH_DEFAULT_MAX_VERTICES;
@@ -530,12 +560,17 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     /* smooth normals and subdivided meshes see the final surface, so only these are summed on
      * the way */
     s.sum_normals = desc->normals == XYL_NORMALS_BRANCH && desc->subdivision == XYL_SUBDIVIDE_NONE;
-    s.unit_per_branch = s.sum_normals && s.k % 2 == 0; /* index_children may still veto */
-    s.inflate = inflate ? 1.0 / limit_mean_radius(s.k) : 1.0;
+    /* index_children may still veto; with an error budget some branch may have odd k, whose
+     * triangles add to the sums after every branch is built */
+    s.unit_per_branch = s.sum_normals && s.kmax % 2 == 0 && !branch_sides;
     s.limit_centres = inflate;
     s.open_base = desc->base == XYL_STEMS_BASE_OPEN;
     s.root_flare = desc->root_flare;
-    r = build_all(&s);
+    r = build_all(&s, inflate);
+    if (!r && st) {
+        memcpy(st->branches_by_sides, s.by_sides, sizeof st->branches_by_sides);
+        st->sides_clamped = s.clamped;
+    }
     if (!r) r = check_finite(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)
         r = xyl__fail(diag, XYL_ERR_LIMIT_EXCEEDED, 0, 0, -1,
@@ -626,7 +661,8 @@ static xyl_result count_laterals(const xyl_skeleton *sk, const xyl_mesh *m, cons
  * node count, so this ends. The test runs on the mesh before subdivision, at the skeleton's
  * radii; a subdivided mesh is then built once more with the same levels. */
 static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
-                                xyl_mesh **out, xyl_stems_stats *st, xyl_diag *diag)
+                                const uint8_t *sides, xyl_mesh **out, xyl_stems_stats *st,
+                                xyl_diag *diag)
 {
     const size_t nb = skeleton->branch_count ? skeleton->branch_count : 1;
     uint32_t *drop = xyl__calloc(&desc->alloc, nb, sizeof *drop);
@@ -643,7 +679,7 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
     while (!r) {
         memset(shift, 0, nb * sizeof *shift);
         memset(hidden, 0, nb);
-        r = build_once(skeleton, &plain, drop, shift, hidden, &m, diag);
+        r = build_once(skeleton, &plain, sides, drop, shift, hidden, &m, st, diag);
         if (r) break;
         if (++st->builds == 1) st->faces_first = m->quad_count + m->triangle_count;
         xyl__joint_tally t;
@@ -669,7 +705,7 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
     if (!r && desc->subdivision != XYL_SUBDIVIDE_NONE) {
         xyl_mesh_destroy(m);
         m = NULL;
-        r = build_once(skeleton, desc, any ? drop : NULL, NULL, NULL, &m, diag);
+        r = build_once(skeleton, desc, sides, any ? drop : NULL, NULL, NULL, &m, st, diag);
         ++st->builds;
     }
     xyl__free(&desc->alloc, drop);
@@ -687,6 +723,90 @@ static xyl_result build_checked(const xyl_skeleton *skeleton, const xyl_stems_de
     return XYL_OK;
 }
 
+/* ---- ring sides per branch (docs/stems.md, "Ring sides per branch") ------------------------ */
+
+/* |B(t)| - 1 on the cubic arc from angle 0 to phi around the unit circle with handles h long
+ * (the circle rule's (4/3) tan(phi / 4)). */
+static double arc_radius_error(double phi, double h, double t)
+{
+    const double c = cos(phi), sn = sin(phi), u = 1.0 - t;
+    const double b0 = u * u * u, b1 = 3.0 * u * u * t, b2 = 3.0 * u * t * t, b3 = t * t * t;
+    const double x = b0 + b1 + b2 * (c + h * sn) + b3 * c;
+    const double y = b1 * h + b2 * (sn - h * c) + b3 * sn;
+    return sqrt(x * x + y * y) - 1.0;
+}
+
+/* The worst radial error of a unit ring of k sides (xyl_stems_ring_error). Refined: the arc is
+ * symmetric about t = 1/2, where the circle rule makes it exact, and it lies outside the circle
+ * in between; the worst point is found by sampling [0, 1/2] and a golden-section search around
+ * the best sample (unimodal there), to about 1e-12 of the radius. */
+static double ring_error(uint32_t k, bool refined)
+{
+    const double phi = 2.0 * XYL__PI / (double)k;
+    if (!refined) return 1.0 - cos(0.5 * phi);
+    const double h = 4.0 / 3.0 * tan(0.25 * phi);
+    const int n = 64;
+    int best = 0;
+    double worst = 0.0;
+    for (int i = 0; i <= n; ++i) {
+        double e = fabs(arc_radius_error(phi, h, 0.5 * i / n));
+        if (e > worst) worst = e, best = i;
+    }
+    double a = 0.5 * (best > 0 ? best - 1 : 0) / n, b = 0.5 * (best < n ? best + 1 : n) / n;
+    const double g = 0.5 * (sqrt(5.0) - 1.0);
+    for (int it = 0; it < 60; ++it) {
+        double x1 = b - g * (b - a), x2 = a + g * (b - a);
+        if (fabs(arc_radius_error(phi, h, x1)) >= fabs(arc_radius_error(phi, h, x2))) b = x2;
+        else a = x1;
+    }
+    return fmax(worst, fabs(arc_radius_error(phi, h, 0.5 * (a + b))));
+}
+
+xyl_result xyl_stems_ring_error(uint32_t sides, bool refined, double *error)
+{
+    if (sides < 3 || sides > 32 || !error)
+        return xyl__fail(NULL, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "sides must be 3..32 and error not NULL");
+    *error = ring_error(sides, refined);
+    return XYL_OK;
+}
+
+/* Per skeleton branch, the fewest sides in 3..kmax whose radial error at the branch's widest
+ * ring is within desc->error_world, or kmax (from desc->alloc; NULL when error_world is 0: every
+ * branch gets kmax). The widest ring is the widest node's, or a root's flared base ring. */
+static xyl_result budget_sides(const xyl_skeleton *sk, const xyl_stems_desc *d, uint8_t **out,
+                               xyl_diag *diag)
+{
+    *out = NULL;
+    if (d->error_world == 0.0f) return XYL_OK;
+    const size_t nb = sk->branch_count ? sk->branch_count : 1;
+    const uint32_t kmax = d->sides ? d->sides : 4;
+    double *widest = xyl__calloc(&d->alloc, nb, sizeof *widest);
+    uint8_t *sides = xyl__alloc_array(&d->alloc, nb, 1);
+    if (!widest || !sides) {
+        xyl__free(&d->alloc, widest);
+        xyl__free(&d->alloc, sides);
+        return xyl__fail(diag, XYL_ERR_OUT_OF_MEMORY, 0, 0, -1, "out of memory");
+    }
+    for (size_t i = 0; i < sk->node_count; ++i) {
+        const xyl_skel_node *n = &sk->nodes[i];
+        double r = (double)n->radius * (n->parent < 0 ? 1.0 + (double)d->root_flare : 1.0);
+        widest[n->branch] = fmax(widest[n->branch], r);
+    }
+    double e[33];
+    for (uint32_t k = 3; k <= kmax; ++k) e[k] = ring_error(k, d->sides_refined);
+    for (size_t b = 0; b < nb; ++b) {
+        uint32_t k = 3;
+        while (k < kmax && !(widest[b] * e[k] <= (double)d->error_world)) ++k;
+        sides[b] = (uint8_t)k;
+    }
+    xyl__free(&d->alloc, widest);
+    *out = sides;
+    return XYL_OK;
+}
+
+/* ---- public entry -------------------------------------------------------------------------- */
+
 xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                            xyl_mesh **out, xyl_stems_stats *stats, xyl_diag *diag)
 {
@@ -696,12 +816,16 @@ xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *d
     if (r) return r;
     xyl_stems_stats st;
     memset(&st, 0, sizeof st);
+    uint8_t *sides = NULL;
+    r = budget_sides(skeleton, desc, &sides, diag);
+    if (r) return r;
     if (desc->joints == XYL_JOINTS_UNCHECKED) {
-        r = build_once(skeleton, desc, NULL, NULL, NULL, out, diag);
+        r = build_once(skeleton, desc, sides, NULL, NULL, NULL, out, &st, diag);
         st.builds = 1;
     } else {
-        r = build_checked(skeleton, desc, out, &st, diag);
+        r = build_checked(skeleton, desc, sides, out, &st, diag);
     }
+    xyl__free(&desc->alloc, sides);
     if (!r && stats) *stats = st;
     if (!r) xyl__skeleton_warn_precision(skeleton->nodes, skeleton->node_count, "the stem mesh", diag);
     return r;

@@ -5,19 +5,28 @@
 
 /* ---- rings around a fork ------------------------------------------------------------------- */
 
-/* Quads in a child's patch: its outline has 2 strip + 2 vertices, k for even k, k + 1 for odd. */
-static uint32_t strip_size(const stems *s)
-{
-    return s->k % 2 ? (s->k - 1) / 2 : s->k / 2 - 1;
-}
-
 /* Rings a fork adds around its own: twice the patches its lateral children need, so each still
  * has a choice; never a fixed cap, so a fork can always hold all its children. */
-size_t xyl__stems_fork_extra_rings(const stems *s, size_t laterals)
+size_t xyl__stems_fork_extra_rings(uint32_t per_band, size_t laterals)
 {
-    uint32_t per_band = s->k / strip_size(s);
     size_t want = (2 * laterals + per_band - 1) / per_band;
     return want < 2 ? 2 : want;
+}
+
+/* The patches a band of the branch being built offers the laterals of station st: a patch is
+ * as wide as the widest of their strips (their sides, no more than the parent's). */
+static uint32_t station_per_band(const stems *s, const stems_station *st)
+{
+    uint32_t strip = 1;
+    for (uint32_t c = st->first; c <= st->last; ++c) {
+        uint32_t node = s->chain[c], main = xyl__stems_main_child(s, node);
+        for (uint32_t j = s->child_start[node]; j < s->child_start[node + 1]; ++j)
+            if (s->child_list[j] != main) {
+                uint32_t w = xyl__stems_strip(xyl__stems_lateral_sides(s, s->child_list[j]));
+                strip = w > strip ? w : strip;
+            }
+    }
+    return s->k / strip;
 }
 
 /* The unit direction a fraction f of the way from unit a to unit b (normalised lerp); a and b
@@ -48,7 +57,7 @@ xyl_result xyl__stems_fork_rings(stems *s, size_t i, xyl__dvec3 t_in, xyl__dvec3
                                  xyl__dvec3 t_out, size_t laterals)
 {
     const stems_station *st = &s->stations[i];
-    size_t want = xyl__stems_fork_extra_rings(s, laterals);
+    size_t want = xyl__stems_fork_extra_rings(station_per_band(s, st), laterals);
     double seg_in = i ? xyl__d3_len(xyl__d3_sub(st->p, s->stations[i - 1].p)) : 0.0;
     double seg_out = i + 1 < s->nstations ? xyl__d3_len(xyl__d3_sub(s->stations[i + 1].p, st->p)) : 0.0;
     /* without a segment of any length on either side (coordinates so large that the station
@@ -116,7 +125,7 @@ static xyl__dvec3 strip_normal(const stems *s, uint32_t band, uint32_t c, uint32
 }
 
 /* The strip's outline, counter-clockwise seen from outside: ring a's vertices c .. c + strip,
- * then ring b's back from c + strip to c. */
+ * then ring b's back from c + strip to c (rings of the parent's k sides). */
 static void strip_loop(const stems *s, uint32_t ring_a, uint32_t ring_b, uint32_t c,
                        uint32_t strip, uint32_t *loop)
 {
@@ -149,14 +158,16 @@ typedef struct bridge_geom {
     stems_ring ring;
 } bridge_geom;
 
-static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r, bridge_geom *g)
+/* The strip is the child's (kc sides, its ring's), its quads the parent's (s->k sides). */
+static void plan_bridge(const stems *s, patch p, uint32_t child, uint32_t kc, double parent_r,
+                        bridge_geom *g)
 {
-    uint32_t strip = strip_size(s);
+    uint32_t strip = xyl__stems_strip(kc);
     const stems_ring *a = &s->rings[p.ring], *b = &s->rings[p.ring + 1];
     strip_loop(s, a->first, b->first, p.column, strip, g->loop);
     xyl__dvec3 n = strip_normal(s, a->band, p.column, strip), centroid = xyl__d3(0, 0, 0);
-    for (uint32_t j = 0; j < s->k; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[g->loop[j]]));
-    centroid = xyl__d3_scale(centroid, 1.0 / (double)s->k);
+    for (uint32_t j = 0; j < kc; ++j) centroid = xyl__d3_add(centroid, xyl__from_f3(s->pos[g->loop[j]]));
+    centroid = xyl__d3_scale(centroid, 1.0 / (double)kc);
     /* the bridge ring must fit inside its patch, or neighbouring bridges overlap; the child's
      * tube widens to its own radius over its first segment */
     double height = xyl__d3_len(xyl__d3_sub(b->centre, a->centre));
@@ -187,11 +198,11 @@ static void plan_bridge(const stems *s, patch p, uint32_t child, double parent_r
 /* The first segment of child's tube if it bridges from patch p: from its bridge ring to its
  * first station as make_stations will place it. *reaches: that station is one of the child's
  * nodes, not a stub in front of the ring (every node behind it). */
-static xyl__stems_cone first_cone(const stems *s, patch p, uint32_t child, double parent_r,
-                                  bool *reaches)
+static xyl__stems_cone first_cone(const stems *s, patch p, uint32_t child, uint32_t kc,
+                                  double parent_r, bool *reaches)
 {
     bridge_geom g;
-    plan_bridge(s, p, child, parent_r, &g);
+    plan_bridge(s, p, child, kc, parent_r, &g);
     const stems_ring *ring = &g.ring;
     xyl__stems_cone c = {ring->centre, xyl__d3_add(ring->centre, xyl__d3_scale(ring->tangent, 2 * ring->radius)),
                          ring->radius, ring->radius};
@@ -222,9 +233,9 @@ static bool clashes(const stems *s, const xyl__stems_cone *c)
  * reach its nodes, or the child would become a stub on the wrong side; if there is none, the
  * best of all. */
 static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node, xyl__dvec3 d,
-                          uint32_t child, double parent_r)
+                          uint32_t child, uint32_t kc, double parent_r)
 {
-    uint32_t strip = strip_size(s);
+    uint32_t strip = xyl__stems_strip(kc);
     patch best = {UINT32_MAX, 0, -4.0}, fallback = best;
     for (size_t r = lo; r < hi; ++r) {
         uint32_t band = s->rings[r].band;
@@ -239,7 +250,7 @@ static patch choose_patch(const stems *s, size_t lo, size_t hi, xyl__dvec3 node,
             if (p.score <= best.score) continue;
             if (s->ncones) {
                 bool reaches;
-                xyl__stems_cone cone = first_cone(s, p, child, parent_r, &reaches);
+                xyl__stems_cone cone = first_cone(s, p, child, kc, parent_r, &reaches);
                 if (facing <= 0.0 || !reaches || clashes(s, &cone)) {
                     if (p.score > fallback.score) fallback = p;
                     continue;
@@ -300,27 +311,30 @@ static void align_to_outline(stems *s, const stems_ring *ring, const uint32_t *l
         s->pos[ring->first + j] = xyl__to_f3(xyl__d3_add(ring->centre, xyl__d3_scale(dir[j], rr)));
 }
 
-/* Replaces the patch by a bridge to a new ring of the child and queues the child's branch. */
-static xyl_result bridge(stems *s, patch p, uint32_t child, double parent_r)
+/* Replaces the patch by a bridge to a new ring of the child (kc sides) and queues the child's
+ * branch. The ring, its alignment and the bridge faces are the child's: kc sides. */
+static xyl_result bridge(stems *s, patch p, uint32_t child, uint32_t kc, double parent_r)
 {
-    uint32_t strip = strip_size(s), band = s->rings[p.ring].band;
+    uint32_t strip = xyl__stems_strip(kc), band = s->rings[p.ring].band, kp = s->k;
     uint32_t branch = s->sk->nodes[child].branch;
     bridge_geom g;
-    plan_bridge(s, p, child, parent_r, &g);
+    plan_bridge(s, p, child, kc, parent_r, &g);
     for (uint32_t j = 0; j < strip; ++j) s->taken[strip_quad(s, band, p.column, j)] = 1;
     const uint32_t *loop = g.loop;
     xyl__dvec3 n = g.n, centroid = g.centroid;
     stems_ring ring = g.ring;
     double r = ring.radius;
-    if (!xyl__stems_reserve(s, s->nv + s->k, s->nq + s->k)) return xyl__stems_oom(s);
+    if (!xyl__stems_reserve(s, s->nv + kc, s->nq + kc)) return xyl__stems_oom(s);
+    if (kc != kp) xyl__stems_set_sides(s, kc);
     ring.first = xyl__stems_put_ring(s, ring.centre, n, ring.u, r, 0.0, branch);
     align_to_outline(s, &ring, loop, centroid, r);
     xyl_result res = bridge_faces(s, loop, 2 * strip + 2, ring.first, branch);
+    if (kc != kp) xyl__stems_set_sides(s, kp);
     if (res) return res;
     if (!xyl__grow(&s->alloc, (void **)&s->pending, &s->pcap, s->npending, s->npending + 1,
                    sizeof *s->pending))
         return xyl__stems_oom(s);
-    stems_pending pend = {child, ring};
+    stems_pending pend = {child, kc, ring};
     s->pending[s->npending++] = pend;
     return XYL_OK;
 }
@@ -358,7 +372,9 @@ static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, u
                              size_t lo, size_t hi, bool more)
 {
     xyl__dvec3 d = child_direction(s, node, child, s->rings[lo].tangent);
-    patch p = choose_patch(s, lo, hi, xyl__stems_node_pos(s, node), d, child, st->r);
+    uint32_t kc = xyl__stems_lateral_sides(s, child);
+    if (s->branch_sides && kc < s->branch_sides[s->sk->nodes[child].branch]) ++s->clamped;
+    patch p = choose_patch(s, lo, hi, xyl__stems_node_pos(s, node), d, child, kc, st->r);
     if (p.ring == UINT32_MAX) /* fork_rings made twice the patches needed */
         return xyl__fail(s->diag, XYL_ERR_UNSUPPORTED, 0, 0, (int64_t)node,
                          "internal: no free patch left at node %u", node);
@@ -367,9 +383,9 @@ static xyl_result attach_one(stems *s, const stems_station *st, uint32_t node, u
                        sizeof *s->cones))
             return xyl__stems_oom(s);
         bool reaches;
-        s->cones[s->ncones++] = first_cone(s, p, child, st->r, &reaches);
+        s->cones[s->ncones++] = first_cone(s, p, child, kc, st->r, &reaches);
     }
-    return bridge(s, p, child, st->r);
+    return bridge(s, p, child, kc, st->r);
 }
 
 /* Attaches every lateral child of station i to a patch among rings lo .. hi, thickest first

@@ -33,6 +33,7 @@ typedef struct stems_ring {
 /* A closed base: its ring's first vertex and the root's axis, into the tree. */
 typedef struct stems_base {
     uint32_t first;
+    uint32_t k;         /* its ring's sides */
     xyl__dvec3 up;
 } stems_base;
 
@@ -46,6 +47,7 @@ typedef struct stems_station {
 /* A lateral child waiting for its branch to be built from its bridge ring. */
 typedef struct stems_pending {
     uint32_t node;      /* the child's first skeleton node */
+    uint32_t k;         /* its ring sides */
     stems_ring bridge;  /* the ring its bridge ends in */
 } stems_pending;
 
@@ -60,9 +62,25 @@ typedef struct xyl__stems_cone {
     double r0, r1;
 } xyl__stems_cone;
 
+/* What ring vertices of k sides need: their directions, texture u, and the factors that
+ * depend on k (docs/stems.md, "Ring sides per branch"). */
+typedef struct stems_sides {
+    double cos_a[32], sin_a[32]; /* ring vertex directions, j = 0 .. k - 1 */
+    float u_of[32];              /* texture u of ring vertex j: j / k */
+    double align_cos;            /* cos of the smallest step align_to_outline takes */
+    double inflate;              /* ring radius factor before subdivision */
+} stems_sides;
+
 typedef struct stems {
     const xyl_skeleton *sk;
-    uint32_t k;
+    uint32_t k;         /* ring sides of the branch being built (xyl__stems_set_sides) */
+    uint32_t kmax;      /* xyl_stems_desc.sides: the most any branch gets */
+    const uint8_t *branch_sides; /* per skeleton branch, the sides error_world gives it, or
+                                    NULL: every branch gets kmax */
+    uint32_t per_band_min; /* the fewest patches a band offers any lateral (ring_bound) */
+    uint32_t by_sides[33]; /* branch tubes built with k sides, at [k] */
+    uint32_t clamped;      /* laterals that got fewer sides than their budget's */
+    stems_sides tab[33];   /* per k in use */
     double inflate;     /* ring radius factor before Catmull-Clark: 1 / mean limit radius */
     bool limit_centres; /* before subdivision: ring centres moved against the limit's pull */
     xyl_allocator alloc;
@@ -72,9 +90,9 @@ typedef struct stems {
     /* children of every node: child_list[child_start[n] .. child_start[n + 1]) */
     uint32_t *child_start, *child_list;
     uint32_t *main;      /* per node: the child continuing its branch, or UINT32_MAX */
-    double cos_a[32], sin_a[32]; /* ring vertex directions, j = 0 .. k - 1 */
-    float u_of[32];              /* texture u of ring vertex j: j / k */
-    double align_cos;            /* cos of the smallest step align_to_outline takes */
+    const double *cos_a, *sin_a; /* tab[k]'s, for the branch being built */
+    const float *u_of;
+    double align_cos;
 
     /* output */
     xyl_vec3 *pos;
@@ -302,11 +320,11 @@ XYL__STEMS_SHARED xyl_result xyl__stems_index_tree(stems *s);
 
 /* ---- a branch's tube (stems_rings.c) ------------------------------------------------------- */
 
-/* Builds the branch that starts at node start: its tube, caps and the bridges of its laterals,
- * whose branches it queues in s->pending. from: the bridge ring a lateral's tube starts from;
- * NULL for a root. */
+/* Builds the branch that starts at node start with rings of k sides: its tube, caps and the
+ * bridges of its laterals, whose branches it queues in s->pending. from: the bridge ring a
+ * lateral's tube starts from; NULL for a root. */
 XYL__STEMS_SHARED xyl_result xyl__stems_build_branch(stems *s, uint32_t start,
-                                                     const stems_ring *from);
+                                                     const stems_ring *from, uint32_t k);
 
 /* k vertices around centre c in the plane of unit tangent t, starting along unit u (u . t = 0),
  * radius r (times s->inflate), texture v. Returns the first vertex index. */
@@ -321,8 +339,37 @@ XYL__STEMS_SHARED size_t xyl__stems_lateral_count(const stems *s, const stems_st
 
 /* ---- forks (stems_fork.c) ------------------------------------------------------------------ */
 
-/* Rings a fork with `laterals` lateral children adds around its own. */
-XYL__STEMS_SHARED size_t xyl__stems_fork_extra_rings(const stems *s, size_t laterals);
+/* Rings a fork with `laterals` lateral children adds around its own, when a band of the
+ * parent's quads offers per_band patches. */
+XYL__STEMS_SHARED size_t xyl__stems_fork_extra_rings(uint32_t per_band, size_t laterals);
+
+/* Quads in the patch of a lateral of k sides: its outline has 2 strip + 2 vertices, k for even
+ * k, k + 1 for odd. */
+static inline uint32_t xyl__stems_strip(uint32_t k)
+{
+    return k % 2 ? (k - 1) / 2 : k / 2 - 1;
+}
+
+/* The ring sides of lateral `child` of the branch being built: its budget's, but no more than
+ * the parent's (its patch is a strip of the parent's quads). */
+static inline uint32_t xyl__stems_lateral_sides(const stems *s, uint32_t child)
+{
+    if (!s->branch_sides) return s->k;
+    uint32_t k = s->branch_sides[s->sk->nodes[child].branch];
+    return k < s->k ? k : s->k;
+}
+
+/* Makes k the ring sides of what is built next (s->tab[k] must be filled). */
+static inline void xyl__stems_set_sides(stems *s, uint32_t k)
+{
+    const stems_sides *t = &s->tab[k];
+    s->k = k;
+    s->cos_a = t->cos_a;
+    s->sin_a = t->sin_a;
+    s->u_of = t->u_of;
+    s->align_cos = t->align_cos;
+    s->inflate = t->inflate;
+}
 
 /* The rings of station i, a fork with `laterals` lateral children: its own ring, turned to t,
  * and the extra rings around it, which the tube comes into along t_in and leaves along t_out. */

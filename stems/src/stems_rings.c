@@ -422,6 +422,7 @@ static xyl_result put_cap(stems *s, size_t i, bool forward, uint32_t branch)
                        sizeof *s->bases))
             return xyl__stems_oom(s);
         s->bases[s->nbase].first = ring->first;
+        s->bases[s->nbase].k = s->k;
         s->bases[s->nbase++].up = ring->tangent;
     }
     if (s->k < 5) return put_flat_cap(s, ring->first, forward, branch);
@@ -545,9 +546,12 @@ static xyl_result flare_root(stems *s, stems_fork_span *spans, size_t nspans)
     return XYL_OK;
 }
 
-xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *from)
+xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *from,
+                                   uint32_t k)
 {
     uint32_t branch = s->sk->nodes[start].branch;
+    if (k != s->k) xyl__stems_set_sides(s, k);
+    s->by_sides[k]++;
     xyl_result r = collect_chain(s, start);
     if (!r) r = make_stations(s, from);
     if (r) return r;

@@ -61,8 +61,8 @@ typedef enum xyl_stems_base {
                                   from alloc */
 } xyl_stems_base;
 
-/* What a checked build did (all 0 but builds when unchecked). Face counts are of the mesh
- * before subdivision. */
+/* What a checked build did (all 0 but builds and the ring sides when unchecked). Face counts
+ * are of the mesh before subdivision. */
 typedef struct xyl_stems_stats {
     uint32_t builds;           /* meshes built: 1, plus one per round of repairs, plus one to
                                   subdivide */
@@ -84,13 +84,20 @@ typedef struct xyl_stems_stats {
                                   warning) */
     size_t skeleton_pairs;     /* intersecting pairs of the mesh that passed that the skeleton's
                                   own overlaps explain */
+    /* Ring sides of the written mesh (docs/stems.md, "Ring sides per branch"), filled by every
+     * build, checked or not: */
+    uint32_t branches_by_sides[33]; /* branch tubes meshed with k sides at [k] (3..32; a branch
+                                  the placement meshes in two pieces counts twice) */
+    uint32_t sides_clamped;    /* laterals given fewer sides than error_world asks for, because
+                                  the branch they grow from has fewer */
 } xyl_stems_stats;
 
 #define XYL_STEMS_MAX_ROOT_FLARE 8.0f /* the widest base: 9 times the root's radius */
 
 typedef struct xyl_stems_desc {
-    uint32_t sides;               /* ring sides k, 3..32; default (0): 4. Even k gives quads
-                                     only; odd k one triangle per cap and per bridge */
+    uint32_t sides;               /* ring sides k, 3..32; default (0): 4; with error_world the
+                                     most any branch gets. Even k gives quads only; odd k one
+                                     triangle per cap and per bridge */
     xyl_normal_mode normals;
     xyl_subdivision subdivision;  /* one level of pre-subdivision; default none */
     bool keep_control_radius;     /* default false: before subdivision, rings are inflated so
@@ -108,6 +115,18 @@ typedef struct xyl_stems_desc {
                                      e^(-d / r) (d the distance from the root, r its radius),
                                      with rings added in the first segment to carry the curve;
                                      0..8 (docs/stems.md, "Root flare") */
+    float error_world;            /* default (0): every branch gets `sides` rings sides. Else a
+                                     radial error budget in skeleton units (> 0, finite): `sides`
+                                     is the most any branch gets, and each branch gets the
+                                     fewest k in 3..sides whose radial error (below) at its
+                                     widest ring (its widest node, times 1 + root_flare on a
+                                     root's branch) is at most error_world, or `sides` if none
+                                     is; a lateral gets no more than the branch it grows from
+                                     (docs/stems.md, "Ring sides per branch") */
+    bool sides_refined;           /* the radial error model of error_world (xyl_stems_ring_error):
+                                     false (default): the ring's own sagitta, r (1 - cos(pi / k));
+                                     true: the ring as the tessellation's circle and arc rules
+                                     refine it (a cubic arc per side) */
     xyl_mesh_limits limits;
     xyl_allocator alloc;
 } xyl_stems_desc;
@@ -122,6 +141,14 @@ typedef struct xyl_stems_desc {
  * mesher and the vertex), and those of xyl_mesh_subdivide. */
 XYL_API xyl_result xyl_stems_build(const xyl_skeleton *skeleton, const xyl_stems_desc *desc,
                                    xyl_mesh **out, xyl_stems_stats *stats, xyl_diag *diag);
+
+/* The worst radial error of a ring of `sides` sides (3..32) around a circle of radius 1, as a
+ * fraction of the radius (scale it by the ring's radius): unrefined, the sagitta
+ * 1 - cos(pi / sides), the inward error at mid-side; refined, the worst outward error of the
+ * cubic arc that the tessellation's circle and arc rules draw over one side (handles
+ * 4/3 tan(pi / (2 sides)) long; docs/stems.md, "Ring sides per branch"). This is the model
+ * error_world is held to. Errors: XYL_ERR_INVALID_ARGUMENT (sides out of range, error NULL). */
+XYL_API xyl_result xyl_stems_ring_error(uint32_t sides, bool refined, double *error);
 
 /* ---- stem LODs: a chain of meshes for growing world errors --------------------------------
  *
@@ -172,9 +199,9 @@ typedef struct xyl_stems_lods {
                                   strictly along the chain */
     uint32_t lod_count;        /* >= 1 */
     bool trunk_only;           /* the last LOD has no lateral left: the chain ends there */
-    float center[3];           /* a sphere around LOD 0's mesh (the coarser ones lie inside
-                                  it), in the skeleton's local coordinates: d for
-                                  xyl_stems_pixel_world is the eye's distance to it */
+    float center[3];           /* a sphere around every LOD's vertices, in the skeleton's
+                                  local coordinates: d for xyl_stems_pixel_world is the eye's
+                                  distance to it */
     float radius;
 } xyl_stems_lods;
 
