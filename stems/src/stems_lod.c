@@ -38,8 +38,8 @@ static xyl_result check_desc(const xyl_stems_lod_desc *d, xyl_diag *diag)
 }
 
 /* The one place where a LOD's mesher options are made from the caller's: every LOD is meshed
- * as the caller asked. A per-LOD setting that follows the budget (ring sides from a world
- * error, say) belongs here. */
+ * as the caller asked. A per-LOD setting that follows the budget belongs here: ring sides
+ * from a world error (md.error_world) are the natural one, not set yet. */
 static xyl_stems_desc lod_stems_desc(const xyl_stems_lod_desc *d, float budget)
 {
     xyl_stems_desc md = d->stems;
