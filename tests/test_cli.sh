@@ -147,7 +147,7 @@ expect 64 "bad base" -- "$XYLEM" mesh --base flat --out "$tmp/x.glb"
 # Stem LODs: one .glb, or one .obj per LOD, each LOD's budget, error, nodes and faces printed.
 expect 0 "stem LODs .glb" -- "$XYLEM" mesh --preset abop-2.8-ternary --lods 4 --out "$tmp/lods.glb"
 contains "4 stem LODs" "the LOD count"
-contains "lod  budget        error         nodes    faces" "the LOD table"
+contains "lod  budget        error         pruned        rings         nodes    faces" "the LOD table"
 contains "wrote $tmp/lods.glb (4 LODs, MSFT_lod)" "one file for the chain"
 expect 0 "stem LODs .obj" -- "$XYLEM" mesh --preset abop-1.24a --lods 3 --lod-error 0.05 --out "$tmp/lods.obj"
 for i in 0 1 2; do

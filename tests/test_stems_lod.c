@@ -289,7 +289,8 @@ static void check_chain(const char *name, const xyl_skeleton *s, const xyl_stems
 static void check_pick_sweep(const xyl_stems_lods *c)
 {
     uint32_t prev = 0, lod = 99;
-    double far = 1e3 * (c->lods[c->lod_count - 1].error + 1.0) / xyl_stems_pixel_world(1.0, 0, 0);
+    double far = 1e3 * (xyl_stems_lod_error(&c->lods[c->lod_count - 1]) + 1.0) /
+                 xyl_stems_pixel_world(1.0, 0, 0);
     for (int k = 0; k <= 400; ++k) {
         double d = far * pow(10.0, (k - 400) / 50.0) * (k > 0);
         assert_int_equal(xyl_stems_lods_pick(c, xyl_stems_pixel_world(d, 0.0f, 0), 0.0f, &lod,
@@ -297,8 +298,8 @@ static void check_pick_sweep(const xyl_stems_lods *c)
         assert_true(lod >= prev && lod < c->lod_count);
         /* the chosen LOD is within the budget and the next one is not */
         double allowed = 0.5 * xyl_stems_pixel_world(d, 0.0f, 0);
-        assert_true(lod == 0 || c->lods[lod].error <= allowed);
-        assert_true(lod + 1 == c->lod_count || !(c->lods[lod + 1].error <= allowed));
+        assert_true(lod == 0 || xyl_stems_lod_error(&c->lods[lod]) <= allowed);
+        assert_true(lod + 1 == c->lod_count || !(xyl_stems_lod_error(&c->lods[lod + 1]) <= allowed));
         if (k == 0) assert_int_equal(lod, 0);
         prev = lod;
     }
@@ -387,6 +388,52 @@ static void options_change_the_chain_as_documented(void **state)
     assert_true(c->trunk_only);
     xyl_stems_lods_destroy(c);
     xyl_skeleton_destroy(lone);
+    xyl_skeleton_destroy(s);
+}
+
+/* Ring sides follow each LOD's budget (unless fixed_sides): at sides 8 every coarser LOD has
+ * fewer faces than the same budget's LOD with every branch at 8, thin branches drop to 3, and
+ * a branch's rings stay within the budget unless it has the most sides already. */
+static void lod_ring_sides_follow_the_budget(void **state)
+{
+    (void)state;
+    xyl_skeleton *s = grow_preset("abop-2.8-ternary");
+    xyl_stems_lod_desc d = {0};
+    d.stems.sides = 8;
+    d.max_lods = XYL_STEMS_LOD_MAX;
+    xyl_stems_lods *follow = NULL, *fixed = NULL;
+    assert_int_equal(xyl_stems_lods_build(s, &d, &follow, NULL), XYL_OK);
+    d.fixed_sides = true;
+    assert_int_equal(xyl_stems_lods_build(s, &d, &fixed, NULL), XYL_OK);
+    check_chain("ternary sides 8 following", s, follow);
+    check_chain("ternary sides 8 fixed", s, fixed);
+    double e8 = 0.0;
+    assert_int_equal(xyl_stems_ring_error(8, false, &e8), XYL_OK);
+    for (uint32_t i = 0; i < follow->lod_count; ++i) {
+        const xyl_stems_lod *l = &follow->lods[i];
+        const xyl_stems_lod *f = NULL;
+        for (uint32_t j = 0; j < fixed->lod_count; ++j)
+            if (fixed->lods[j].budget == l->budget) f = &fixed->lods[j];
+        print_message("LOD %u budget %g: %zu faces, ring error %g (every branch at 8: %zu faces, "
+                      "ring error %g), k = 3 on %u branches\n", i, (double)l->budget,
+                      l->face_count, (double)l->ring_error, f ? f->face_count : 0,
+                      f ? (double)f->ring_error : 0.0, l->stats.branches_by_sides[3]);
+        if (i == 0) { /* budget 0: the caller's own sides */
+            assert_non_null(f);
+            assert_int_equal(l->face_count, f->face_count);
+            continue;
+        }
+        if (f) assert_true(l->face_count < f->face_count);
+        assert_true(l->stats.branches_by_sides[3] > 0);
+        /* a branch below 8 sides is within the budget; one at 8 no worse than at LOD 0 */
+        assert_true(l->ring_error <= fmax((double)l->budget, (double)follow->lods[0].ring_error));
+    }
+    /* LOD 0's rings: every branch at 8, the widest one's error */
+    float widest = 0.0f;
+    for (size_t i = 0; i < s->node_count; ++i) widest = fmaxf(widest, s->nodes[i].radius);
+    assert_true(fabs(follow->lods[0].ring_error - widest * e8) <= 1e-6 * widest);
+    xyl_stems_lods_destroy(follow);
+    xyl_stems_lods_destroy(fixed);
     xyl_skeleton_destroy(s);
 }
 
@@ -503,8 +550,8 @@ static void the_glb_holds_every_lod_behind_msft_lod(void **state)
         snprintf(want, sizeof want, "\"extras\":{\"lod\":%u,\"error_world\":", i);
         const char *at = strstr(json, want);
         assert_non_null(at);
-        assert_true(fabs(strtod(at + strlen(want), NULL) - (double)c->lods[i].error) <=
-                    1e-6 * (double)c->lods[i].error);
+        double e = (double)xyl_stems_lod_error(&c->lods[i]);
+        assert_true(fabs(strtod(at + strlen(want), NULL) - e) <= 1e-6 * e);
     }
     free(json);
     free(buf);
@@ -537,6 +584,7 @@ int main(void)
         cmocka_unit_test(prune_rejects_bad_input),
         cmocka_unit_test(every_preset_gets_a_chain_of_closed_coarser_lods),
         cmocka_unit_test(options_change_the_chain_as_documented),
+        cmocka_unit_test(lod_ring_sides_follow_the_budget),
         cmocka_unit_test(the_pick_sees_a_pixel_as_the_foliage_pick_does),
         cmocka_unit_test(lods_reject_bad_input),
         cmocka_unit_test(the_glb_holds_every_lod_behind_msft_lod),

@@ -1075,11 +1075,16 @@ static int mesh_lods(const options *o, const xyl_skeleton *sk, const char *sourc
     double t2 = now_seconds();
     printf("%s: %zu nodes -> %u stem LODs%s\n", source, sk->node_count, c->lod_count,
            c->trunk_only ? " (the last is the trunk alone)" : "");
-    printf("  lod  budget        error         nodes    faces  subtrees cut\n");
+    printf("  lod  budget        error         pruned        rings         nodes    faces  "
+           "subtrees cut  sides (branches)\n");
     for (uint32_t i = 0; i < c->lod_count; ++i) {
         const xyl_stems_lod *l = &c->lods[i];
-        printf("  %3u  %-12.6g  %-12.6g  %6zu  %7zu  %7zu\n", i, (double)l->budget,
-               (double)l->error, l->node_count, l->face_count, l->subtrees_removed);
+        printf("  %3u  %-12.6g  %-12.6g  %-12.6g  %-12.6g  %6zu  %7zu  %12zu ", i,
+               (double)l->budget, (double)xyl_stems_lod_error(l), (double)l->error,
+               (double)l->ring_error, l->node_count, l->face_count, l->subtrees_removed);
+        for (uint32_t k = 3; k <= 32; ++k)
+            if (l->stats.branches_by_sides[k]) printf(" %u:%u", k, l->stats.branches_by_sides[k]);
+        printf("\n");
     }
     printf("  sphere: centre (%g, %g, %g), radius %g (skeleton coordinates)\n",
            (double)c->center[0], (double)c->center[1], (double)c->center[2], (double)c->radius);

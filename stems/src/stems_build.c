@@ -566,10 +566,12 @@ static xyl_result build_once(const xyl_skeleton *skeleton, const xyl_stems_desc 
     s.limit_centres = inflate;
     s.open_base = desc->base == XYL_STEMS_BASE_OPEN;
     s.root_flare = desc->root_flare;
+    s.sides_refined = desc->sides_refined;
     r = build_all(&s, inflate);
     if (!r && st) {
         memcpy(st->branches_by_sides, s.by_sides, sizeof st->branches_by_sides);
         st->sides_clamped = s.clamped;
+        st->ring_error_max = s.ring_error_max;
     }
     if (!r) r = check_finite(&s);
     if (!r && (uint64_t)s.nq > s.max_faces)
@@ -740,7 +742,7 @@ static double arc_radius_error(double phi, double h, double t)
  * symmetric about t = 1/2, where the circle rule makes it exact, and it lies outside the circle
  * in between; the worst point is found by sampling [0, 1/2] and a golden-section search around
  * the best sample (unimodal there), to about 1e-12 of the radius. */
-static double ring_error(uint32_t k, bool refined)
+XYL__STEMS_SHARED double xyl__stems_ring_error(uint32_t k, bool refined)
 {
     const double phi = 2.0 * XYL__PI / (double)k;
     if (!refined) return 1.0 - cos(0.5 * phi);
@@ -767,7 +769,7 @@ xyl_result xyl_stems_ring_error(uint32_t sides, bool refined, double *error)
     if (sides < 3 || sides > 32 || !error)
         return xyl__fail(NULL, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "sides must be 3..32 and error not NULL");
-    *error = ring_error(sides, refined);
+    *error = xyl__stems_ring_error(sides, refined);
     return XYL_OK;
 }
 
@@ -794,7 +796,7 @@ static xyl_result budget_sides(const xyl_skeleton *sk, const xyl_stems_desc *d, 
         widest[n->branch] = fmax(widest[n->branch], r);
     }
     double e[33];
-    for (uint32_t k = 3; k <= kmax; ++k) e[k] = ring_error(k, d->sides_refined);
+    for (uint32_t k = 3; k <= kmax; ++k) e[k] = xyl__stems_ring_error(k, d->sides_refined);
     for (size_t b = 0; b < nb; ++b) {
         uint32_t k = 3;
         while (k < kmax && !(widest[b] * e[k] <= (double)d->error_world)) ++k;

@@ -80,6 +80,9 @@ typedef struct stems {
     uint32_t per_band_min; /* the fewest patches a band offers any lateral (ring_bound) */
     uint32_t by_sides[33]; /* branch tubes built with k sides, at [k] */
     uint32_t clamped;      /* laterals that got fewer sides than their budget's */
+    bool sides_refined;    /* xyl_stems_desc.sides_refined: the model of ring_error_max */
+    double ring_error_max; /* the largest radial ring error of a tube built: its widest node's
+                              radius times the model's error of its k */
     stems_sides tab[33];   /* per k in use */
     double inflate;     /* ring radius factor before Catmull-Clark: 1 / mean limit radius */
     bool limit_centres; /* before subdivision: ring centres moved against the limit's pull */
@@ -319,6 +322,9 @@ XYL__STEMS_SHARED xyl_result xyl__stems_put_tri(stems *s, uint32_t a, uint32_t b
 XYL__STEMS_SHARED xyl_result xyl__stems_index_tree(stems *s);
 
 /* ---- a branch's tube (stems_rings.c) ------------------------------------------------------- */
+
+/* The worst radial error of a unit ring of k sides (xyl_stems_ring_error's model). */
+XYL__STEMS_SHARED double xyl__stems_ring_error(uint32_t k, bool refined);
 
 /* Builds the branch that starts at node start with rings of k sides: its tube, caps and the
  * bridges of its laterals, whose branches it queues in s->pending. from: the bridge ring a

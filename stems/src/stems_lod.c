@@ -37,14 +37,19 @@ static xyl_result check_desc(const xyl_stems_lod_desc *d, xyl_diag *diag)
     return XYL_OK;
 }
 
-/* The one place where a LOD's mesher options are made from the caller's: every LOD is meshed
- * as the caller asked. A per-LOD setting that follows the budget belongs here: ring sides
- * from a world error (md.error_world) are the natural one, not set yet. */
+/* The one place where a LOD's mesher options are made from the caller's: as the caller asked,
+ * but for the ring sides, which follow the budget unless fixed_sides (a branch whose rings
+ * are within the budget is no worse than a twig pruned at it). */
 static xyl_stems_desc lod_stems_desc(const xyl_stems_lod_desc *d, float budget)
 {
     xyl_stems_desc md = d->stems;
-    (void)budget;
+    if (!d->fixed_sides && budget > md.error_world) md.error_world = budget;
     return md;
+}
+
+float xyl_stems_lod_error(const xyl_stems_lod *lod)
+{
+    return lod ? fmaxf(lod->error, lod->ring_error) : 0.0f;
 }
 
 static void chain_free(chain *c)
@@ -135,6 +140,7 @@ static xyl_result try_lod(chain *c, const xyl_skeleton *s, const xyl_stems_lod_d
     l->mesh = mesh;
     l->budget = budget;
     l->error = st.max_removed_width;
+    l->ring_error = (float)ms.ring_error_max;
     l->node_count = pruned->node_count;
     l->branch_count = pruned->branch_count;
     l->face_count = faces;
@@ -220,7 +226,8 @@ xyl_result xyl_stems_lods_pick(const xyl_stems_lods *lods, double pixel_world, f
                          pixel_world, (double)error_px);
     double allowed = (double)(error_px > 0.0f ? error_px : DEFAULT_ERROR_PX) * pixel_world;
     uint32_t i = 0; /* the errors grow along the chain: the last one within */
-    while (i + 1 < lods->lod_count && (double)lods->lods[i + 1].error <= allowed) ++i;
+    while (i + 1 < lods->lod_count && (double)xyl_stems_lod_error(&lods->lods[i + 1]) <= allowed)
+        ++i;
     *lod = i;
     xyl__diag_ok(diag);
     return XYL_OK;
@@ -278,7 +285,7 @@ static void lod_body(const void *ctx, xyl__sink *s)
         xyl__put_str(s, ",\"extras\":{\"lod\":");
         xyl__put_uint(s, i);
         xyl__put_str(s, ",\"error_world\":");
-        xyl__put_float(s, d->chain->lods[i].error);
+        xyl__put_float(s, xyl_stems_lod_error(&d->chain->lods[i]));
         xyl__put_str(s, "}}");
     }
     if (any) xyl__put_str(s, "]");

@@ -553,7 +553,14 @@ xyl_result xyl__stems_build_branch(stems *s, uint32_t start, const stems_ring *f
     if (k != s->k) xyl__stems_set_sides(s, k);
     s->by_sides[k]++;
     xyl_result r = collect_chain(s, start);
-    if (!r) r = make_stations(s, from);
+    if (r) return r;
+    double widest = 0.0; /* the ring error's radius, as budget_sides takes it */
+    for (size_t i = 0; i < s->nchain; ++i) {
+        const xyl_skel_node *n = &s->sk->nodes[s->chain[i]];
+        widest = fmax(widest, (double)n->radius * (n->parent < 0 ? 1.0 + s->root_flare : 1.0));
+    }
+    s->ring_error_max = fmax(s->ring_error_max, widest * xyl__stems_ring_error(k, s->sides_refined));
+    r = make_stations(s, from);
     if (r) return r;
     xyl__dvec3 dir = from ? from->tangent : xyl__d3(0, 1, 0);
     if (!from && s->nchain > 1)

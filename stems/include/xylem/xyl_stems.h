@@ -90,6 +90,10 @@ typedef struct xyl_stems_stats {
                                   the placement meshes in two pieces counts twice) */
     uint32_t sides_clamped;    /* laterals given fewer sides than error_world asks for, because
                                   the branch they grow from has fewer */
+    double ring_error_max;     /* the largest radial error of a meshed tube's rings under the
+                                  sides_refined model (xyl_stems_ring_error): its widest node's
+                                  radius (a root's times 1 + root_flare) times its k's error;
+                                  world units, with or without error_world */
 } xyl_stems_stats;
 
 #define XYL_STEMS_MAX_ROOT_FLARE 8.0f /* the widest base: 9 times the root's radius */
@@ -179,14 +183,23 @@ typedef struct xyl_stems_lod_desc {
     float factor;          /* each LOD's budget over the one before, finite, > 1; default (0):
                               2. From a budget of 0 the next is factor times the thinnest
                               node's diameter 2 r */
+    bool fixed_sides;      /* default false: each LOD's ring sides follow its budget too
+                              (stems.error_world raised to the budget, so a branch gets the
+                              fewest sides, up to stems.sides, whose ring error under
+                              stems.sides_refined's model is within it); true: every LOD is
+                              meshed with stems as given */
 } xyl_stems_lod_desc;
 
 typedef struct xyl_stems_lod {
     xyl_mesh *mesh;          /* closed, owned by the chain (xyl_stems_build's guarantees) */
     float budget;            /* the prune width: every subtree thinner than this was removed,
                                 world units */
-    float error;             /* the measured world error: the widest removed node's diameter
-                                2 r (< budget; 0 when nothing was removed), world units */
+    float error;             /* the measured world error of the pruning: the widest removed
+                                node's diameter 2 r (< budget; 0 when nothing was removed),
+                                world units */
+    float ring_error;        /* the rings' largest radial error (stats.ring_error_max, under
+                                stems.sides_refined's model), world units; the LOD's error is
+                                the larger of the two (xyl_stems_lod_error) */
     size_t node_count;       /* of the pruned skeleton */
     uint32_t branch_count;   /* of the pruned skeleton */
     size_t face_count;       /* quads + triangles of the mesh */
@@ -222,8 +235,11 @@ XYL_API void xyl_stems_lods_destroy(xyl_stems_lods *lods);
  * eye to the chain's sphere (|eye - center| - radius), clamped at 0 inside it. */
 XYL_API double xyl_stems_pixel_world(double d, float fovy, uint32_t viewport_height);
 
+/* A LOD's world error: the larger of its pruning's and its rings' (xyl_stems_lod). */
+XYL_API float xyl_stems_lod_error(const xyl_stems_lod *lod);
+
 /* The coarsest LOD whose error is at most error_px pixels of pixel_world world units each:
- * lods[i].error <= error_px * pixel_world (error_px 0: 0.5 px, foliage's default); LOD 0 when
+ * xyl_stems_lod_error(&lods[i]) <= error_px * pixel_world (error_px 0: 0.5 px, foliage's default); LOD 0 when
  * none is. Never coarser for a smaller pixel_world: 0 (the eye inside the sphere) gives LOD 0,
  * +inf the coarsest. Allocates nothing.
  * Errors: XYL_ERR_INVALID_ARGUMENT (NULL chain or lod, an empty chain, pixel_world or error_px
