@@ -20,6 +20,10 @@ typedef struct xyl__skeleton {
 /* Runs the checks of xyl_skeleton_create without copying. */
 xyl_result xyl__skeleton_validate(const xyl_skeleton_desc *desc, xyl_diag *diag);
 
+/* A skeleton view (public, so possibly built by the caller) checked like a desc, without
+ * limits: what the writers and the pruning walk rely on (parents before children ...). */
+xyl_result xyl__skeleton_check_view(const xyl_skeleton *sk, xyl_diag *diag);
+
 /* Takes ownership of nodes/leaves (allocated with alloc; freed on failure too), derives branch
  * ids and orders and wraps them in a skeleton whose positions are relative to origin (NULL: 0).
  * The arrays and the origin must already be valid. */

@@ -726,16 +726,7 @@ static void render_obj(const xyl_skeleton *sk, sink *s)
 /* The view is public, so it is checked like a desc: the writers index and print it. */
 static xyl_result check_view(const xyl_skeleton *sk, xyl_diag *diag)
 {
-    xyl_skeleton_desc d;
-    memset(&d, 0, sizeof d);
-    d.nodes = sk->nodes;
-    d.node_count = sk->node_count;
-    d.leaves = sk->leaves;
-    d.leaf_count = sk->leaf_count;
-    d.limits.max_nodes = UINT64_MAX;
-    d.limits.max_leaves = UINT64_MAX;
-    memcpy(d.origin, sk->origin, sizeof d.origin);
-    return xyl__skeleton_validate(&d, diag);
+    return xyl__skeleton_check_view(sk, diag);
 }
 
 static bool format_ok(xyl_skel_format format)

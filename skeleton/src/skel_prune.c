@@ -61,15 +61,7 @@ static xyl_result check(const xyl_skeleton *s, float min_width, xyl_diag *diag)
                          "the prune width is %g; it must be finite and >= 0 (world units)",
                          (double)min_width);
     /* a caller-built view must hold what the walk relies on: parents before children */
-    xyl_skeleton_desc d = {0};
-    d.nodes = s->nodes;
-    d.node_count = s->node_count;
-    d.leaves = s->leaves;
-    d.leaf_count = s->leaf_count;
-    d.limits.max_nodes = UINT64_MAX;
-    d.limits.max_leaves = UINT64_MAX;
-    memcpy(d.origin, s->origin, sizeof d.origin);
-    return xyl__skeleton_validate(&d, diag);
+    return xyl__skeleton_check_view(s, diag);
 }
 
 xyl_result xyl_skeleton_prune(const xyl_skeleton *s, float min_width,

@@ -179,6 +179,20 @@ xyl_result xyl__skeleton_validate(const xyl_skeleton_desc *desc, xyl_diag *diag)
     return validate(desc, diag);
 }
 
+xyl_result xyl__skeleton_check_view(const xyl_skeleton *sk, xyl_diag *diag)
+{
+    xyl_skeleton_desc d;
+    memset(&d, 0, sizeof d);
+    d.nodes = sk->nodes;
+    d.node_count = sk->node_count;
+    d.leaves = sk->leaves;
+    d.leaf_count = sk->leaf_count;
+    d.limits.max_nodes = UINT64_MAX;
+    d.limits.max_leaves = UINT64_MAX;
+    memcpy(d.origin, sk->origin, sizeof d.origin);
+    return validate(&d, diag);
+}
+
 void xyl_skeleton_destroy(xyl_skeleton *skeleton)
 {
     if (!skeleton) return;
