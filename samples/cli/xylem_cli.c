@@ -1244,8 +1244,8 @@ static void frame_camera(const options *o, render_job *j)
 /* render --error-px E given: one screen budget for the whole tree (docs/cli.md). W, the world
  * size of E px at the near side of the tree's bounding sphere as the default camera frames it,
  * prunes every twig narrower than W (a removed twig shows at most E px, where no other surface
- * of the tree is drawn); the rings get the fewest sides within W / 2 (refined arcs: the surface
- * is tessellated) and the tessellation E / 2 px, two errors of the one drawn surface that add
+ * of the tree is drawn); the rings get the fewest sides, up to --sides or 16, within W / 2
+ * (refined arcs under --variant circle or arc, else the sagitta) and the tessellation E / 2 px, two errors of the one drawn surface that add
  * up to at most E px. Farther points see every share smaller. */
 static int budget_stems(const options *o, render_job *j, const xyl_skeleton *sk,
                         const char *source)
@@ -1276,7 +1276,10 @@ static int budget_stems(const options *o, render_job *j, const xyl_skeleton *sk,
     xyl_result r = xyl_tess_view_world_error(&v, c, sqrtf(r2), &w, &d);
     if (r == XYL_OK) r = xyl_skeleton_prune(sk, w, NULL, &pruned, &ps, &d);
     desc.error_world = 0.5f * w;
-    desc.sides_refined = true;
+    /* the circle and arc rules round a ring to its refined-arc error; pn and rounded leave
+     * errors below the ring's sagitta (docs/tessellation.md), which then bounds them */
+    desc.sides_refined = o->render.variant == XYL_TESS_CIRCLE || o->render.variant == XYL_TESS_ARC;
+    if (!o->stems.sides) desc.sides = 16; /* no --sides: the budget may ask up to 16 */
     if (r == XYL_OK) r = xyl_stems_build(pruned, &desc, &m, &st, &d);
     xyl_skeleton_destroy(pruned);
     if (r != XYL_OK) return report(source, r, &d);
