@@ -8,8 +8,11 @@
  * error target the cheapest configuration.
  *
  * usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]
+ *                   [--budget E]
  *   --dat FILE writes every row to FILE and the Pareto front to FILE.front (scripts/plot_tess.gp
- *   plots both). */
+ *   plots both). --budget E prints the budget rows instead (CPU only): for the default tree and
+ *   two leafy presets' stems at three camera distances, fixed k = 4 with adaptive levels at E px
+ *   against one budget of E px choosing pruning, ring sides and levels (budget_rows). */
 #define _POSIX_C_SOURCE 200809L
 
 #include <math.h>
@@ -37,6 +40,7 @@ typedef struct bench_opts {
     const char *dat;
     uint32_t sides[8], nsides;  /* --sides: ring sides to run; default 3, 4, 6, 8 */
     double max_triangles;       /* --max-triangles: configurations above it are skipped */
+    double budget_px;           /* --budget E: the budget rows alone */
 } bench_opts;
 
 typedef struct row {
@@ -88,10 +92,10 @@ static xyl_skeleton *arc_skeleton(void)
     return sk;
 }
 
-static xyl_skeleton *default_tree(void)
+static xyl_skeleton *preset_tree(const char *name)
 {
     xyl_grammar_desc gd = {0};
-    gd.source = xyl_lsystem_preset_source(xyl_lsystem_default_preset());
+    gd.source = xyl_lsystem_preset_source(name);
     xyl_grammar *g = NULL;
     xyl_lstring *s = NULL;
     xyl_skeleton *sk = NULL;
@@ -99,10 +103,15 @@ static xyl_skeleton *default_tree(void)
     xyl_result r = xyl_grammar_parse(&gd, &g, &d);
     if (!r) r = xyl_lsystem_derive(g, NULL, &s, &d);
     if (!r) r = xyl_lsystem_interpret(g, s, NULL, &sk, &d);
-    if (r) die("default tree", r, &d);
+    if (r) die(name, r, &d);
     xyl_lstring_destroy(s);
     xyl_grammar_destroy(g);
     return sk;
+}
+
+static xyl_skeleton *default_tree(void)
+{
+    return preset_tree(xyl_lsystem_default_preset());
 }
 
 static xyl_mesh *mesh_of(const xyl_skeleton *sk, uint32_t k, uint32_t subdiv)
@@ -448,6 +457,232 @@ static int write_front(const row *rows, size_t n, const char *path)
     return 0;
 }
 
+/* ---- one budget for the whole tree (--budget E) --------------------------------------------
+
+ * Screen-space error of a drawn stem surface against the skeleton's round tubes (every segment
+ * a cone from its parent's radius to its node's, ends rounded: the union's distance is the least
+ * |p - axis| - r over the segments), in pixels at each point's own distance from the eye. Points:
+ * every refined vertex, and in every flat triangle its centroid and edge midpoints. A node that
+ * pruning removed counts once more with its projected width 2 r. Both rows are measured so; the
+ * tubes are not the mesher's joints and caps, whose shape counts the same in both rows. */
+
+typedef struct tube {
+    float a[3], b[3], ra, rb, c[3], reach; /* c, reach: a sphere around the cone */
+} tube;
+
+static double tube_distance(const tube *t, const float p[3])
+{
+    double ab[3], ap[3], l2 = 0.0, dot = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        ab[k] = (double)t->b[k] - t->a[k];
+        ap[k] = (double)p[k] - t->a[k];
+        l2 += ab[k] * ab[k];
+        dot += ab[k] * ap[k];
+    }
+    double u = l2 > 0.0 ? dot / l2 : 0.0;
+    u = u < 0.0 ? 0.0 : (u > 1.0 ? 1.0 : u);
+    double q2 = 0.0;
+    for (int k = 0; k < 3; ++k) q2 += (ap[k] - u * ab[k]) * (ap[k] - u * ab[k]);
+    return sqrt(q2) - (t->ra + u * (t->rb - t->ra));
+}
+
+typedef struct screen_err {
+    double max, sum2;
+    size_t n;
+} screen_err;
+
+static void screen_point(screen_err *e, const tube *tubes, size_t nt, const float p[3],
+                         const float eye[3], double per_distance)
+{
+    double best = INFINITY;
+    for (size_t i = 0; i < nt; ++i) {
+        const tube *t = &tubes[i];
+        double dc = sqrt(((double)p[0] - t->c[0]) * (p[0] - t->c[0]) +
+                         ((double)p[1] - t->c[1]) * (p[1] - t->c[1]) +
+                         ((double)p[2] - t->c[2]) * (p[2] - t->c[2]));
+        if (dc - t->reach > best) continue; /* no point of this tube is nearer */
+        double dd = tube_distance(t, p);
+        if (fabs(dd) < fabs(best)) best = dd;
+        else if (dd < 0.0 && best > 0.0) best = dd; /* inside a tube: inside the union */
+    }
+    double dist = sqrt(((double)p[0] - eye[0]) * (p[0] - eye[0]) +
+                       ((double)p[1] - eye[1]) * (p[1] - eye[1]) +
+                       ((double)p[2] - eye[2]) * (p[2] - eye[2]));
+    double px = fabs(best) / (dist * per_distance);
+    e->max = fmax(e->max, px);
+    e->sum2 += px * px;
+    e->n++;
+}
+
+static void screen_mesh(screen_err *e, const tube *tubes, size_t nt, const xyl_mesh *m,
+                        const float eye[3], double per_distance)
+{
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
+        screen_point(e, tubes, nt, p, eye, per_distance);
+    }
+    static const float w[4][3] = {{1 / 3.f, 1 / 3.f, 1 / 3.f}, {.5f, .5f, 0}, {0, .5f, .5f}, {.5f, 0, .5f}};
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        xyl_vec3 c[3];
+        for (int i = 0; i < 3; ++i) c[i] = m->positions[m->triangles[3 * t + (size_t)i]];
+        for (int s = 0; s < 4; ++s) {
+            const float p[3] = {w[s][0] * c[0].x + w[s][1] * c[1].x + w[s][2] * c[2].x,
+                                w[s][0] * c[0].y + w[s][1] * c[1].y + w[s][2] * c[2].y,
+                                w[s][0] * c[0].z + w[s][1] * c[1].z + w[s][2] * c[2].z};
+            screen_point(e, tubes, nt, p, eye, per_distance);
+        }
+    }
+}
+
+/* Nodes of sk that pruning removed: the kept ones are in pruned in the same order with the same
+ * position and radius, so one walk pairs them; each removed node counts its projected width. */
+static size_t screen_pruned(screen_err *e, const xyl_skeleton *sk, const xyl_skeleton *pruned,
+                            const float eye[3], double per_distance)
+{
+    size_t j = 0, removed = 0;
+    for (size_t i = 0; i < sk->node_count; ++i) {
+        const xyl_skel_node *n = &sk->nodes[i];
+        if (j < pruned->node_count && pruned->nodes[j].radius == n->radius &&
+            pruned->nodes[j].pos.x == n->pos.x && pruned->nodes[j].pos.y == n->pos.y &&
+            pruned->nodes[j].pos.z == n->pos.z) {
+            ++j;
+            continue;
+        }
+        double dx = n->pos.x - eye[0], dy = n->pos.y - eye[1], dz = n->pos.z - eye[2];
+        double px = 2.0 * n->radius / (sqrt(dx * dx + dy * dy + dz * dz) * per_distance);
+        e->max = fmax(e->max, px);
+        e->sum2 += px * px;
+        e->n++;
+        ++removed;
+    }
+    return removed;
+}
+
+static tube *tubes_of(const xyl_skeleton *sk, size_t *count)
+{
+    tube *t = calloc(sk->node_count ? sk->node_count : 1, sizeof *t);
+    size_t n = 0;
+    for (size_t i = 0; t && i < sk->node_count; ++i) {
+        const xyl_skel_node *b = &sk->nodes[i];
+        if (b->parent < 0) continue;
+        const xyl_skel_node *a = &sk->nodes[b->parent];
+        tube *u = &t[n++];
+        u->a[0] = a->pos.x, u->a[1] = a->pos.y, u->a[2] = a->pos.z;
+        u->b[0] = b->pos.x, u->b[1] = b->pos.y, u->b[2] = b->pos.z;
+        u->ra = a->radius, u->rb = b->radius;
+        double h2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            u->c[k] = 0.5f * (u->a[k] + u->b[k]);
+            h2 += 0.25 * ((double)u->b[k] - u->a[k]) * ((double)u->b[k] - u->a[k]);
+        }
+        u->reach = (float)(sqrt(h2) + fmax(u->ra, u->rb)) * 1.0001f;
+    }
+    if (!t) die("tubes", XYL_ERR_OUT_OF_MEMORY, NULL);
+    *count = n;
+    return t;
+}
+
+/* The stems of sk meshed with desc, levels chosen for view, refined on the CPU. */
+static xyl_mesh *refine_view(const xyl_skeleton *sk, const xyl_stems_desc *desc,
+                             const xyl_tess_patterns *pat, const xyl_tess_view *view,
+                             uint64_t *triangles, xyl_stems_stats *st)
+{
+    xyl_mesh *m = NULL, *refined = NULL;
+    xyl_tess_patches *tp = NULL;
+    xyl_tess_batches *b = NULL;
+    xyl_tess_patches_desc pd = {0};
+    pd.variant = XYL_TESS_CIRCLE;
+    xyl_diag d = {0};
+    xyl_result r = xyl_stems_build(sk, desc, &m, st, &d);
+    if (!r) r = xyl_tess_patches_create(m, &pd, &tp, &d);
+    if (!r) r = xyl_tess_batches_create(NULL, &b, &d);
+    if (!r) r = xyl_tess_select(tp, pat, view, b, &d);
+    if (!r) r = xyl_tess_refine(tp, pat, b, NULL, NULL, &refined, &d);
+    if (r) die("budget row", r, &d);
+    *triangles = b->triangles;
+    xyl_tess_batches_destroy(b);
+    xyl_tess_patches_destroy(tp);
+    xyl_mesh_destroy(m);
+    return refined;
+}
+
+static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
+{
+    const char *trees[] = {xyl_lsystem_default_preset(), "faycal-leaves", "abop-2.6-monopodial"};
+    static const float zooms[] = {1.0f, 4.0f, 16.0f};
+    const double E = o->budget_px;
+    printf("Budget rows: stems only, circle rule, %u px viewport, E = %g px; (a) k = 4, nothing "
+           "pruned, levels at E px; (b) E px -> W world units at the tree's near side: twigs under "
+           "W pruned, sides within W/2 (refined arcs, up to 16), levels at E/2 px. Error: against "
+           "the skeleton's round tubes, in px at each point's distance; a pruned node counts its "
+           "projected width.\n", o->size, E);
+    printf("| tree | distance | W | (a) triangles | (a) max px | (a) RMS px | (b) triangles | "
+           "(b) max px | (b) RMS px | (b) nodes pruned | (b)/(a) triangles |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (size_t ti = 0; ti < sizeof trees / sizeof trees[0]; ++ti) {
+        xyl_skeleton *sk = preset_tree(trees[ti]);
+        size_t nt = 0;
+        tube *tubes = tubes_of(sk, &nt);
+        xyl_mesh *k4 = mesh_of(sk, 4, 0);
+        float lo[3], hi[3], c[3], r2 = 0.0f, size = 0.0f;
+        xyl_mesh_bounds(k4, lo, hi);
+        for (int k = 0; k < 3; ++k) {
+            c[k] = 0.5f * (lo[k] + hi[k]);
+            r2 += 0.25f * (hi[k] - lo[k]) * (hi[k] - lo[k]);
+            size = fmaxf(size, hi[k] - lo[k]);
+        }
+        xyl_mesh_destroy(k4);
+        for (size_t zi = 0; zi < 3; ++zi) {
+            xyl_tess_camera cam;
+            xyl_tess_camera_frame(lo, hi, 0.5f, 0.2f, 0.8f, 1.0f, &cam);
+            if (zooms[zi] != 1.0f) xyl_tess_camera_zoom(&cam, zooms[zi]);
+            xyl_tess_view v = {0};
+            memcpy(v.eye, cam.eye, sizeof v.eye);
+            v.fovy = cam.fovy;
+            v.viewport_height = o->size;
+            v.error_px = (float)E;
+            v.near_distance = fmaxf(1e-3f * size, 1e-30f);
+            double per_distance = 2.0 * tan(0.5 * (double)cam.fovy) / o->size;
+            /* (a) */
+            xyl_stems_desc da = {0};
+            da.sides = 4;
+            uint64_t ta = 0, tb = 0;
+            xyl_stems_stats st = {0};
+            xyl_mesh *ra = refine_view(sk, &da, pat, &v, &ta, &st);
+            screen_err ea = {0};
+            screen_mesh(&ea, tubes, nt, ra, v.eye, per_distance);
+            xyl_mesh_destroy(ra);
+            /* (b) */
+            float w = 0.0f;
+            xyl_diag d = {0};
+            xyl_skeleton *pruned = NULL;
+            xyl_result r = xyl_tess_view_world_error(&v, c, sqrtf(r2), &w, &d);
+            if (!r) r = xyl_skeleton_prune(sk, w, NULL, &pruned, NULL, &d);
+            if (r) die("budget", r, &d);
+            xyl_stems_desc db = {0};
+            db.sides = 16;
+            db.error_world = 0.5f * w;
+            db.sides_refined = true;
+            xyl_tess_view vb = v;
+            vb.error_px = (float)(0.5 * E);
+            xyl_mesh *rb = refine_view(pruned, &db, pat, &vb, &tb, &st);
+            screen_err eb = {0};
+            screen_mesh(&eb, tubes, nt, rb, v.eye, per_distance);
+            size_t removed = screen_pruned(&eb, sk, pruned, v.eye, per_distance);
+            xyl_mesh_destroy(rb);
+            xyl_skeleton_destroy(pruned);
+            printf("| %s | %gx | %.4g | %llu | %.3f | %.3f | %llu | %.3f | %.3f | %zu of %zu | "
+                   "%.3f |\n", trees[ti], (double)zooms[zi], (double)w, (unsigned long long)ta,
+                   ea.max, sqrt(ea.sum2 / (double)(ea.n ? ea.n : 1)), (unsigned long long)tb,
+                   eb.max, sqrt(eb.sum2 / (double)(eb.n ? eb.n : 1)), removed, sk->node_count,
+                   ta ? (double)tb / (double)ta : 0.0);
+            fflush(stdout);
+        }
+        free(tubes);
+        xyl_skeleton_destroy(sk);
+    }
+}
+
 static void parse(int argc, char **argv, bench_opts *o)
 {
     o->gpu = true;
@@ -459,6 +694,13 @@ static void parse(int argc, char **argv, bench_opts *o)
         else if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) o->frames = atoi(argv[++i]);
         else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) o->size = (uint32_t)atoi(argv[++i]);
         else if (strcmp(argv[i], "--dat") == 0 && i + 1 < argc) o->dat = argv[++i];
+        else if (strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
+            o->budget_px = atof(argv[++i]);
+            if (!(o->budget_px > 0.0 && o->budget_px <= 1e6)) {
+                fprintf(stderr, "bench_tess: --budget takes a positive number of pixels\n");
+                exit(64);
+            }
+        }
         else if (strcmp(argv[i], "--max-triangles") == 0 && i + 1 < argc) {
             o->max_triangles = atof(argv[++i]);
             if (!(o->max_triangles >= 1.0)) {
@@ -482,7 +724,7 @@ static void parse(int argc, char **argv, bench_opts *o)
             bool help = strcmp(argv[i], "--help") == 0;
             fprintf(help ? stdout : stderr,
                     "usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]"
-                    " [--sides K,K,...] [--max-triangles N]\n");
+                    " [--sides K,K,...] [--max-triangles N] [--budget E]\n");
             exit(help ? 0 : 64);
         }
     }
@@ -511,6 +753,11 @@ int main(int argc, char **argv)
     xyl_diag d = {0};
     xyl_result r = xyl_tess_patterns_create(0, NULL, &pat, &d);
     if (r) die("patterns", r, &d);
+    if (o.budget_px > 0.0) {
+        budget_rows(pat, &o);
+        xyl_tess_patterns_destroy(pat);
+        return 0;
+    }
     xyl_skeleton *arc = arc_skeleton(), *tree = default_tree();
     arc_centreline(arc);
     gpu g = {0};

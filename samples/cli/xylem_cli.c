@@ -1245,8 +1245,9 @@ static void frame_camera(const options *o, render_job *j)
  * size of E px at the near side of the tree's bounding sphere as the default camera frames it,
  * prunes every twig narrower than W (a removed twig shows at most E px, where no other surface
  * of the tree is drawn); the rings get the fewest sides, up to --sides or 16, within W / 2
- * (refined arcs under --variant circle or arc, else the sagitta) and the tessellation E / 2 px, two errors of the one drawn surface that add
- * up to at most E px. Farther points see every share smaller. */
+ * (refined arcs under --variant circle or arc, else the sagitta) and the tessellation what the
+ * rings leave of E px, E (1 - their largest error / W) but at least E / 2: two errors of the
+ * one drawn surface that add up to at most E px. Farther points see every share smaller. */
 static int budget_stems(const options *o, render_job *j, const xyl_skeleton *sk,
                         const char *source)
 {
@@ -1285,7 +1286,8 @@ static int budget_stems(const options *o, render_job *j, const xyl_skeleton *sk,
     if (r != XYL_OK) return report(source, r, &d);
     xyl_mesh_destroy(j->mesh);
     j->mesh = m;
-    j->stem_px = 0.5f * v.error_px;
+    /* the tessellation gets what the rings leave: E (1 - ring error / W), at least E / 2 */
+    j->stem_px = v.error_px * fmaxf(0.5f, 1.0f - (float)(st.ring_error_max / w));
     printf("budget: %g px = %g world units at the tree's near side; pruned twigs under %g wide: "
            "%zu of %zu nodes (%zu subtrees, widest %g), %zu leaves moved; ring sides within %g, "
            "tessellation within %g px\n", (double)v.error_px, (double)w, (double)w,
