@@ -457,69 +457,188 @@ static int write_front(const row *rows, size_t n, const char *path)
     return 0;
 }
 
-/* ---- one budget for the whole tree (--budget E) --------------------------------------------
+/* ---- one budget for the whole tree (--budget E) ---------------------------------------------
+ *
+ * Screen-space error of a drawn stem surface against a reference surface, in pixels at each
+ * point's own distance from the eye. The reference is the UNPRUNED tree meshed at k = 16 and
+ * refined with the circle rule at a 16th of the budget (its own error: at most E / 16 px from
+ * its limit surface, k = 16 rings 7e-8 r from round). The mesher's joints and tips are not the
+ * same at every k (a lateral's bridge strip and a one-band twig's tip ring follow its k), and
+ * that difference counts: it makes the max and the 99th percentile at the nearer distances
+ * (docs/tessellation.md, "One budget for the whole tree"). Points: every refined vertex, and in every flat triangle
+ * its centroid and edge midpoints; each one's error is its exact distance to the nearest
+ * reference triangle (a uniform grid of the triangles, searched in growing shells). A node that
+ * pruning removed counts once more with its projected width 2 r (the surface it had is gone). */
 
- * Screen-space error of a drawn stem surface against the skeleton's round tubes (every segment
- * a cone from its parent's radius to its node's, ends rounded: the union's distance is the least
- * |p - axis| - r over the segments), in pixels at each point's own distance from the eye. Points:
- * every refined vertex, and in every flat triangle its centroid and edge midpoints. A node that
- * pruning removed counts once more with its projected width 2 r. Both rows are measured so; the
- * tubes are not the mesher's joints and caps, whose shape counts the same in both rows. */
+typedef struct ref_grid {
+    const xyl_mesh *m;
+    float lo[3], h; /* cell size */
+    int g[3];
+    uint32_t *start, *tri; /* CSR: the triangles overlapping each cell */
+} ref_grid;
 
-typedef struct tube {
-    float a[3], b[3], ra, rb, c[3], reach; /* c, reach: a sphere around the cone */
-} tube;
-
-static double tube_distance(const tube *t, const float p[3])
+static int cell_of(const ref_grid *r, float x, int k)
 {
-    double ab[3], ap[3], l2 = 0.0, dot = 0.0;
+    int c = (int)floorf((x - r->lo[k]) / r->h);
+    return c < 0 ? 0 : (c >= r->g[k] ? r->g[k] - 1 : c);
+}
+
+static void ref_grid_build(ref_grid *r, const xyl_mesh *m)
+{
+    float hi[3];
+    xyl_mesh_bounds(m, r->lo, hi);
+    float ext = 0.0f;
+    for (int k = 0; k < 3; ++k) ext = fmaxf(ext, hi[k] - r->lo[k]);
+    r->m = m;
+    r->h = ext / 200.0f;
+    size_t cells = 1;
     for (int k = 0; k < 3; ++k) {
-        ab[k] = (double)t->b[k] - t->a[k];
-        ap[k] = (double)p[k] - t->a[k];
-        l2 += ab[k] * ab[k];
-        dot += ab[k] * ap[k];
+        r->g[k] = (int)((hi[k] - r->lo[k]) / r->h) + 1;
+        cells *= (size_t)r->g[k];
     }
-    double u = l2 > 0.0 ? dot / l2 : 0.0;
-    u = u < 0.0 ? 0.0 : (u > 1.0 ? 1.0 : u);
-    double q2 = 0.0;
-    for (int k = 0; k < 3; ++k) q2 += (ap[k] - u * ab[k]) * (ap[k] - u * ab[k]);
-    return sqrt(q2) - (t->ra + u * (t->rb - t->ra));
+    r->start = calloc(cells + 1, sizeof *r->start);
+    if (!r->start) die("grid", XYL_ERR_OUT_OF_MEMORY, NULL);
+    for (int pass = 0; pass < 2; ++pass) {
+        for (size_t t = 0; t < m->triangle_count; ++t) {
+            int c0[3], c1[3];
+            for (int k = 0; k < 3; ++k) {
+                float mn = INFINITY, mx = -INFINITY;
+                for (int i = 0; i < 3; ++i) {
+                    const xyl_vec3 q = m->positions[m->triangles[3 * t + (size_t)i]];
+                    float x = k == 0 ? q.x : (k == 1 ? q.y : q.z);
+                    mn = fminf(mn, x), mx = fmaxf(mx, x);
+                }
+                c0[k] = cell_of(r, mn, k), c1[k] = cell_of(r, mx, k);
+            }
+            for (int z = c0[2]; z <= c1[2]; ++z)
+                for (int y = c0[1]; y <= c1[1]; ++y)
+                    for (int x = c0[0]; x <= c1[0]; ++x) {
+                        size_t c = ((size_t)z * r->g[1] + (size_t)y) * r->g[0] + (size_t)x;
+                        if (pass == 0) r->start[c + 1]++;
+                        else r->tri[r->start[c]++] = (uint32_t)t;
+                    }
+        }
+        if (pass == 0) {
+            for (size_t c = 0; c < cells; ++c) r->start[c + 1] += r->start[c];
+            r->tri = malloc((r->start[cells] ? r->start[cells] : 1) * sizeof *r->tri);
+            if (!r->tri) die("grid", XYL_ERR_OUT_OF_MEMORY, NULL);
+        } else { /* start[c] now holds the end of cell c: shift back */
+            for (size_t c = cells; c > 0; --c) r->start[c] = r->start[c - 1];
+            r->start[0] = 0;
+        }
+    }
+}
+
+/* Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5). */
+static double point_triangle2(const double p[3], const double a[3], const double b[3],
+                              const double c[3])
+{
+    double ab[3], ac[3], ap[3], q[3];
+    for (int k = 0; k < 3; ++k) ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k];
+#define DOT(u, v) ((u)[0] * (v)[0] + (u)[1] * (v)[1] + (u)[2] * (v)[2])
+    double d1 = DOT(ab, ap), d2 = DOT(ac, ap), v, w;
+    double bp[3], cp[3];
+    for (int k = 0; k < 3; ++k) bp[k] = p[k] - b[k], cp[k] = p[k] - c[k];
+    double d3 = DOT(ab, bp), d4 = DOT(ac, bp), d5 = DOT(ab, cp), d6 = DOT(ac, cp);
+    double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
+#undef DOT
+    if (d1 <= 0 && d2 <= 0) v = 0, w = 0;
+    else if (d3 >= 0 && d4 <= d3) v = 1, w = 0;
+    else if (d6 >= 0 && d5 <= d6) v = 0, w = 1;
+    else if (vc <= 0 && d1 >= 0 && d3 <= 0) v = d1 / (d1 - d3), w = 0;
+    else if (vb <= 0 && d2 >= 0 && d6 <= 0) v = 0, w = d2 / (d2 - d6);
+    else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        v = 1 - w;
+    } else {
+        double den = 1 / (va + vb + vc);
+        v = vb * den, w = vc * den;
+    }
+    double e2 = 0.0;
+    for (int k = 0; k < 3; ++k) q[k] = a[k] + ab[k] * v + ac[k] * w - p[k], e2 += q[k] * q[k];
+    return e2;
+}
+
+/* Distance from p to the nearest reference triangle: shells of cells around p's cell until the
+ * best found is within the shell (a nearer triangle would overlap a cell already searched). */
+static double ref_distance(const ref_grid *r, const float pf[3])
+{
+    const double p[3] = {pf[0], pf[1], pf[2]};
+    int c[3];
+    for (int k = 0; k < 3; ++k) c[k] = cell_of(r, pf[k], k);
+    double best2 = INFINITY;
+    int gmax = r->g[0] > r->g[1] ? r->g[0] : r->g[1];
+    gmax = gmax > r->g[2] ? gmax : r->g[2];
+    for (int s = 0; s <= gmax; ++s) {
+        for (int z = c[2] - s; z <= c[2] + s; ++z)
+            for (int y = c[1] - s; y <= c[1] + s; ++y)
+                for (int x = c[0] - s; x <= c[0] + s; ++x) {
+                    if (abs(z - c[2]) != s && abs(y - c[1]) != s && abs(x - c[0]) != s) continue;
+                    if (x < 0 || y < 0 || z < 0 || x >= r->g[0] || y >= r->g[1] || z >= r->g[2])
+                        continue;
+                    size_t cell = ((size_t)z * r->g[1] + (size_t)y) * r->g[0] + (size_t)x;
+                    for (uint32_t i = r->start[cell]; i < r->start[cell + 1]; ++i) {
+                        const uint32_t *t = &r->m->triangles[3 * (size_t)r->tri[i]];
+                        double v[3][3];
+                        for (int j = 0; j < 3; ++j) {
+                            const xyl_vec3 q = r->m->positions[t[j]];
+                            v[j][0] = q.x, v[j][1] = q.y, v[j][2] = q.z;
+                        }
+                        double e2 = point_triangle2(p, v[0], v[1], v[2]);
+                        if (e2 < best2) best2 = e2;
+                    }
+                }
+        /* p lies in its clamped cell or outside the grid; anything not yet searched is at
+         * least s cells (s h) from p's cell */
+        double reach = (double)s * r->h;
+        if (best2 <= reach * reach) break;
+    }
+    return sqrt(best2);
 }
 
 typedef struct screen_err {
     double max, sum2;
-    size_t n;
+    size_t n, cap;
+    double *v; /* every point's error, for the 99th percentile */
 } screen_err;
 
-static void screen_point(screen_err *e, const tube *tubes, size_t nt, const float p[3],
-                         const float eye[3], double per_distance)
+static void screen_add(screen_err *e, double px)
 {
-    double best = INFINITY;
-    for (size_t i = 0; i < nt; ++i) {
-        const tube *t = &tubes[i];
-        double dc = sqrt(((double)p[0] - t->c[0]) * (p[0] - t->c[0]) +
-                         ((double)p[1] - t->c[1]) * (p[1] - t->c[1]) +
-                         ((double)p[2] - t->c[2]) * (p[2] - t->c[2]));
-        if (dc - t->reach > best) continue; /* no point of this tube is nearer */
-        double dd = tube_distance(t, p);
-        if (fabs(dd) < fabs(best)) best = dd;
-        else if (dd < 0.0 && best > 0.0) best = dd; /* inside a tube: inside the union */
+    if (e->n == e->cap) {
+        e->cap = e->cap ? 2 * e->cap : 4096;
+        e->v = realloc(e->v, e->cap * sizeof *e->v);
+        if (!e->v) die("errors", XYL_ERR_OUT_OF_MEMORY, NULL);
     }
+    e->v[e->n++] = px;
+    e->max = fmax(e->max, px);
+    e->sum2 += px * px;
+}
+
+/* The 99th percentile (nearest rank) and the RMS; frees the values. */
+static void screen_finish(screen_err *e, double *p99, double *rms)
+{
+    qsort(e->v, e->n, sizeof *e->v, cmp_double);
+    *p99 = e->n ? e->v[(size_t)ceil(0.99 * (double)e->n) - 1] : 0.0;
+    *rms = e->n ? sqrt(e->sum2 / (double)e->n) : 0.0;
+    free(e->v);
+    e->v = NULL;
+}
+
+static void screen_point(screen_err *e, const ref_grid *ref, const float p[3], const float eye[3],
+                         double per_distance)
+{
     double dist = sqrt(((double)p[0] - eye[0]) * (p[0] - eye[0]) +
                        ((double)p[1] - eye[1]) * (p[1] - eye[1]) +
                        ((double)p[2] - eye[2]) * (p[2] - eye[2]));
-    double px = fabs(best) / (dist * per_distance);
-    e->max = fmax(e->max, px);
-    e->sum2 += px * px;
-    e->n++;
+    screen_add(e, ref_distance(ref, p) / (dist * per_distance));
 }
 
-static void screen_mesh(screen_err *e, const tube *tubes, size_t nt, const xyl_mesh *m,
-                        const float eye[3], double per_distance)
+static void screen_mesh(screen_err *e, const ref_grid *ref, const xyl_mesh *m, const float eye[3],
+                        double per_distance)
 {
     for (size_t v = 0; v < m->vertex_count; ++v) {
         const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
-        screen_point(e, tubes, nt, p, eye, per_distance);
+        screen_point(e, ref, p, eye, per_distance);
     }
     static const float w[4][3] = {{1 / 3.f, 1 / 3.f, 1 / 3.f}, {.5f, .5f, 0}, {0, .5f, .5f}, {.5f, 0, .5f}};
     for (size_t t = 0; t < m->triangle_count; ++t) {
@@ -529,7 +648,7 @@ static void screen_mesh(screen_err *e, const tube *tubes, size_t nt, const xyl_m
             const float p[3] = {w[s][0] * c[0].x + w[s][1] * c[1].x + w[s][2] * c[2].x,
                                 w[s][0] * c[0].y + w[s][1] * c[1].y + w[s][2] * c[2].y,
                                 w[s][0] * c[0].z + w[s][1] * c[1].z + w[s][2] * c[2].z};
-            screen_point(e, tubes, nt, p, eye, per_distance);
+            screen_point(e, ref, p, eye, per_distance);
         }
     }
 }
@@ -549,37 +668,10 @@ static size_t screen_pruned(screen_err *e, const xyl_skeleton *sk, const xyl_ske
             continue;
         }
         double dx = n->pos.x - eye[0], dy = n->pos.y - eye[1], dz = n->pos.z - eye[2];
-        double px = 2.0 * n->radius / (sqrt(dx * dx + dy * dy + dz * dz) * per_distance);
-        e->max = fmax(e->max, px);
-        e->sum2 += px * px;
-        e->n++;
+        screen_add(e, 2.0 * n->radius / (sqrt(dx * dx + dy * dy + dz * dz) * per_distance));
         ++removed;
     }
     return removed;
-}
-
-static tube *tubes_of(const xyl_skeleton *sk, size_t *count)
-{
-    tube *t = calloc(sk->node_count ? sk->node_count : 1, sizeof *t);
-    size_t n = 0;
-    for (size_t i = 0; t && i < sk->node_count; ++i) {
-        const xyl_skel_node *b = &sk->nodes[i];
-        if (b->parent < 0) continue;
-        const xyl_skel_node *a = &sk->nodes[b->parent];
-        tube *u = &t[n++];
-        u->a[0] = a->pos.x, u->a[1] = a->pos.y, u->a[2] = a->pos.z;
-        u->b[0] = b->pos.x, u->b[1] = b->pos.y, u->b[2] = b->pos.z;
-        u->ra = a->radius, u->rb = b->radius;
-        double h2 = 0.0;
-        for (int k = 0; k < 3; ++k) {
-            u->c[k] = 0.5f * (u->a[k] + u->b[k]);
-            h2 += 0.25 * ((double)u->b[k] - u->a[k]) * ((double)u->b[k] - u->a[k]);
-        }
-        u->reach = (float)(sqrt(h2) + fmax(u->ra, u->rb)) * 1.0001f;
-    }
-    if (!t) die("tubes", XYL_ERR_OUT_OF_MEMORY, NULL);
-    *count = n;
-    return t;
 }
 
 /* The stems of sk meshed with desc, levels chosen for view, refined on the CPU. */
@@ -613,16 +705,14 @@ static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
     const double E = o->budget_px;
     printf("Budget rows: stems only, circle rule, %u px viewport, E = %g px; (a) k = 4, nothing "
            "pruned, levels at E px; (b) E px -> W world units at the tree's near side: twigs under "
-           "W pruned, sides within W/2 (refined arcs, up to 16), levels at E/2 px. Error: against "
-           "the skeleton's round tubes, in px at each point's distance; a pruned node counts its "
-           "projected width.\n", o->size, E);
+           "W pruned, sides within W/2 (refined arcs, up to 16), levels at E (1 - ring error / W) px. "
+           "Error: against the unpruned k = 16 mesh refined at E/16 px, in px at each point's "
+           "distance; a pruned node counts its projected width.\n", o->size, E);
     printf("| tree | distance | W | (a) triangles | (a) max px | (a) RMS px | (b) triangles | "
-           "(b) max px | (b) RMS px | (b) nodes pruned | (b)/(a) triangles |\n"
-           "|---|---|---|---|---|---|---|---|---|---|---|\n");
+           "(b) max px | (b) RMS px | (b) nodes pruned | (b)/(a) triangles | (a) p99 px | (b) p99 px | "
+           "reference triangles |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (size_t ti = 0; ti < sizeof trees / sizeof trees[0]; ++ti) {
         xyl_skeleton *sk = preset_tree(trees[ti]);
-        size_t nt = 0;
-        tube *tubes = tubes_of(sk, &nt);
         xyl_mesh *k4 = mesh_of(sk, 4, 0);
         float lo[3], hi[3], c[3], r2 = 0.0f, size = 0.0f;
         xyl_mesh_bounds(k4, lo, hi);
@@ -643,14 +733,23 @@ static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
             v.error_px = (float)E;
             v.near_distance = fmaxf(1e-3f * size, 1e-30f);
             double per_distance = 2.0 * tan(0.5 * (double)cam.fovy) / o->size;
+            /* the reference: unpruned, k = 16, circle rule at E / 16 px */
+            xyl_stems_desc dr = {0};
+            dr.sides = 16;
+            xyl_tess_view vr = v;
+            vr.error_px = (float)(E / 16.0);
+            uint64_t tr = 0;
+            xyl_stems_stats st = {0};
+            xyl_mesh *refm = refine_view(sk, &dr, pat, &vr, &tr, &st);
+            ref_grid ref = {0};
+            ref_grid_build(&ref, refm);
             /* (a) */
             xyl_stems_desc da = {0};
             da.sides = 4;
             uint64_t ta = 0, tb = 0;
-            xyl_stems_stats st = {0};
             xyl_mesh *ra = refine_view(sk, &da, pat, &v, &ta, &st);
             screen_err ea = {0};
-            screen_mesh(&ea, tubes, nt, ra, v.eye, per_distance);
+            screen_mesh(&ea, &ref, ra, v.eye, per_distance);
             xyl_mesh_destroy(ra);
             /* (b) */
             float w = 0.0f;
@@ -663,22 +762,32 @@ static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
             db.sides = 16;
             db.error_world = 0.5f * w;
             db.sides_refined = true;
+            /* meshed first to learn the rings' error: the tessellation gets what they leave */
+            xyl_mesh *mb = NULL;
+            r = xyl_stems_build(pruned, &db, &mb, &st, &d);
+            if (r) die("budget mesh", r, &d);
+            xyl_mesh_destroy(mb);
             xyl_tess_view vb = v;
-            vb.error_px = (float)(0.5 * E);
+            vb.error_px = (float)(E * fmax(0.5, 1.0 - st.ring_error_max / w));
             xyl_mesh *rb = refine_view(pruned, &db, pat, &vb, &tb, &st);
             screen_err eb = {0};
-            screen_mesh(&eb, tubes, nt, rb, v.eye, per_distance);
+            screen_mesh(&eb, &ref, rb, v.eye, per_distance);
             size_t removed = screen_pruned(&eb, sk, pruned, v.eye, per_distance);
             xyl_mesh_destroy(rb);
             xyl_skeleton_destroy(pruned);
+            free(ref.start);
+            free(ref.tri);
+            xyl_mesh_destroy(refm);
+            double pa, qa, pb, qb;
+            screen_finish(&ea, &pa, &qa);
+            screen_finish(&eb, &pb, &qb);
             printf("| %s | %gx | %.4g | %llu | %.3f | %.3f | %llu | %.3f | %.3f | %zu of %zu | "
-                   "%.3f |\n", trees[ti], (double)zooms[zi], (double)w, (unsigned long long)ta,
-                   ea.max, sqrt(ea.sum2 / (double)(ea.n ? ea.n : 1)), (unsigned long long)tb,
-                   eb.max, sqrt(eb.sum2 / (double)(eb.n ? eb.n : 1)), removed, sk->node_count,
-                   ta ? (double)tb / (double)ta : 0.0);
+                   "%.3f | %.3f | %.3f | %llu |\n", trees[ti], (double)zooms[zi], (double)w,
+                   (unsigned long long)ta, ea.max, qa, (unsigned long long)tb, eb.max, qb, removed,
+                   sk->node_count, ta ? (double)tb / (double)ta : 0.0, pa, pb,
+                   (unsigned long long)tr);
             fflush(stdout);
         }
-        free(tubes);
         xyl_skeleton_destroy(sk);
     }
 }
