@@ -600,6 +600,9 @@ typedef struct screen_err {
     double max, sum2;
     size_t n, cap;
     double *v; /* every point's error, for the 99th percentile */
+    float worst[3]; /* the drawn point of the largest error, and that error in world units */
+    double worst_world;
+    bool worst_pruned; /* the largest error is a pruned node's width */
 } screen_err;
 
 static void screen_add(screen_err *e, double px)
@@ -630,7 +633,13 @@ static void screen_point(screen_err *e, const ref_grid *ref, const float p[3], c
     double dist = sqrt(((double)p[0] - eye[0]) * (p[0] - eye[0]) +
                        ((double)p[1] - eye[1]) * (p[1] - eye[1]) +
                        ((double)p[2] - eye[2]) * (p[2] - eye[2]));
-    screen_add(e, ref_distance(ref, p) / (dist * per_distance));
+    double world = ref_distance(ref, p), px = world / (dist * per_distance);
+    if (px > e->max) {
+        memcpy(e->worst, p, sizeof e->worst);
+        e->worst_world = world;
+        e->worst_pruned = false;
+    }
+    screen_add(e, px);
 }
 
 static void screen_mesh(screen_err *e, const ref_grid *ref, const xyl_mesh *m, const float eye[3],
@@ -668,10 +677,34 @@ static size_t screen_pruned(screen_err *e, const xyl_skeleton *sk, const xyl_ske
             continue;
         }
         double dx = n->pos.x - eye[0], dy = n->pos.y - eye[1], dz = n->pos.z - eye[2];
-        screen_add(e, 2.0 * n->radius / (sqrt(dx * dx + dy * dy + dz * dz) * per_distance));
+        double px = 2.0 * n->radius / (sqrt(dx * dx + dy * dy + dz * dz) * per_distance);
+        if (px > e->max) {
+            e->worst[0] = n->pos.x, e->worst[1] = n->pos.y, e->worst[2] = n->pos.z;
+            e->worst_world = 2.0 * n->radius;
+            e->worst_pruned = true;
+        }
+        screen_add(e, px);
         ++removed;
     }
     return removed;
+}
+
+/* Where the worst point of a row lies: the skeleton node nearest to it, its radius and how many
+ * children it has (0: a tip). */
+static int worst_note(char *buf, size_t cap, const char *what, const screen_err *e,
+                      const xyl_skeleton *sk)
+{
+    size_t best = 0, kids = 0;
+    double bd = INFINITY;
+    for (size_t i = 0; i < sk->node_count; ++i) {
+        double dx = sk->nodes[i].pos.x - e->worst[0], dy = sk->nodes[i].pos.y - e->worst[1];
+        double dz = sk->nodes[i].pos.z - e->worst[2], dd = sqrt(dx * dx + dy * dy + dz * dz);
+        if (dd < bd) bd = dd, best = i;
+    }
+    for (size_t i = 0; i < sk->node_count; ++i) kids += sk->nodes[i].parent == (int32_t)best;
+    return snprintf(buf, cap, "%s: %.3f px = %.4g world units from the reference, %.4g from node "
+                    "%zu (r %.4g, %zu children)", what, e->max, e->worst_world, bd, best,
+                    (double)sk->nodes[best].radius, kids);
 }
 
 /* The stems of sk meshed with desc, levels chosen for view, refined on the CPU. */
@@ -711,6 +744,8 @@ static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
     printf("| tree | distance | W | (a) triangles | (a) max px | (a) RMS px | (b) triangles | "
            "(b) max px | (b) RMS px | (b) nodes pruned | (b)/(a) triangles | (a) p99 px | (b) p99 px | "
            "reference triangles |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    char notes[9][512];
+    size_t nn = 0;
     for (size_t ti = 0; ti < sizeof trees / sizeof trees[0]; ++ti) {
         xyl_skeleton *sk = preset_tree(trees[ti]);
         xyl_mesh *k4 = mesh_of(sk, 4, 0);
@@ -778,6 +813,16 @@ static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
             free(ref.start);
             free(ref.tri);
             xyl_mesh_destroy(refm);
+            int at = snprintf(notes[nn], sizeof notes[nn], "%s %gx: ", trees[ti],
+                              (double)zooms[zi]);
+            at += worst_note(notes[nn] + at, sizeof notes[nn] - (size_t)at, "(a) worst", &ea, sk);
+            if (!eb.worst_pruned)
+                worst_note(notes[nn] + at, sizeof notes[nn] - (size_t)at, "; (b) worst", &eb, sk);
+            else
+                snprintf(notes[nn] + at, sizeof notes[nn] - (size_t)at,
+                         "; (b) worst: a pruned node, %.3f px (its width %.4g)", eb.max,
+                         eb.worst_world);
+            ++nn;
             double pa, qa, pb, qb;
             screen_finish(&ea, &pa, &qa);
             screen_finish(&eb, &pb, &qb);
@@ -790,6 +835,8 @@ static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
         }
         xyl_skeleton_destroy(sk);
     }
+    printf("\nWhere each row's largest error is:\n");
+    for (size_t i = 0; i < nn; ++i) printf("- %s\n", notes[i]);
 }
 
 static void parse(int argc, char **argv, bench_opts *o)
