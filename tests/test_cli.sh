@@ -304,6 +304,21 @@ contains "(Vulkan)" "Vulkan device named"
 expect 0 "render stems of a leafy .glb" -- "$XYLEM" render --mesh "$tmp/leafy.glb" --size 32x32 --out "$tmp/l.png"
 contains "patches: 11646 (11646 quads)" "the leaves are not refined as stems"
 expect 0 "render CPU reference" -- "$XYLEM" render --tess cpu --error-px 2 --camera 90,20 --size 64x64 --out "$tmp/c.png"
+# --error-px given: one budget prunes, picks ring sides and tessellation levels; a far camera
+# (16 times the framing distance) draws far fewer triangles than the framed one
+expect 0 "render --error-px near" -- "$XYLEM" render --tess cpu --error-px 1 --foliage none --size 128x128 --out "$tmp/bn.png"
+contains "budget: 1 px = " "render --error-px prints its world budget"
+contains "sides: error " "render --error-px prints its ring sides"
+near=$(sed -n 's/.* \([0-9]*\) triangles drawn$/\1/p' "$tmp/out")
+expect 0 "render --error-px far" -- "$XYLEM" render --tess cpu --error-px 1 --foliage none --camera 30,10,16 --size 128x128 --out "$tmp/bf.png"
+contains "nodes (" "render --error-px prints what it pruned"
+far=$(sed -n 's/.* \([0-9]*\) triangles drawn$/\1/p' "$tmp/out")
+[ -n "$near" ] && [ -n "$far" ] && [ $((far * 10)) -lt "$near" ] && ok || bad "--error-px far drew $far triangles, near $near"
+grep -q "pruned twigs under .*: 0 of" "$tmp/out" && bad "--error-px far pruned nothing" || ok
+for px in nan 0 -1 inf; do
+  expect 64 "render --error-px $px" -- "$XYLEM" render --error-px "$px" --out "$tmp/x.png"
+  contains "--error-px takes a positive number of pixels" "--error-px $px says why"
+done
 expect 65 "render an unknown .skel version" -- "$XYLEM" render --skeleton "$data/skel/bad_version.skel" --size 16x16 --out "$tmp/x.png"
 [ ! -e "$tmp/x.png" ] && ok || bad "a refused skeleton wrote x.png"
 expect 64 "render needs a .png" -- "$XYLEM" render --out "$tmp/x.jpg"

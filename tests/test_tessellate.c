@@ -582,6 +582,54 @@ static void levels_rise_as_the_camera_approaches(void **state)
     }
 }
 
+/* Pixels -> world at a sphere's near side: a camera whose focal length is 1000 px (fovy
+ * 2 atan(0.5) over 1000 px) sees 2 px at distance 8 as 0.016 world units. */
+static void world_error_of_a_pixel_budget(void **state)
+{
+    (void)state;
+    xyl_tess_view v = {0};
+    v.fovy = 2.0f * atanf(0.5f);
+    v.viewport_height = 1000;
+    v.error_px = 2.0f;
+    const float c[3] = {0.0f, 0.0f, 10.0f};
+    float w = 0.0f;
+    assert_int_equal(xyl_tess_view_world_error(&v, c, 2.0f, &w, NULL), XYL_OK);
+    assert_float_equal(w, 2.0 * 8.0 / 1000.0, 1e-7);
+    /* an eye inside the sphere: the near distance given, else 1e-3 of the diameter */
+    v.near_distance = 0.5f;
+    assert_int_equal(xyl_tess_view_world_error(&v, c, 20.0f, &w, NULL), XYL_OK);
+    assert_float_equal(w, 2.0 * 0.5 / 1000.0, 1e-9);
+    v.near_distance = 0.0f;
+    assert_int_equal(xyl_tess_view_world_error(&v, c, 20.0f, &w, NULL), XYL_OK);
+    assert_float_equal(w, 2.0 * 0.04 / 1000.0, 1e-10);
+    /* defaults: 0.5 px, fovy 0.8, 1080 px */
+    xyl_tess_view z = {0};
+    assert_int_equal(xyl_tess_view_world_error(&z, c, 0.0f, &w, NULL), XYL_OK);
+    assert_float_equal(w, 0.5 * 10.0 * 2.0 * tan(0.4) / 1080.0, 1e-8);
+    /* the same conversion as the level selection: the level chosen for a patch at that
+     * distance keeps its world error c / l^2 within the world budget */
+    for (float cf = 1e-4f; cf < 10.0f; cf *= 3.1f) {
+        uint32_t l = xyl__tess_level_for(cf, 8.0f, &v, 64);
+        v.error_px = 2.0f;
+        assert_int_equal(xyl_tess_view_world_error(&v, c, 2.0f, &w, NULL), XYL_OK);
+        if (l < 64) assert_true(cf / (float)(l * l) <= w * 1.0001f);
+        if (l > 1) assert_true(cf / (float)((l - 1) * (l - 1)) > w);
+    }
+    /* bad input: a clear error, *world untouched */
+    w = -1.0f;
+    xyl_diag d = {0};
+    v.error_px = NAN;
+    assert_int_equal(xyl_tess_view_world_error(&v, c, 2.0f, &w, &d), XYL_ERR_INVALID_ARGUMENT);
+    v.error_px = -1.0f;
+    assert_int_equal(xyl_tess_view_world_error(&v, c, 2.0f, &w, &d), XYL_ERR_INVALID_ARGUMENT);
+    v.error_px = 1.0f;
+    assert_int_equal(xyl_tess_view_world_error(&v, c, -1.0f, &w, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_tess_view_world_error(&v, c, NAN, &w, &d), XYL_ERR_NON_FINITE);
+    assert_int_equal(xyl_tess_view_world_error(NULL, c, 1.0f, &w, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_int_equal(xyl_tess_view_world_error(&v, c, 1.0f, NULL, &d), XYL_ERR_INVALID_ARGUMENT);
+    assert_float_equal(w, -1.0f, 0.0f);
+}
+
 static void select_buckets_every_patch_once(void **state)
 {
     (void)state;
@@ -959,6 +1007,7 @@ int main(void)
         cmocka_unit_test(planar_triangles_stay_planar_and_linear),
         cmocka_unit_test(cylinder_mid_edge_error_matches_analytic_table),
         cmocka_unit_test(ring_error_model_matches_the_refined_tube),
+        cmocka_unit_test(world_error_of_a_pixel_budget),
         cmocka_unit_test(circle_handle_reduces_to_pn_for_flat_edges),
         cmocka_unit_test(arc_rule_follows_a_bent_tube),
         cmocka_unit_test(adaptive_levels_keep_shared_edges_bit_identical),

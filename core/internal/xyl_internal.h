@@ -109,6 +109,19 @@ void xyl__warn(xyl_diag *diag, const char *fmt, ...)
 #endif
     ;
 
+/* ---- screen-space budgets ------------------------------------------------------------------ */
+
+/* The world size of one pixel per unit of distance from the eye, for a vertical field of view
+ * (radians; <= 0: 0.8) over viewport_height pixels (0: 1080): 2 tan(fovy / 2) / height. The one
+ * pixel -> world formula: the tessellation's levels (its pixels per world unit at distance 1 is
+ * the inverse), the foliage's LOD pick and xyl_tess_view_world_error all use it. */
+static inline double xyl__world_per_px(float fovy, uint32_t viewport_height)
+{
+    double f = fovy > 0.0f ? fovy : 0.8;
+    double h = viewport_height ? viewport_height : 1080;
+    return 2.0 * tan(0.5 * f) / h;
+}
+
 /* ---- double vectors ------------------------------------------------------------------------ */
 
 typedef struct xyl__dvec3 {

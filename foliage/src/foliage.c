@@ -326,11 +326,9 @@ xyl_result xyl__foliage_view_resolve(const xyl_foliage_view *view, double eye[3]
     if (v->fovy < 0.0f || v->fovy >= (float)XYL__PI || v->error_px < 0.0f)
         return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
                          "view: fovy must be in [0, pi) (0: 0.8) and error_px >= 0 (0: 0.5)");
-    double fovy = v->fovy > 0.0f ? v->fovy : 0.8;
-    double height = v->viewport_height ? v->viewport_height : 1080;
     double budget = v->error_px > 0.0f ? v->error_px : 0.5;
     /* world error per unit of distance that the budget allows */
-    *per_distance = budget * 2.0 * tan(0.5 * fovy) / height;
+    *per_distance = budget * xyl__world_per_px(v->fovy, v->viewport_height);
     for (int k = 0; k < 3; ++k) eye[k] = v->eye[k];
     return XYL_OK;
 }

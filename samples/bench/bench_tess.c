@@ -8,8 +8,11 @@
  * error target the cheapest configuration.
  *
  * usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]
+ *                   [--budget E]
  *   --dat FILE writes every row to FILE and the Pareto front to FILE.front (scripts/plot_tess.gp
- *   plots both). */
+ *   plots both). --budget E prints the budget rows instead (CPU only): for the default tree and
+ *   two leafy presets' stems at three camera distances, fixed k = 4 with adaptive levels at E px
+ *   against one budget of E px choosing pruning, ring sides and levels (budget_rows). */
 #define _POSIX_C_SOURCE 200809L
 
 #include <math.h>
@@ -37,6 +40,7 @@ typedef struct bench_opts {
     const char *dat;
     uint32_t sides[8], nsides;  /* --sides: ring sides to run; default 3, 4, 6, 8 */
     double max_triangles;       /* --max-triangles: configurations above it are skipped */
+    double budget_px;           /* --budget E: the budget rows alone */
 } bench_opts;
 
 typedef struct row {
@@ -88,10 +92,10 @@ static xyl_skeleton *arc_skeleton(void)
     return sk;
 }
 
-static xyl_skeleton *default_tree(void)
+static xyl_skeleton *preset_tree(const char *name)
 {
     xyl_grammar_desc gd = {0};
-    gd.source = xyl_lsystem_preset_source(xyl_lsystem_default_preset());
+    gd.source = xyl_lsystem_preset_source(name);
     xyl_grammar *g = NULL;
     xyl_lstring *s = NULL;
     xyl_skeleton *sk = NULL;
@@ -99,10 +103,15 @@ static xyl_skeleton *default_tree(void)
     xyl_result r = xyl_grammar_parse(&gd, &g, &d);
     if (!r) r = xyl_lsystem_derive(g, NULL, &s, &d);
     if (!r) r = xyl_lsystem_interpret(g, s, NULL, &sk, &d);
-    if (r) die("default tree", r, &d);
+    if (r) die(name, r, &d);
     xyl_lstring_destroy(s);
     xyl_grammar_destroy(g);
     return sk;
+}
+
+static xyl_skeleton *default_tree(void)
+{
+    return preset_tree(xyl_lsystem_default_preset());
 }
 
 static xyl_mesh *mesh_of(const xyl_skeleton *sk, uint32_t k, uint32_t subdiv)
@@ -448,6 +457,388 @@ static int write_front(const row *rows, size_t n, const char *path)
     return 0;
 }
 
+/* ---- one budget for the whole tree (--budget E) ---------------------------------------------
+ *
+ * Screen-space error of a drawn stem surface against a reference surface, in pixels at each
+ * point's own distance from the eye. The reference is the UNPRUNED tree meshed at k = 16 and
+ * refined with the circle rule at a 16th of the budget (its own error: at most E / 16 px from
+ * its limit surface, k = 16 rings 7e-8 r from round). The mesher's joints and tips are not the
+ * same at every k (a lateral's bridge strip and a one-band twig's tip ring follow its k), and
+ * that difference counts: it makes the max and the 99th percentile at the nearer distances
+ * (docs/tessellation.md, "One budget for the whole tree"). Points: every refined vertex, and in every flat triangle
+ * its centroid and edge midpoints; each one's error is its exact distance to the nearest
+ * reference triangle (a uniform grid of the triangles, searched in growing shells). A node that
+ * pruning removed counts once more with its projected width 2 r (the surface it had is gone). */
+
+typedef struct ref_grid {
+    const xyl_mesh *m;
+    float lo[3], h; /* cell size */
+    int g[3];
+    uint32_t *start, *tri; /* CSR: the triangles overlapping each cell */
+} ref_grid;
+
+static int cell_of(const ref_grid *r, float x, int k)
+{
+    int c = (int)floorf((x - r->lo[k]) / r->h);
+    return c < 0 ? 0 : (c >= r->g[k] ? r->g[k] - 1 : c);
+}
+
+static void ref_grid_build(ref_grid *r, const xyl_mesh *m)
+{
+    float hi[3];
+    xyl_mesh_bounds(m, r->lo, hi);
+    float ext = 0.0f;
+    for (int k = 0; k < 3; ++k) ext = fmaxf(ext, hi[k] - r->lo[k]);
+    r->m = m;
+    r->h = ext / 200.0f;
+    size_t cells = 1;
+    for (int k = 0; k < 3; ++k) {
+        r->g[k] = (int)((hi[k] - r->lo[k]) / r->h) + 1;
+        cells *= (size_t)r->g[k];
+    }
+    r->start = calloc(cells + 1, sizeof *r->start);
+    if (!r->start) die("grid", XYL_ERR_OUT_OF_MEMORY, NULL);
+    for (int pass = 0; pass < 2; ++pass) {
+        for (size_t t = 0; t < m->triangle_count; ++t) {
+            int c0[3], c1[3];
+            for (int k = 0; k < 3; ++k) {
+                float mn = INFINITY, mx = -INFINITY;
+                for (int i = 0; i < 3; ++i) {
+                    const xyl_vec3 q = m->positions[m->triangles[3 * t + (size_t)i]];
+                    float x = k == 0 ? q.x : (k == 1 ? q.y : q.z);
+                    mn = fminf(mn, x), mx = fmaxf(mx, x);
+                }
+                c0[k] = cell_of(r, mn, k), c1[k] = cell_of(r, mx, k);
+            }
+            for (int z = c0[2]; z <= c1[2]; ++z)
+                for (int y = c0[1]; y <= c1[1]; ++y)
+                    for (int x = c0[0]; x <= c1[0]; ++x) {
+                        size_t c = ((size_t)z * r->g[1] + (size_t)y) * r->g[0] + (size_t)x;
+                        if (pass == 0) r->start[c + 1]++;
+                        else r->tri[r->start[c]++] = (uint32_t)t;
+                    }
+        }
+        if (pass == 0) {
+            for (size_t c = 0; c < cells; ++c) r->start[c + 1] += r->start[c];
+            r->tri = malloc((r->start[cells] ? r->start[cells] : 1) * sizeof *r->tri);
+            if (!r->tri) die("grid", XYL_ERR_OUT_OF_MEMORY, NULL);
+        } else { /* start[c] now holds the end of cell c: shift back */
+            for (size_t c = cells; c > 0; --c) r->start[c] = r->start[c - 1];
+            r->start[0] = 0;
+        }
+    }
+}
+
+/* Squared distance from p to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5). */
+static double point_triangle2(const double p[3], const double a[3], const double b[3],
+                              const double c[3])
+{
+    double ab[3], ac[3], ap[3], q[3];
+    for (int k = 0; k < 3; ++k) ab[k] = b[k] - a[k], ac[k] = c[k] - a[k], ap[k] = p[k] - a[k];
+#define DOT(u, v) ((u)[0] * (v)[0] + (u)[1] * (v)[1] + (u)[2] * (v)[2])
+    double d1 = DOT(ab, ap), d2 = DOT(ac, ap), v, w;
+    double bp[3], cp[3];
+    for (int k = 0; k < 3; ++k) bp[k] = p[k] - b[k], cp[k] = p[k] - c[k];
+    double d3 = DOT(ab, bp), d4 = DOT(ac, bp), d5 = DOT(ab, cp), d6 = DOT(ac, cp);
+    double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
+#undef DOT
+    if (d1 <= 0 && d2 <= 0) v = 0, w = 0;
+    else if (d3 >= 0 && d4 <= d3) v = 1, w = 0;
+    else if (d6 >= 0 && d5 <= d6) v = 0, w = 1;
+    else if (vc <= 0 && d1 >= 0 && d3 <= 0) v = d1 / (d1 - d3), w = 0;
+    else if (vb <= 0 && d2 >= 0 && d6 <= 0) v = 0, w = d2 / (d2 - d6);
+    else if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        v = 1 - w;
+    } else {
+        double den = 1 / (va + vb + vc);
+        v = vb * den, w = vc * den;
+    }
+    double e2 = 0.0;
+    for (int k = 0; k < 3; ++k) q[k] = a[k] + ab[k] * v + ac[k] * w - p[k], e2 += q[k] * q[k];
+    return e2;
+}
+
+/* Distance from p to the nearest reference triangle: shells of cells around p's cell until the
+ * best found is within the shell (a nearer triangle would overlap a cell already searched). */
+static double ref_distance(const ref_grid *r, const float pf[3])
+{
+    const double p[3] = {pf[0], pf[1], pf[2]};
+    int c[3];
+    for (int k = 0; k < 3; ++k) c[k] = cell_of(r, pf[k], k);
+    double best2 = INFINITY;
+    int gmax = r->g[0] > r->g[1] ? r->g[0] : r->g[1];
+    gmax = gmax > r->g[2] ? gmax : r->g[2];
+    for (int s = 0; s <= gmax; ++s) {
+        for (int z = c[2] - s; z <= c[2] + s; ++z)
+            for (int y = c[1] - s; y <= c[1] + s; ++y)
+                for (int x = c[0] - s; x <= c[0] + s; ++x) {
+                    if (abs(z - c[2]) != s && abs(y - c[1]) != s && abs(x - c[0]) != s) continue;
+                    if (x < 0 || y < 0 || z < 0 || x >= r->g[0] || y >= r->g[1] || z >= r->g[2])
+                        continue;
+                    size_t cell = ((size_t)z * r->g[1] + (size_t)y) * r->g[0] + (size_t)x;
+                    for (uint32_t i = r->start[cell]; i < r->start[cell + 1]; ++i) {
+                        const uint32_t *t = &r->m->triangles[3 * (size_t)r->tri[i]];
+                        double v[3][3];
+                        for (int j = 0; j < 3; ++j) {
+                            const xyl_vec3 q = r->m->positions[t[j]];
+                            v[j][0] = q.x, v[j][1] = q.y, v[j][2] = q.z;
+                        }
+                        double e2 = point_triangle2(p, v[0], v[1], v[2]);
+                        if (e2 < best2) best2 = e2;
+                    }
+                }
+        /* p lies in its clamped cell or outside the grid; anything not yet searched is at
+         * least s cells (s h) from p's cell */
+        double reach = (double)s * r->h;
+        if (best2 <= reach * reach) break;
+    }
+    return sqrt(best2);
+}
+
+typedef struct screen_err {
+    double max, sum2;
+    size_t n, cap;
+    double *v; /* every point's error, for the 99th percentile */
+    float worst[3]; /* the drawn point of the largest error, and that error in world units */
+    double worst_world;
+    bool worst_pruned; /* the largest error is a pruned node's width */
+} screen_err;
+
+static void screen_add(screen_err *e, double px)
+{
+    if (e->n == e->cap) {
+        e->cap = e->cap ? 2 * e->cap : 4096;
+        e->v = realloc(e->v, e->cap * sizeof *e->v);
+        if (!e->v) die("errors", XYL_ERR_OUT_OF_MEMORY, NULL);
+    }
+    e->v[e->n++] = px;
+    e->max = fmax(e->max, px);
+    e->sum2 += px * px;
+}
+
+/* The 99th percentile (nearest rank) and the RMS; frees the values. */
+static void screen_finish(screen_err *e, double *p99, double *rms)
+{
+    qsort(e->v, e->n, sizeof *e->v, cmp_double);
+    *p99 = e->n ? e->v[(size_t)ceil(0.99 * (double)e->n) - 1] : 0.0;
+    *rms = e->n ? sqrt(e->sum2 / (double)e->n) : 0.0;
+    free(e->v);
+    e->v = NULL;
+}
+
+static void screen_point(screen_err *e, const ref_grid *ref, const float p[3], const float eye[3],
+                         double per_distance)
+{
+    double dist = sqrt(((double)p[0] - eye[0]) * (p[0] - eye[0]) +
+                       ((double)p[1] - eye[1]) * (p[1] - eye[1]) +
+                       ((double)p[2] - eye[2]) * (p[2] - eye[2]));
+    double world = ref_distance(ref, p), px = world / (dist * per_distance);
+    if (px > e->max) {
+        memcpy(e->worst, p, sizeof e->worst);
+        e->worst_world = world;
+        e->worst_pruned = false;
+    }
+    screen_add(e, px);
+}
+
+static void screen_mesh(screen_err *e, const ref_grid *ref, const xyl_mesh *m, const float eye[3],
+                        double per_distance)
+{
+    for (size_t v = 0; v < m->vertex_count; ++v) {
+        const float p[3] = {m->positions[v].x, m->positions[v].y, m->positions[v].z};
+        screen_point(e, ref, p, eye, per_distance);
+    }
+    static const float w[4][3] = {{1 / 3.f, 1 / 3.f, 1 / 3.f}, {.5f, .5f, 0}, {0, .5f, .5f}, {.5f, 0, .5f}};
+    for (size_t t = 0; t < m->triangle_count; ++t) {
+        xyl_vec3 c[3];
+        for (int i = 0; i < 3; ++i) c[i] = m->positions[m->triangles[3 * t + (size_t)i]];
+        for (int s = 0; s < 4; ++s) {
+            const float p[3] = {w[s][0] * c[0].x + w[s][1] * c[1].x + w[s][2] * c[2].x,
+                                w[s][0] * c[0].y + w[s][1] * c[1].y + w[s][2] * c[2].y,
+                                w[s][0] * c[0].z + w[s][1] * c[1].z + w[s][2] * c[2].z};
+            screen_point(e, ref, p, eye, per_distance);
+        }
+    }
+}
+
+/* Nodes of sk that pruning removed: the kept ones are in pruned in the same order with the same
+ * position and radius, so one walk pairs them; each removed node counts its projected width. */
+static size_t screen_pruned(screen_err *e, const xyl_skeleton *sk, const xyl_skeleton *pruned,
+                            const float eye[3], double per_distance)
+{
+    size_t j = 0, removed = 0;
+    for (size_t i = 0; i < sk->node_count; ++i) {
+        const xyl_skel_node *n = &sk->nodes[i];
+        if (j < pruned->node_count && pruned->nodes[j].radius == n->radius &&
+            pruned->nodes[j].pos.x == n->pos.x && pruned->nodes[j].pos.y == n->pos.y &&
+            pruned->nodes[j].pos.z == n->pos.z) {
+            ++j;
+            continue;
+        }
+        double dx = n->pos.x - eye[0], dy = n->pos.y - eye[1], dz = n->pos.z - eye[2];
+        double px = 2.0 * n->radius / (sqrt(dx * dx + dy * dy + dz * dz) * per_distance);
+        if (px > e->max) {
+            e->worst[0] = n->pos.x, e->worst[1] = n->pos.y, e->worst[2] = n->pos.z;
+            e->worst_world = 2.0 * n->radius;
+            e->worst_pruned = true;
+        }
+        screen_add(e, px);
+        ++removed;
+    }
+    return removed;
+}
+
+/* Where the worst point of a row lies: the skeleton node nearest to it, its radius and how many
+ * children it has (0: a tip). */
+static int worst_note(char *buf, size_t cap, const char *what, const screen_err *e,
+                      const xyl_skeleton *sk)
+{
+    size_t best = 0, kids = 0;
+    double bd = INFINITY;
+    for (size_t i = 0; i < sk->node_count; ++i) {
+        double dx = sk->nodes[i].pos.x - e->worst[0], dy = sk->nodes[i].pos.y - e->worst[1];
+        double dz = sk->nodes[i].pos.z - e->worst[2], dd = sqrt(dx * dx + dy * dy + dz * dz);
+        if (dd < bd) bd = dd, best = i;
+    }
+    for (size_t i = 0; i < sk->node_count; ++i) kids += sk->nodes[i].parent == (int32_t)best;
+    return snprintf(buf, cap, "%s: %.3f px = %.4g world units from the reference, %.4g from node "
+                    "%zu (r %.4g, %zu children)", what, e->max, e->worst_world, bd, best,
+                    (double)sk->nodes[best].radius, kids);
+}
+
+/* The stems of sk meshed with desc, levels chosen for view, refined on the CPU. */
+static xyl_mesh *refine_view(const xyl_skeleton *sk, const xyl_stems_desc *desc,
+                             const xyl_tess_patterns *pat, const xyl_tess_view *view,
+                             uint64_t *triangles, xyl_stems_stats *st)
+{
+    xyl_mesh *m = NULL, *refined = NULL;
+    xyl_tess_patches *tp = NULL;
+    xyl_tess_batches *b = NULL;
+    xyl_tess_patches_desc pd = {0};
+    pd.variant = XYL_TESS_CIRCLE;
+    xyl_diag d = {0};
+    xyl_result r = xyl_stems_build(sk, desc, &m, st, &d);
+    if (!r) r = xyl_tess_patches_create(m, &pd, &tp, &d);
+    if (!r) r = xyl_tess_batches_create(NULL, &b, &d);
+    if (!r) r = xyl_tess_select(tp, pat, view, b, &d);
+    if (!r) r = xyl_tess_refine(tp, pat, b, NULL, NULL, &refined, &d);
+    if (r) die("budget row", r, &d);
+    *triangles = b->triangles;
+    xyl_tess_batches_destroy(b);
+    xyl_tess_patches_destroy(tp);
+    xyl_mesh_destroy(m);
+    return refined;
+}
+
+static void budget_rows(const xyl_tess_patterns *pat, const bench_opts *o)
+{
+    const char *trees[] = {xyl_lsystem_default_preset(), "faycal-leaves", "abop-2.6-monopodial"};
+    static const float zooms[] = {1.0f, 4.0f, 16.0f};
+    const double E = o->budget_px;
+    printf("Budget rows: stems only, circle rule, %u px viewport, E = %g px; (a) k = 4, nothing "
+           "pruned, levels at E px; (b) E px -> W world units at the tree's near side: twigs under "
+           "W pruned, sides within W/2 (refined arcs, up to 16), levels at E (1 - ring error / W) px. "
+           "Error: against the unpruned k = 16 mesh refined at E/16 px, in px at each point's "
+           "distance; a pruned node counts its projected width.\n", o->size, E);
+    printf("| tree | distance | W | (a) triangles | (a) max px | (a) RMS px | (b) triangles | "
+           "(b) max px | (b) RMS px | (b) nodes pruned | (b)/(a) triangles | (a) p99 px | (b) p99 px | "
+           "reference triangles |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    char notes[9][512];
+    size_t nn = 0;
+    for (size_t ti = 0; ti < sizeof trees / sizeof trees[0]; ++ti) {
+        xyl_skeleton *sk = preset_tree(trees[ti]);
+        xyl_mesh *k4 = mesh_of(sk, 4, 0);
+        float lo[3], hi[3], c[3], r2 = 0.0f, size = 0.0f;
+        xyl_mesh_bounds(k4, lo, hi);
+        for (int k = 0; k < 3; ++k) {
+            c[k] = 0.5f * (lo[k] + hi[k]);
+            r2 += 0.25f * (hi[k] - lo[k]) * (hi[k] - lo[k]);
+            size = fmaxf(size, hi[k] - lo[k]);
+        }
+        xyl_mesh_destroy(k4);
+        for (size_t zi = 0; zi < 3; ++zi) {
+            xyl_tess_camera cam;
+            xyl_tess_camera_frame(lo, hi, 0.5f, 0.2f, 0.8f, 1.0f, &cam);
+            if (zooms[zi] != 1.0f) xyl_tess_camera_zoom(&cam, zooms[zi]);
+            xyl_tess_view v = {0};
+            memcpy(v.eye, cam.eye, sizeof v.eye);
+            v.fovy = cam.fovy;
+            v.viewport_height = o->size;
+            v.error_px = (float)E;
+            v.near_distance = fmaxf(1e-3f * size, 1e-30f);
+            double per_distance = 2.0 * tan(0.5 * (double)cam.fovy) / o->size;
+            /* the reference: unpruned, k = 16, circle rule at E / 16 px */
+            xyl_stems_desc dr = {0};
+            dr.sides = 16;
+            xyl_tess_view vr = v;
+            vr.error_px = (float)(E / 16.0);
+            uint64_t tr = 0;
+            xyl_stems_stats st = {0};
+            xyl_mesh *refm = refine_view(sk, &dr, pat, &vr, &tr, &st);
+            ref_grid ref = {0};
+            ref_grid_build(&ref, refm);
+            /* (a) */
+            xyl_stems_desc da = {0};
+            da.sides = 4;
+            uint64_t ta = 0, tb = 0;
+            xyl_mesh *ra = refine_view(sk, &da, pat, &v, &ta, &st);
+            screen_err ea = {0};
+            screen_mesh(&ea, &ref, ra, v.eye, per_distance);
+            xyl_mesh_destroy(ra);
+            /* (b) */
+            float w = 0.0f;
+            xyl_diag d = {0};
+            xyl_skeleton *pruned = NULL;
+            xyl_result r = xyl_tess_view_world_error(&v, c, sqrtf(r2), &w, &d);
+            if (!r) r = xyl_skeleton_prune(sk, w, NULL, &pruned, NULL, &d);
+            if (r) die("budget", r, &d);
+            xyl_stems_desc db = {0};
+            db.sides = 16;
+            db.error_world = 0.5f * w;
+            db.sides_refined = true;
+            /* meshed first to learn the rings' error: the tessellation gets what they leave */
+            xyl_mesh *mb = NULL;
+            r = xyl_stems_build(pruned, &db, &mb, &st, &d);
+            if (r) die("budget mesh", r, &d);
+            xyl_mesh_destroy(mb);
+            xyl_tess_view vb = v;
+            vb.error_px = (float)(E * fmax(0.5, 1.0 - st.ring_error_max / w));
+            xyl_mesh *rb = refine_view(pruned, &db, pat, &vb, &tb, &st);
+            screen_err eb = {0};
+            screen_mesh(&eb, &ref, rb, v.eye, per_distance);
+            size_t removed = screen_pruned(&eb, sk, pruned, v.eye, per_distance);
+            xyl_mesh_destroy(rb);
+            xyl_skeleton_destroy(pruned);
+            free(ref.start);
+            free(ref.tri);
+            xyl_mesh_destroy(refm);
+            int at = snprintf(notes[nn], sizeof notes[nn], "%s %gx: ", trees[ti],
+                              (double)zooms[zi]);
+            at += worst_note(notes[nn] + at, sizeof notes[nn] - (size_t)at, "(a) worst", &ea, sk);
+            if (!eb.worst_pruned)
+                worst_note(notes[nn] + at, sizeof notes[nn] - (size_t)at, "; (b) worst", &eb, sk);
+            else
+                snprintf(notes[nn] + at, sizeof notes[nn] - (size_t)at,
+                         "; (b) worst: a pruned node, %.3f px (its width %.4g)", eb.max,
+                         eb.worst_world);
+            ++nn;
+            double pa, qa, pb, qb;
+            screen_finish(&ea, &pa, &qa);
+            screen_finish(&eb, &pb, &qb);
+            printf("| %s | %gx | %.4g | %llu | %.3f | %.3f | %llu | %.3f | %.3f | %zu of %zu | "
+                   "%.3f | %.3f | %.3f | %llu |\n", trees[ti], (double)zooms[zi], (double)w,
+                   (unsigned long long)ta, ea.max, qa, (unsigned long long)tb, eb.max, qb, removed,
+                   sk->node_count, ta ? (double)tb / (double)ta : 0.0, pa, pb,
+                   (unsigned long long)tr);
+            fflush(stdout);
+        }
+        xyl_skeleton_destroy(sk);
+    }
+    printf("\nWhere each row's largest error is:\n");
+    for (size_t i = 0; i < nn; ++i) printf("- %s\n", notes[i]);
+}
+
 static void parse(int argc, char **argv, bench_opts *o)
 {
     o->gpu = true;
@@ -459,6 +850,13 @@ static void parse(int argc, char **argv, bench_opts *o)
         else if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc) o->frames = atoi(argv[++i]);
         else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc) o->size = (uint32_t)atoi(argv[++i]);
         else if (strcmp(argv[i], "--dat") == 0 && i + 1 < argc) o->dat = argv[++i];
+        else if (strcmp(argv[i], "--budget") == 0 && i + 1 < argc) {
+            o->budget_px = atof(argv[++i]);
+            if (!(o->budget_px > 0.0 && o->budget_px <= 1e6)) {
+                fprintf(stderr, "bench_tess: --budget takes a positive number of pixels\n");
+                exit(64);
+            }
+        }
         else if (strcmp(argv[i], "--max-triangles") == 0 && i + 1 < argc) {
             o->max_triangles = atof(argv[++i]);
             if (!(o->max_triangles >= 1.0)) {
@@ -482,7 +880,7 @@ static void parse(int argc, char **argv, bench_opts *o)
             bool help = strcmp(argv[i], "--help") == 0;
             fprintf(help ? stdout : stderr,
                     "usage: bench_tess [--quick] [--no-gpu] [--frames N] [--size PX] [--dat FILE]"
-                    " [--sides K,K,...] [--max-triangles N]\n");
+                    " [--sides K,K,...] [--max-triangles N] [--budget E]\n");
             exit(help ? 0 : 64);
         }
     }
@@ -511,6 +909,11 @@ int main(int argc, char **argv)
     xyl_diag d = {0};
     xyl_result r = xyl_tess_patterns_create(0, NULL, &pat, &d);
     if (r) die("patterns", r, &d);
+    if (o.budget_px > 0.0) {
+        budget_rows(pat, &o);
+        xyl_tess_patterns_destroy(pat);
+        return 0;
+    }
     xyl_skeleton *arc = arc_skeleton(), *tree = default_tree();
     arc_centreline(arc);
     gpu g = {0};

@@ -175,7 +175,9 @@ static const char usage_text[] =
     "                               nearest with a per-leaf cut each; full: every leaf),\n"
     "                               framed as a whole or by --camera; --fade F cross-fades\n"
     "                               two levels over F times each switch distance, 0..4,\n"
-    "                               default 0.1 (0: hard switches)\n"
+    "                               default 0.1 (0: hard switches); --error-px E given\n"
+    "                               with a grammar or .skel: E px also prune the twigs and\n"
+    "                               choose each branch's ring sides (docs/cli.md)\n"
     "  view     [source | --skeleton FILE.skel | --mesh FILE.glb] [mesh options]\n"
     "           [--tess instanced|hardware] [--variant pn|rounded|circle|arc]\n"
     "           [--level N | --error-px E] [--camera AZIMUTH,ELEVATION] [--size WxH]\n"
@@ -1193,6 +1195,8 @@ typedef struct render_job {
     bool gpu_timer_billboard; /* gpu_ms times the billboard drawn in the tree's place */
     float stem_width;     /* twice the skeleton's thickest node's radius: where a forest
                              leaves stems out */
+    bool framed;          /* the camera is set (--error-px: framed on the unpruned tree) */
+    float stem_px;        /* the tessellation's share of --error-px (0: all of it) */
 } render_job;
 
 static void render_job_free(render_job *j)
@@ -1239,6 +1243,62 @@ static void frame_camera(const options *o, render_job *j)
         xyl_tess_camera_zoom(&j->camera, (float)o->render.zoom);
 }
 
+/* render --error-px E given: one screen budget for the whole tree (docs/cli.md). W, the world
+ * size of E px at the near side of the tree's bounding sphere as the default camera frames it,
+ * prunes every twig narrower than W (a removed twig shows at most E px, where no other surface
+ * of the tree is drawn); the rings get the fewest sides, up to --sides or 16, within W / 2
+ * (refined arcs under --variant circle or arc, else the sagitta) and the tessellation what the
+ * rings leave of E px, E (1 - their largest error / W) but at least E / 2: two errors of the
+ * one drawn surface that add up to at most E px. Farther points see every share smaller. */
+static int budget_stems(const options *o, render_job *j, const xyl_skeleton *sk,
+                        const char *source)
+{
+    frame_camera(o, j);
+    j->framed = true;
+    float lo[3], hi[3], c[3], mlo[3], mhi[3], r2 = 0.0f, size = 0.0f;
+    tree_bounds(j, lo, hi);
+    xyl_mesh_bounds(j->mesh, mlo, mhi);
+    for (int k = 0; k < 3; ++k) {
+        c[k] = 0.5f * (lo[k] + hi[k]);
+        r2 += 0.25f * (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        size = fmaxf(size, mhi[k] - mlo[k]);
+    }
+    xyl_tess_view v = {0};
+    memcpy(v.eye, j->camera.eye, sizeof v.eye);
+    v.fovy = j->camera.fovy;
+    v.viewport_height = j->image.height;
+    v.error_px = (float)o->render.error_px;
+    v.near_distance = fmaxf(1e-3f * size, FLT_MIN); /* the tessellation's clamp */
+    float w = 0.0f;
+    xyl_diag d = {0};
+    xyl_skeleton *pruned = NULL;
+    xyl_skeleton_prune_stats ps = {0};
+    xyl_stems_stats st = {0};
+    xyl_stems_desc desc = o->stems;
+    xyl_mesh *m = NULL;
+    xyl_result r = xyl_tess_view_world_error(&v, c, sqrtf(r2), &w, &d);
+    if (r == XYL_OK) r = xyl_skeleton_prune(sk, w, NULL, &pruned, &ps, &d);
+    desc.error_world = 0.5f * w;
+    /* the circle and arc rules round a ring to its refined-arc error; pn and rounded leave
+     * errors below the ring's sagitta (docs/tessellation.md), which then bounds them */
+    desc.sides_refined = o->render.variant == XYL_TESS_CIRCLE || o->render.variant == XYL_TESS_ARC;
+    if (!o->stems.sides) desc.sides = 16; /* no --sides: the budget may ask up to 16 */
+    if (r == XYL_OK) r = xyl_stems_build(pruned, &desc, &m, &st, &d);
+    xyl_skeleton_destroy(pruned);
+    if (r != XYL_OK) return report(source, r, &d);
+    xyl_mesh_destroy(j->mesh);
+    j->mesh = m;
+    /* the tessellation gets what the rings leave: E (1 - ring error / W), at least E / 2 */
+    j->stem_px = v.error_px * fmaxf(0.5f, 1.0f - (float)(st.ring_error_max / w));
+    printf("budget: %g px = %g world units at the tree's near side; pruned twigs under %g wide: "
+           "%zu of %zu nodes (%zu subtrees, widest %g), %zu leaves moved; ring sides within %g, "
+           "tessellation within %g px\n", (double)v.error_px, (double)w, (double)w,
+           ps.nodes_removed, sk->node_count, ps.subtrees_removed, (double)ps.max_removed_width,
+           ps.leaves_moved, (double)desc.error_world, (double)j->stem_px);
+    print_sides(&st, &desc);
+    return 0;
+}
+
 /* Levels for the view (or the fixed level), timed: the per-frame CPU cost of the technique. */
 static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_patches *p,
                                 uint32_t fixed, xyl_diag *d)
@@ -1247,7 +1307,7 @@ static xyl_result select_levels(const options *o, render_job *j, const xyl_tess_
     memcpy(view.eye, j->camera.eye, sizeof view.eye);
     view.fovy = j->camera.fovy;
     view.viewport_height = j->image.height;
-    view.error_px = (float)o->render.error_px;
+    view.error_px = j->stem_px > 0.0f ? j->stem_px : (float)o->render.error_px;
     view.fixed_level = fixed;
     double t0 = now_seconds();
     xyl_result r = xyl_tess_select(p, j->patterns, &view, j->batches, d);
@@ -1297,7 +1357,7 @@ static xyl_result prepare_render(const options *o, render_job *j, xyl_diag *d)
     if (r == XYL_OK) r = xyl_tess_batches_create(NULL, &j->batches, d);
     if (r != XYL_OK) return r;
     j->drawn = j->patches;
-    frame_camera(o, j);
+    if (!j->framed) frame_camera(o, j);
     if (j->draw_leaves) r = pick_leaves(o, j, d);
     if (r == XYL_OK) r = select_levels(o, j, j->patches, ro->level, d);
     if (r == XYL_OK && ro->tess == TESS_CPU) {
@@ -1964,10 +2024,13 @@ static int cmd_render(const options *o)
     xyl_diag d = {0};
     xyl_result r = XYL_OK;
     xyl_skeleton *sk = NULL;
-    int rc = load_mesh(o, &j.mesh, &source, ro->leaves == LEAVES_NONE ? NULL : &sk);
-    if (!rc && sk) rc = prepare_leaves(o, &j, sk, source);
+    /* --error-px given: the budget chooses the stems too (not for a --mesh or a forest) */
+    bool budget = ro->error_px > 0.0 && !ro->forest;
+    int rc = load_mesh(o, &j.mesh, &source, ro->leaves == LEAVES_NONE && !budget ? NULL : &sk);
+    if (!rc && sk && ro->leaves != LEAVES_NONE) rc = prepare_leaves(o, &j, sk, source);
     for (size_t k = 0; sk && k < sk->node_count; ++k)
         j.stem_width = fmaxf(j.stem_width, 2.0f * sk->nodes[k].radius);
+    if (!rc && sk && budget) rc = budget_stems(o, &j, sk, source);
     xyl_skeleton_destroy(sk);
     if (!rc && ro->forest && !j.draw_leaves) {
         fprintf(stderr, "xylem: %s: --forest needs a source with leaves\n", source);

@@ -16,9 +16,7 @@ typedef struct view_params {
 
 static float view_scale(const xyl_tess_view *view)
 {
-    float fovy = view->fovy > 0.0f ? view->fovy : 0.8f;
-    float h = view->viewport_height ? (float)view->viewport_height : 1080.0f;
-    return h / (2.0f * tanf(0.5f * fovy));
+    return (float)(1.0 / xyl__world_per_px(view->fovy, view->viewport_height));
 }
 
 static uint32_t level_from(float coef, float distance, float scale, float error_px,
@@ -38,6 +36,34 @@ uint32_t xyl__tess_level_for(float coefficient, float distance, const xyl_tess_v
     xyl_tess_view zero = {0};
     if (!(distance > 0.0f)) return max_level;
     return level_from(coefficient, distance, view_scale(view ? view : &zero), budget, max_level);
+}
+
+xyl_result xyl_tess_view_world_error(const xyl_tess_view *view, const float center[3],
+                                     float radius, float *world, xyl_diag *diag)
+{
+    if (!view || !center || !world)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "view, center and world are required");
+    for (int k = 0; k < 3; ++k)
+        if (!isfinite(view->eye[k]) || !isfinite(center[k]))
+            return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "eye or center is not finite");
+    if (!isfinite(radius))
+        return xyl__fail(diag, XYL_ERR_NON_FINITE, 0, 0, -1, "radius is not finite");
+    if (!isfinite(view->fovy) || view->fovy < 0.0f || view->fovy >= 3.14159f ||
+        !isfinite(view->error_px) || view->error_px < 0.0f || !isfinite(view->near_distance) ||
+        view->near_distance < 0.0f || radius < 0.0f)
+        return xyl__fail(diag, XYL_ERR_INVALID_ARGUMENT, 0, 0, -1,
+                         "view: fovy must be in [0, pi), error_px, near_distance and radius >= 0");
+    double dx = (double)center[0] - view->eye[0], dy = (double)center[1] - view->eye[1];
+    double dz = (double)center[2] - view->eye[2];
+    double d = sqrt(dx * dx + dy * dy + dz * dz) - radius;
+    double near = view->near_distance > 0.0f ? view->near_distance
+                                             : fmax(2e-3 * radius, (double)FLT_MIN);
+    if (!(d > near)) d = near;
+    double px = view->error_px > 0.0f ? view->error_px : 0.5;
+    *world = (float)(px * d * xyl__world_per_px(view->fovy, view->viewport_height));
+    xyl__diag_ok(diag);
+    return XYL_OK;
 }
 
 static uint32_t level_of(const xyl__tess_bound *b, const view_params *vp)

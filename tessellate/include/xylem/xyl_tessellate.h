@@ -180,6 +180,19 @@ XYL_API xyl_result xyl_tess_select(const xyl_tess_patches *patches,
                                    const xyl_tess_patterns *patterns, const xyl_tess_view *view,
                                    xyl_tess_batches *batches, xyl_diag *diag);
 
+/* The world size of view->error_px pixels (0: 0.5) at the nearest point of a bounding sphere
+ * (center, radius >= 0; world units) seen from view->eye: error_px d 2 tan(fovy / 2) /
+ * viewport_height, with d the distance from the eye to the sphere's near side clamped up to
+ * view->near_distance (0: 1e-3 of the sphere's diameter, as xyl_tess_select clamps to 1e-3 of
+ * the patches' size). The same pixel -> world conversion as the level selection and the foliage
+ * LOD pick, so a world error of at most *world shows as at most error_px pixels at every point
+ * of the sphere (farther points: fewer). Turns one screen budget into the mesher's and the
+ * pruning's world budgets (docs/tessellation.md, "One budget for the whole tree"). Errors:
+ * XYL_ERR_INVALID_ARGUMENT (view, center or world NULL; fovy outside [0, pi), error_px,
+ * near_distance or radius negative), XYL_ERR_NON_FINITE (eye, center or radius). */
+XYL_API xyl_result xyl_tess_view_world_error(const xyl_tess_view *view, const float center[3],
+                                             float radius, float *world, xyl_diag *diag);
+
 /* ---- CPU tessellation ---------------------------------------------------------------------- */
 
 /* Evaluates every instance of the batches with the reference evaluator into a triangle mesh:
