@@ -996,20 +996,20 @@ static void tip_reach_sees_tips_outside_and_inside(void **state)
     xyl_skel_node a[2] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0}};
     xyl_skeleton *ska = skeleton_of(a, 2);
     xyl_mesh *m = build(ska, 6, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH);
-    tr_tally own = tr_measure(ska, m, 1.0);
+    tr_tally own = tr_measure(ska, m, 1.0, NULL);
     assert_int_equal(own.tips, 1);
     assert_int_equal(own.reached, 1);
     xyl_skel_node b[3] = {{{0, 0, 0}, 0.1f, -1, 0, 0}, {{0, 1, 0}, 0.1f, 0, 0, 0},
                           {{0, 1.5f, 0}, 0.1f, 1, 0, 0}};
     xyl_skeleton *skb = skeleton_of(b, 3);
-    tr_tally out = tr_measure(skb, m, 1.0);
+    tr_tally out = tr_measure(skb, m, 1.0, NULL);
     assert_int_equal(out.outside, 1);
     print_message("a tip 0.5 beyond the stem's: %.4f r outside\n", out.worst_out);
     assert_true(out.worst_out > 4.7 && out.worst_out < 4.8); /* 0.5 beyond a dome 0.025 high */
     assert_int_equal(out.worst_node, 2);
     xyl_skel_node c[2] = {{{0, 0.2f, 0}, 0.01f, -1, 0, 0}, {{0, 0.5f, 0}, 0.01f, 0, 0, 0}};
     xyl_skeleton *skc = skeleton_of(c, 2);
-    tr_tally in = tr_measure(skc, m, 1.0);
+    tr_tally in = tr_measure(skc, m, 1.0, NULL);
     assert_int_equal(in.inside, 1);
     assert_int_equal(in.outside, 0);
     xyl_skeleton_destroy(skc);
@@ -1047,8 +1047,11 @@ static void presets_leave_no_more_tips_outside_than_measured(void **state)
         xyl_skeleton *sk = grow_preset(name);
         xyl_mesh *m = build_with(sk, 4, XYL_SUBDIVIDE_NONE, XYL_NORMALS_BRANCH,
                                  XYL_JOINTS_CHECKED, NULL);
-        tr_tally t = tr_measure(sk, m, 1.0);
-        size_t single = tr_one_segment_laterals_outside(sk, m, 1.0);
+        tr_place *place = calloc(sk->node_count, sizeof *place); /* 0: TR_REACHED */
+        assert_non_null(place);
+        tr_tally t = tr_measure(sk, m, 1.0, place);
+        size_t single = tr_one_segment_laterals_outside(sk, m, place);
+        free(place);
         print_message("  %-20s %5zu tips: %5zu within r of the surface, %4zu further inside, "
                       "%4zu further outside (worst %.2f r, node %d; %zu of them one-segment "
                       "laterals not meshed)\n",

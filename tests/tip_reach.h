@@ -102,7 +102,9 @@ static inline tr_place tr_classify(const xyl_mesh *m, xyl_vec3 p, float r, doubl
     return fabs(wind) > 2.0 * 3.14159265358979323846 ? TR_INSIDE : TR_OUTSIDE;
 }
 
-static inline tr_tally tr_measure(const xyl_skeleton *sk, const xyl_mesh *m, double slack)
+/* place (may be NULL): per node, where each tip lies (other nodes untouched). */
+static inline tr_tally tr_measure(const xyl_skeleton *sk, const xyl_mesh *m, double slack,
+                                  tr_place *place)
 {
     tr_tally t = {0, 0, 0, 0, 0.0, -1};
     bool *parent = calloc(sk->node_count ? sk->node_count : 1, sizeof *parent);
@@ -113,7 +115,9 @@ static inline tr_tally tr_measure(const xyl_skeleton *sk, const xyl_mesh *m, dou
         if (parent[i]) continue;
         double d;
         ++t.tips;
-        switch (tr_classify(m, sk->nodes[i].pos, sk->nodes[i].radius, slack, &d)) {
+        tr_place at = tr_classify(m, sk->nodes[i].pos, sk->nodes[i].radius, slack, &d);
+        if (place) place[i] = at;
+        switch (at) {
         case TR_REACHED: ++t.reached; break;
         case TR_INSIDE: ++t.inside; break;
         case TR_OUTSIDE:
@@ -126,28 +130,22 @@ static inline tr_tally tr_measure(const xyl_skeleton *sk, const xyl_mesh *m, dou
     return t;
 }
 
-/* Of the tips further than slack r outside m, those of one-segment laterals with no face in m
- * (a fork's twig of one node that the construction left out): the cause docs/stems.md names. */
+/* Of the tips tr_measure placed outside m (place), those of one-segment laterals with no face
+ * in m (a fork's twig of one node that the construction left out): the cause docs/stems.md
+ * names. */
 static inline size_t tr_one_segment_laterals_outside(const xyl_skeleton *sk, const xyl_mesh *m,
-                                                     double slack)
+                                                     const tr_place *place)
 {
     bool *meshed = calloc(sk->branch_count ? sk->branch_count : 1, sizeof *meshed);
-    bool *parent = calloc(sk->node_count ? sk->node_count : 1, sizeof *parent);
-    if (!meshed || !parent) abort();
+    if (!meshed) abort();
     for (size_t f = 0; f < m->quad_count + m->triangle_count; ++f)
         meshed[m->face_branches[f]] = true;
-    for (size_t i = 0; i < sk->node_count; ++i)
-        if (sk->nodes[i].parent >= 0) parent[sk->nodes[i].parent] = true;
     size_t n = 0;
     for (size_t i = 0; i < sk->node_count; ++i) {
         const xyl_skel_node *x = &sk->nodes[i];
-        if (parent[i] || meshed[x->branch] || x->parent < 0 ||
-            sk->nodes[x->parent].branch == x->branch)
-            continue;
-        double d;
-        n += tr_classify(m, x->pos, x->radius, slack, &d) == TR_OUTSIDE;
+        n += place[i] == TR_OUTSIDE && !meshed[x->branch] && x->parent >= 0 &&
+             sk->nodes[x->parent].branch != x->branch;
     }
-    free(parent);
     free(meshed);
     return n;
 }
